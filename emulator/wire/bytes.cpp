@@ -5,13 +5,20 @@ namespace moco::wire {
 
 std::string_view KindName(DecodeError::Kind kind) {
   switch (kind) {
-    case DecodeError::Kind::kTruncated: return "truncated";
-    case DecodeError::Kind::kTrailing: return "trailing bytes";
-    case DecodeError::Kind::kBadValue: return "bad value";
-    case DecodeError::Kind::kBadLength: return "bad length";
-    case DecodeError::Kind::kBadChecksum: return "bad checksum";
-    case DecodeError::Kind::kBadSyntax: return "bad syntax";
-    case DecodeError::Kind::kUnknown: return "unknown";
+    case DecodeError::Kind::kTruncated:
+      return "truncated";
+    case DecodeError::Kind::kTrailing:
+      return "trailing bytes";
+    case DecodeError::Kind::kBadValue:
+      return "bad value";
+    case DecodeError::Kind::kBadLength:
+      return "bad length";
+    case DecodeError::Kind::kBadChecksum:
+      return "bad checksum";
+    case DecodeError::Kind::kBadSyntax:
+      return "bad syntax";
+    case DecodeError::Kind::kUnknown:
+      return "unknown";
   }
   return "?";
 }

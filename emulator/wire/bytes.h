@@ -25,13 +25,13 @@ using ByteView = std::span<const uint8_t>;
 // handed to the decoding function).
 struct DecodeError {
   enum class Kind {
-    kTruncated,     // fewer bytes than the layout needs
-    kTrailing,      // more bytes than the layout allows
-    kBadValue,      // a field holds a value the spec does not allow
-    kBadLength,     // a length field is outside the spec's bounds
-    kBadChecksum,   // check bytes do not verify
-    kBadSyntax,     // (ASCII) a line that does not parse
-    kUnknown,       // a message type/command the codec does not know
+    kTruncated,    // fewer bytes than the layout needs
+    kTrailing,     // more bytes than the layout allows
+    kBadValue,     // a field holds a value the spec does not allow
+    kBadLength,    // a length field is outside the spec's bounds
+    kBadChecksum,  // check bytes do not verify
+    kBadSyntax,    // (ASCII) a line that does not parse
+    kUnknown,      // a message type/command the codec does not know
   };
   Kind kind = Kind::kBadValue;
   size_t offset = 0;
@@ -47,8 +47,8 @@ std::string Describe(const DecodeError& e);
 template <typename T>
 class Result {
  public:
-  Result(T value) : v_(std::move(value)) {}                  // NOLINT: implicit by design
-  Result(DecodeError error) : v_(std::move(error)) {}        // NOLINT: implicit by design
+  Result(T value) : v_(std::move(value)) {}            // NOLINT: implicit by design
+  Result(DecodeError error) : v_(std::move(error)) {}  // NOLINT: implicit by design
   bool ok() const { return v_.index() == 0; }
   explicit operator bool() const { return ok(); }
   // REQUIRES: ok().
@@ -163,9 +163,9 @@ class Reader {
     return {DecodeError::Kind::kTruncated, offset(), "truncated: " + std::string(what)};
   }
   DecodeError Trailing(std::string_view what) const {
-    return {DecodeError::Kind::kTrailing, offset(),
-            std::to_string(remaining()) + " unexpected trailing byte(s) after " +
-                std::string(what)};
+    return {
+        DecodeError::Kind::kTrailing, offset(),
+        std::to_string(remaining()) + " unexpected trailing byte(s) after " + std::string(what)};
   }
   DecodeError BadValue(std::string detail) const {
     return {DecodeError::Kind::kBadValue, offset(), std::move(detail)};

@@ -1,0 +1,96 @@
+// Session files: timestamped host/device traffic in JSON Lines (docs/sessions.md).
+// Read by `mocosim decode`, `mococheck replay` and `mococheck fuzz`; written by
+// `mocosim --record`.
+#ifndef MOCO_CONTROL_SESSION_H_
+#define MOCO_CONTROL_SESSION_H_
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "wire/bytes.h"
+
+namespace moco::control {
+
+inline constexpr int kSessionFormatVersion = 1;
+
+enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
+
+// "dmc", "dfmoco", "stackshot", "stackshot-dfmoco".
+std::string_view ProtocolName(Protocol p);
+std::optional<Protocol> ParseProtocol(std::string_view name);
+
+struct SessionHeader {
+  Protocol protocol = Protocol::kDmc;
+  std::string device;             // optional device model name
+  std::string clock = "virtual";  // "virtual" or "real"
+  std::string note;
+  std::optional<int64_t> tolerance_position_steps;
+  std::optional<int64_t> tolerance_time_ms;
+  nlohmann::json extra = nlohmann::json::object();  // unknown fields, kept verbatim
+};
+
+enum class Origin { kHost, kDevice };
+
+// One line after the header: traffic (origin + bytes) or an event.
+struct SessionEntry {
+  int64_t t_ns = 0;
+  bool is_event = false;
+  Origin from = Origin::kHost;       // traffic only
+  wire::Bytes bytes;                 // traffic only
+  std::vector<std::string> decoded;  // traffic only, informational
+  nlohmann::json event;              // event only: the whole line
+};
+
+struct Session {
+  SessionHeader header;
+  std::vector<SessionEntry> entries;
+};
+
+// A failure to read a session, with the 1-based line number and a message that
+// names the problem and the fix.
+struct SessionError {
+  size_t line = 0;
+  std::string message;
+};
+
+// Parses a whole session from text. Never throws.
+std::variant<Session, SessionError> ParseSession(std::string_view text);
+// Reads and parses a file. Never throws.
+std::variant<Session, SessionError> LoadSession(const std::filesystem::path& path);
+
+nlohmann::json HeaderToJson(const SessionHeader& h);
+nlohmann::json EntryToJson(const SessionEntry& e);
+
+// Writes a session line by line: every line is flushed as written to
+// "<path>.partial", and Finish() renames it to <path>, so a finished file is
+// always whole and a crash leaves at most the last line missing in .partial.
+class SessionWriter {
+ public:
+  // Throws std::runtime_error with a user-facing message if the file cannot be created.
+  SessionWriter(std::filesystem::path path, const SessionHeader& header);
+  ~SessionWriter();  // Finish()es if not done yet; never throws.
+  SessionWriter(const SessionWriter&) = delete;
+  SessionWriter& operator=(const SessionWriter&) = delete;
+
+  void Append(const SessionEntry& entry);
+  // Flushes, closes and renames into place. Returns false (with a message) on an I/O error.
+  bool Finish(std::string* error = nullptr);
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  void WriteLine(const nlohmann::json& j);
+  std::filesystem::path path_;
+  std::filesystem::path partial_;
+  std::ofstream out_;
+  bool finished_ = false;
+};
+
+}  // namespace moco::control
+
+#endif  // MOCO_CONTROL_SESSION_H_

@@ -1,0 +1,143 @@
+// Tests for the session file format of docs/sessions.md: parsing, errors that
+// name the line and the fix, the write-then-rename rule, and round trips.
+#include "control/session.h"
+
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace moco::control {
+namespace {
+
+Session Ok(std::variant<Session, SessionError> r) {
+  if (const auto* e = std::get_if<SessionError>(&r)) {
+    ADD_FAILURE() << "line " << e->line << ": " << e->message;
+    return {};
+  }
+  return std::get<Session>(std::move(r));
+}
+
+TEST(SessionTest, ParsesHeaderTrafficAndEvents) {
+  const char* text =
+      "{\"mocosim_session\":1,\"protocol\":\"dmc\",\"device\":\"dmc16\",\"clock\":\"virtual\","
+      "\"tolerances\":{\"position_steps\":2,\"time_ms\":20},\"vendor_field\":7}\n"
+      "{\"t_ns\":0,\"from\":\"host\",\"hex\":\"4446\"}\n"
+      "\n"
+      "{\"t_ns\":5,\"from\":\"device\",\"hex\":\"AB cd\",\"decoded\":[\"X\"]}\n"
+      "{\"t_ns\":9,\"event\":\"estop\",\"state\":\"pressed\"}";
+  const Session s = Ok(ParseSession(text));
+  EXPECT_EQ(s.header.protocol, Protocol::kDmc);
+  EXPECT_EQ(s.header.device, "dmc16");
+  EXPECT_EQ(s.header.tolerance_position_steps, 2);
+  EXPECT_EQ(s.header.tolerance_time_ms, 20);
+  EXPECT_EQ(s.header.extra["vendor_field"], 7);
+  ASSERT_EQ(s.entries.size(), 3u);
+  EXPECT_EQ(s.entries[0].from, Origin::kHost);
+  EXPECT_EQ(s.entries[0].bytes, (wire::Bytes{0x44, 0x46}));
+  EXPECT_EQ(s.entries[1].from, Origin::kDevice);
+  EXPECT_EQ(s.entries[1].bytes, (wire::Bytes{0xab, 0xcd}));
+  EXPECT_EQ(s.entries[1].decoded, std::vector<std::string>{"X"});
+  EXPECT_TRUE(s.entries[2].is_event);
+  EXPECT_EQ(s.entries[2].event["state"], "pressed");
+}
+
+struct BadCase {
+  const char* text;
+  size_t line;
+  const char* needle;
+};
+
+TEST(SessionTest, ErrorsNameTheLineAndTheFix) {
+  const BadCase cases[] = {
+      {"", 1, "header"},
+      {"{\"protocol\":\"dmc\"}", 1, "mocosim_session"},
+      {"{\"mocosim_session\":2,\"protocol\":\"dmc\"}", 1, "upgrade"},
+      {"{\"mocosim_session\":1,\"protocol\":\"can\"}", 1, "dmc, dfmoco"},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n{\"t_ns\":1,\"from\":\"x\",\"hex\":\"\"}", 2,
+       "\"host\" or \"device\""},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n{\"t_ns\":1,\"from\":\"host\",\"hex\":"
+       "\"abc\"}",
+       2, "hex"},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n{\"t_ns\":5,\"from\":\"host\",\"hex\":\"\"}\n"
+       "{\"t_ns\":4,\"from\":\"host\",\"hex\":\"\"}",
+       3, "backwards"},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\nnot json", 2, "not valid JSON"},
+  };
+  for (const auto& c : cases) {
+    auto r = ParseSession(c.text);
+    ASSERT_TRUE(std::holds_alternative<SessionError>(r)) << c.text;
+    const auto& e = std::get<SessionError>(r);
+    EXPECT_EQ(e.line, c.line) << c.text;
+    EXPECT_NE(e.message.find(c.needle), std::string::npos) << e.message;
+  }
+}
+
+TEST(SessionTest, WriterWritesPartialThenRenames) {
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("moco_session_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "s.jsonl";
+  std::filesystem::remove(path);
+  SessionHeader h;
+  h.protocol = Protocol::kStackshot;
+  {
+    SessionWriter w(path, h);
+    SessionEntry e;
+    e.t_ns = 3;
+    e.from = Origin::kDevice;
+    e.bytes = {0xaa, 0x10};
+    w.Append(e);
+    EXPECT_FALSE(std::filesystem::exists(path));
+    EXPECT_TRUE(std::filesystem::exists(path.string() + ".partial"));
+    std::string err;
+    EXPECT_TRUE(w.Finish(&err)) << err;
+  }
+  EXPECT_TRUE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path.string() + ".partial"));
+  const Session s = Ok(LoadSession(path));
+  EXPECT_EQ(s.header.protocol, Protocol::kStackshot);
+  ASSERT_EQ(s.entries.size(), 1u);
+  EXPECT_EQ(s.entries[0].bytes, (wire::Bytes{0xaa, 0x10}));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SessionTest, WriterRefusesUnwritableDirectoryWithMessage) {
+  SessionHeader h;
+  try {
+    SessionWriter w("/nonexistent-dir-for-moco/s.jsonl", h);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("writable"), std::string::npos);
+  }
+}
+
+RC_GTEST_PROP(SessionProp, TrafficRoundTripsThroughText,
+              (const std::vector<std::pair<bool, std::vector<uint8_t>>>& chunks)) {
+  SessionHeader h;
+  h.protocol = Protocol::kDfmoco;
+  std::string text = HeaderToJson(h).dump() + "\n";
+  int64_t t = 0;
+  for (const auto& [from_host, bytes] : chunks) {
+    SessionEntry e;
+    e.t_ns = t;
+    t += 1000;
+    e.from = from_host ? Origin::kHost : Origin::kDevice;
+    e.bytes = bytes;
+    text += EntryToJson(e).dump() + "\n";
+  }
+  auto r = ParseSession(text);
+  RC_ASSERT(std::holds_alternative<Session>(r));
+  const auto& s = std::get<Session>(r);
+  RC_ASSERT(s.header.protocol == Protocol::kDfmoco);
+  RC_ASSERT(s.entries.size() == chunks.size());
+  for (size_t i = 0; i < chunks.size(); ++i) {
+    RC_ASSERT(s.entries[i].bytes == chunks[i].second);
+    RC_ASSERT((s.entries[i].from == Origin::kHost) == chunks[i].first);
+  }
+}
+
+}  // namespace
+}  // namespace moco::control
