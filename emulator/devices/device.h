@@ -1,0 +1,62 @@
+// The boundary between an emulated device and whatever carries its bytes
+// (ARCHITECTURE "three layers"): a device reads host bytes, writes its own
+// bytes to a ByteSink and keeps time only through the Scheduler. It never
+// opens a socket, a file or a thread.
+#ifndef MOCO_DEVICES_DEVICE_H_
+#define MOCO_DEVICES_DEVICE_H_
+
+#include <cstdint>
+#include <string_view>
+
+#include "wire/bytes.h"
+
+namespace moco::devices {
+
+// Where a device's output goes (a transport session, a test buffer, a recorder).
+class ByteSink {
+ public:
+  virtual ~ByteSink() = default;
+  // Takes a copy of `bytes`; never blocks and never fails from the device's
+  // point of view (a transport queues, paces or drops as the link would).
+  virtual void Write(wire::ByteView bytes) = 0;
+};
+
+// Serial line settings the transport honours when pacing (baud / 10 bytes/s for 8N1).
+struct LineSettings {
+  uint32_t baud = 115200;
+  uint8_t data_bits = 8;
+  uint8_t stop_bits = 1;
+  char parity = 'N';
+  // Bytes per second on the wire for this setting (start + data + parity + stop bits).
+  uint32_t BytesPerSecond() const {
+    const uint32_t bits = 1u + data_bits + (parity == 'N' ? 0u : 1u) + stop_bits;
+    return baud / bits;
+  }
+};
+
+// An emulated device. Lifecycle: constructed powered off; PowerOn() boots it
+// (a device may announce itself then, e.g. DMC HI or DFMoco `hi`); PowerOff()
+// drops all volatile state and cancels its timers. All calls come from the
+// thread that owns the Scheduler.
+class Device {
+ public:
+  virtual ~Device() = default;
+
+  // Model name for logs, e.g. "dmc16".
+  virtual std::string_view Model() const = 0;
+  // The line the real device uses; transports pace at this rate unless told not to.
+  virtual LineSettings Line() const = 0;
+
+  virtual void PowerOn() = 0;
+  virtual void PowerOff() = 0;
+  virtual bool Powered() const = 0;
+
+  // Bytes from the host, in any chunking. Ignored while powered off.
+  virtual void OnHostBytes(wire::ByteView bytes) = 0;
+  // The host opened (true) or closed (false) the link. Most devices do not care.
+  virtual void OnHostLink(bool /*open*/) {}
+};
+
+}  // namespace moco::devices
+
+#endif  // MOCO_DEVICES_DEVICE_H_
