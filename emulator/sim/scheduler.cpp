@@ -1,5 +1,5 @@
 // The one clock: discrete-event scheduler ordered by (time, sequence)
-// (ARCHITECTURE "One clock"). Binary min-heap with lazy cancellation.
+// (ARCHITECTURE "One clock"). 4-ary min-heap with lazy cancellation.
 #include "sim/scheduler.h"
 
 #include <algorithm>
@@ -81,14 +81,39 @@ size_t Scheduler::RunUntilIdle(size_t max_events) {
   return n;
 }
 
+// A 4-ary heap: shallower than binary, and the four children of a node share
+// a cache line or two, which matters with thousands of pending timers.
 void Scheduler::HeapPush(Entry e) {
   heap_.push_back(e);
-  std::push_heap(heap_.begin(), heap_.end(), Later);
+  size_t hole = heap_.size() - 1;
+  while (hole > 0) {
+    const size_t parent = (hole - 1) / 4;
+    if (!Later(heap_[parent], e)) break;
+    heap_[hole] = heap_[parent];
+    hole = parent;
+  }
+  heap_[hole] = e;
 }
 
 void Scheduler::HeapPopTop() {
-  std::pop_heap(heap_.begin(), heap_.end(), Later);
+  const Entry last = heap_.back();
   heap_.pop_back();
+  const size_t n = heap_.size();
+  if (n == 0) return;
+  size_t hole = 0;
+  for (;;) {
+    const size_t first = 4 * hole + 1;
+    if (first >= n) break;
+    size_t best = first;
+    const size_t end = first + 4 < n ? first + 4 : n;
+    for (size_t c = first + 1; c < end; ++c) {
+      if (Later(heap_[best], heap_[c])) best = c;
+    }
+    if (!Later(last, heap_[best])) break;
+    heap_[hole] = heap_[best];
+    hole = best;
+  }
+  heap_[hole] = last;
 }
 
 void Scheduler::ReleaseSlot(uint32_t slot) {
@@ -104,8 +129,13 @@ void Scheduler::PruneTop() {
 
 void Scheduler::MaybeCompact() {
   if (heap_.size() < 64 || heap_.size() <= 2 * live_count_) return;
-  std::erase_if(heap_, [this](const Entry& e) { return slots_[e.slot].seq != e.seq; });
-  std::make_heap(heap_.begin(), heap_.end(), Later);
+  std::vector<Entry> live;
+  live.reserve(live_count_);
+  for (const Entry& e : heap_) {
+    if (slots_[e.slot].seq == e.seq) live.push_back(e);
+  }
+  heap_.clear();
+  for (const Entry& e : live) HeapPush(e);
 }
 
 void Scheduler::RunTop() {
