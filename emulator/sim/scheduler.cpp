@@ -124,6 +124,7 @@ void Scheduler::ReleaseSlot(uint32_t slot) {
 }
 
 void Scheduler::PruneTop() {
+  if (heap_.size() == live_count_) return;  // no cancelled entries anywhere
   while (!heap_.empty() && slots_[heap_.front().slot].seq != heap_.front().seq) HeapPopTop();
 }
 
