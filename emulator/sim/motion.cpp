@@ -10,6 +10,14 @@ namespace {
 
 constexpr double kNsPerSecondF = 1e9;
 
+// Smallest multiple of q at or after t (t >= 0 in practice; exact for t < 0 too).
+TimeNs RoundUp(TimeNs t, TimeNs q) {
+  if (q <= 1) return t;
+  const TimeNs r = t % q;
+  if (r == 0) return t;
+  return r > 0 ? t + (q - r) : t - r;
+}
+
 // Number of thresholds p +- (k + 1/2), k >= 0, that x_end reaches from p.
 int64_t EdgesReached(int dir, int64_t p, double x_end) {
   double n = 0;
@@ -47,8 +55,9 @@ double CrossingTime(const Segment& s, int dir, double threshold_steps) {
 }
 
 Plan Plan::Build(TimeNs origin_ns, int64_t origin_steps, double start_x_steps,
-                 const std::vector<Segment>& segments) {
+                 const std::vector<Segment>& segments, TimeNs step_quantum_ns) {
   Plan plan;
+  plan.quantum_ns_ = step_quantum_ns > 1 ? step_quantum_ns : 1;
   plan.origin_ns_ = origin_ns;
   plan.origin_steps_ = origin_steps;
   plan.end_ns_ = origin_ns;
@@ -100,7 +109,7 @@ Plan Plan::Build(TimeNs origin_ns, int64_t origin_steps, double start_x_steps,
     const double end_rel_ns = std::ceil(plan.segs_.back().EndTime() * kNsPerSecondF);
     TimeNs end_rel = static_cast<TimeNs>(end_rel_ns);
     if (total_edges > 0 && end_rel < 1) end_rel = 1;
-    plan.end_ns_ = origin_ns + end_rel;
+    plan.end_ns_ = RoundUp(origin_ns + end_rel, plan.quantum_ns_);
   }
   return plan;
 }
@@ -124,7 +133,7 @@ TimeNs Plan::EdgeTime(size_t i, int64_t k) const {
       static_cast<double>(info.p_start) + info.dir * (static_cast<double>(k) + 0.5);
   const double tau = CrossingTime(s, info.dir, threshold);
   const auto rel = static_cast<TimeNs>(std::ceil((s.t0_s + tau) * kNsPerSecondF));
-  return origin_ns_ + std::max<TimeNs>(1, rel);
+  return RoundUp(origin_ns_ + std::max<TimeNs>(1, rel), quantum_ns_);
 }
 
 size_t Plan::SegmentAt(TimeNs t) const {
@@ -157,10 +166,24 @@ int64_t Plan::EdgesUpTo(size_t i, TimeNs t) const {
   return k;
 }
 
+std::pair<size_t, int64_t> Plan::Locate(TimeNs t) const {
+  size_t i = SegmentAt(t);
+  int64_t k = EdgesUpTo(i, t);
+  // With a step quantum, the last edges of earlier segments may fall after
+  // the start of this one: walk back to the segment of the last edge <= t.
+  while (k == 0 && i > 0) {
+    const SegInfo& prev = info_[i - 1];
+    if (prev.edges > 0 && EdgeTime(i - 1, prev.edges - 1) <= t) break;
+    --i;
+    k = EdgesUpTo(i, t);
+  }
+  return {i, k};
+}
+
 int64_t Plan::StepsAt(TimeNs t) const {
   if (segs_.empty() || t <= origin_ns_) return origin_steps_;
-  const size_t i = SegmentAt(t);
-  return origin_steps_ + info_[i].p_start + info_[i].dir * EdgesUpTo(i, t);
+  const auto [i, k] = Locate(t);
+  return origin_steps_ + info_[i].p_start + info_[i].dir * k;
 }
 
 KinematicState Plan::StateAt(TimeNs t) const {

@@ -14,8 +14,9 @@
 //     with the thresholds half-way between steps, so a motor at rest on an
 //     integer x sits as far as possible from any threshold).
 //   * An edge's time is the exact root of the segment equation, in
-//     nanoseconds after origin_ns, rounded UP to the next integer ns and at
-//     least 1 ns after origin_ns: p(T) counts the edges with time <= T.
+//     nanoseconds after origin_ns, rounded UP to the next integer ns (and to
+//     the plan's step quantum, 1 ns unless a planner models a step timer)
+//     and at least 1 ns after origin_ns: p(T) counts the edges with time <= T.
 //   * Floating point is used only to place edges in time; positions are
 //     integers and are never rounded from x.
 #ifndef MOCO_SIM_MOTION_H_
@@ -24,6 +25,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "sim/scheduler.h"
@@ -77,8 +80,12 @@ class Plan {
   // at t = 0 and x = start_x_steps), drops empty ones, and splits any
   // segment whose velocity changes sign. start_x_steps is the motor's
   // continuous offset from origin_steps (|start_x_steps| <= 1/2 in practice).
+  // step_quantum_ns > 1 models a step generator clocked by a timer: each
+  // edge time is further rounded up to a multiple of it (absolute time), as
+  // is the plan's end. REQUIRES: the segments never ask for more than one
+  // edge per quantum.
   static Plan Build(TimeNs origin_ns, int64_t origin_steps, double start_x_steps,
-                    const std::vector<Segment>& segments);
+                    const std::vector<Segment>& segments, TimeNs step_quantum_ns = 1);
 
   bool empty() const { return segs_.empty(); }
   TimeNs origin_ns() const { return origin_ns_; }
@@ -122,12 +129,16 @@ class Plan {
   TimeNs EdgeTime(size_t i, int64_t k) const;
   // Index of the segment in effect at time T (the last with t0 <= T).
   size_t SegmentAt(TimeNs t) const;
+  // The segment holding the last edge with time <= T (or the one in effect
+  // at T), and the number of its edges up to T.
+  std::pair<size_t, int64_t> Locate(TimeNs t) const;
   // Edges of segment i with time <= T.
   int64_t EdgesUpTo(size_t i, TimeNs t) const;
 
   TimeNs origin_ns_ = 0;
   int64_t origin_steps_ = 0;
   TimeNs end_ns_ = 0;
+  TimeNs quantum_ns_ = 1;
   std::vector<Segment> segs_;
   std::vector<SegInfo> info_;
 };
@@ -143,8 +154,9 @@ template <typename Sink>
 int64_t Plan::ForEachEdge(TimeNs from_ns, TimeNs to_ns, Sink&& sink) const {
   int64_t emitted = 0;
   if (segs_.empty() || to_ns <= from_ns || to_ns <= origin_ns_) return 0;
-  size_t i = from_ns < origin_ns_ ? 0 : SegmentAt(from_ns);
-  int64_t k = from_ns < origin_ns_ ? 0 : EdgesUpTo(i, from_ns);
+  size_t i = 0;
+  int64_t k = 0;
+  if (from_ns >= origin_ns_) std::tie(i, k) = Locate(from_ns);
   for (; i < segs_.size(); ++i, k = 0) {
     const SegInfo& info = info_[i];
     for (; k < info.edges; ++k) {

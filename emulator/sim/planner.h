@@ -45,13 +45,17 @@ struct PlanRequest {
 // (e.g. a chunk phase) but must be deterministic.
 //
 // Contract for Plan(): the returned segments, laid end to end from
-// req.start, must be continuous in velocity, end at rest, and for kMoveTo end
-// within 1/2 step of target_steps (the motor lands on the integer target).
+// req.start, must end at rest, and for kMoveTo end within 1/2 step of
+// target_steps (the motor lands on the integer target). Velocity should be
+// continuous unless the modelled device really steps it (DFMoco chunks).
 // Each segment's t0_s and x0_steps are ignored (the motor recomputes them).
 class Planner {
  public:
   virtual ~Planner() = default;
   virtual std::vector<Segment> Plan(const PlanRequest& req) = 0;
+  // Step edges are rounded up to multiples of this (a step generator run by
+  // a timer interrupt); 1 = analytic edge times.
+  virtual TimeNs StepQuantumNs() const { return 1; }
 };
 
 // Segments bringing `start` to rest at constant deceleration `decel`

@@ -214,7 +214,7 @@ void StepperMotor::Replan(PlanRequest req) {
   req.now_ns = now;
   req.start = start;
   req.target_steps -= p;
-  InstallPlan(Plan::Build(now, p, start.x_steps, planner_->Plan(req)));
+  InstallPlan(Plan::Build(now, p, start.x_steps, planner_->Plan(req), planner_->StepQuantumNs()));
 }
 
 void StepperMotor::InstallPlan(Plan plan) {
