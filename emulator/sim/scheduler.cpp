@@ -95,6 +95,9 @@ void Scheduler::HeapPush(Entry e) {
   heap_[hole] = e;
 }
 
+// Bottom-up deletion: move the hole down along the smallest children to a
+// leaf (no comparison with the moved element on the way), then sift the last
+// element up from there, which is usually a short trip.
 void Scheduler::HeapPopTop() {
   const Entry last = heap_.back();
   heap_.pop_back();
@@ -105,13 +108,23 @@ void Scheduler::HeapPopTop() {
     const size_t first = 4 * hole + 1;
     if (first >= n) break;
     size_t best = first;
+    Key best_key = KeyOf(heap_[first]);
     const size_t end = first + 4 < n ? first + 4 : n;
     for (size_t c = first + 1; c < end; ++c) {
-      if (Later(heap_[best], heap_[c])) best = c;
+      const Key k = KeyOf(heap_[c]);
+      const bool smaller = k < best_key;
+      best = smaller ? c : best;
+      best_key = smaller ? k : best_key;
     }
-    if (!Later(last, heap_[best])) break;
     heap_[hole] = heap_[best];
     hole = best;
+  }
+  const Key last_key = KeyOf(last);
+  while (hole > 0) {
+    const size_t parent = (hole - 1) / 4;
+    if (KeyOf(heap_[parent]) <= last_key) break;
+    heap_[hole] = heap_[parent];
+    hole = parent;
   }
   heap_[hole] = last;
 }

@@ -86,9 +86,12 @@ class Scheduler {
     uint32_t generation = 1;  // bumped when the slot is released
   };
 
-  static bool Later(const Entry& a, const Entry& b) {
-    return a.time != b.time ? a.time > b.time : a.seq > b.seq;
+  // (time, seq) as one unsigned 128-bit key, so comparisons are branch-free.
+  __extension__ using Key = unsigned __int128;
+  static Key KeyOf(const Entry& e) {
+    return (static_cast<Key>(static_cast<uint64_t>(e.time) ^ (uint64_t{1} << 63)) << 64) | e.seq;
   }
+  static bool Later(const Entry& a, const Entry& b) { return KeyOf(a) > KeyOf(b); }
   static TimerId MakeId(uint32_t generation, uint32_t slot) {
     return (static_cast<uint64_t>(generation) << 32) | slot;
   }
