@@ -184,6 +184,33 @@ TEST(SchedulerTest, CancelledClosuresAreDestroyed) {
   EXPECT_EQ(token.use_count(), 1);
 }
 
+TEST(SchedulerTest, ManyCancellationsKeepOrderThroughCompaction) {
+  Scheduler s;
+  std::vector<Scheduler::TimerId> ids;
+  std::vector<std::pair<TimeNs, int>> ran;
+  uint32_t rng = 12345;
+  auto next = [&rng] {
+    rng = rng * 1664525u + 1013904223u;
+    return rng >> 8;
+  };
+  std::vector<std::pair<TimeNs, int>> want;
+  for (int i = 0; i < 5000; ++i) {
+    const TimeNs t = next() % 1000;
+    ids.push_back(s.At(t, [&ran, &s, i] { ran.push_back({s.Now(), i}); }));
+    if (i % 10 == 3) want.push_back({t, i});
+  }
+  for (int i = 0; i < 5000; ++i) {
+    if (i % 10 != 3) {
+      EXPECT_TRUE(s.Cancel(ids[static_cast<size_t>(i)]));
+    }
+  }
+  EXPECT_EQ(s.PendingCount(), want.size());
+  std::stable_sort(want.begin(), want.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  s.RunUntilIdle();
+  EXPECT_EQ(ran, want);
+}
+
 // Law: whatever the mix of schedules and cancels, the events that run are
 // exactly the non-cancelled ones, in (time, insertion) order, each at its time.
 RC_GTEST_PROP(SchedulerProp, RunsSurvivorsInTimeSequenceOrder,
