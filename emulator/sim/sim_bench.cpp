@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "sim/planner_dfmoco.h"
 #include "sim/rig.h"
 #include "sim/scheduler.h"
 #include "sim/step_trace.h"
@@ -129,6 +130,28 @@ void BM_MotorMemoryTenMinuteMove(benchmark::State& state) {
   state.counters["segments"] = static_cast<double>(segments);
 }
 BENCHMARK(BM_MotorMemoryTenMinuteMove);
+
+// The same with DFMoco's 50 ms chunks: O(segments) = 12000 chunks.
+void BM_MotorMemoryTenMinuteMoveDfmoco(benchmark::State& state) {
+  size_t bytes = 0;
+  size_t segments = 0;
+  for (auto _ : state) {
+    Scheduler s;
+    StepperMotor m(s, 1, std::make_unique<DfmocoPlanner>());
+    MotionProfile p;
+    p.max_velocity_steps_per_s = 20000;
+    p.max_accel_steps_per_s2 = 10000;
+    m.SetProfile(p);
+    m.MoveTo(20000LL * 600);
+    s.RunUntil(300 * kNsPerSecond);
+    bytes = sizeof(StepperMotor) + m.HeapBytes();
+    segments = m.CurrentPlan().segments().size();
+    benchmark::DoNotOptimize(m.Position());
+  }
+  state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["segments"] = static_cast<double>(segments);
+}
+BENCHMARK(BM_MotorMemoryTenMinuteMoveDfmoco)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace moco::sim
