@@ -27,7 +27,8 @@ std::variant<EndpointSpec, std::string> ParseEndpointSpec(std::string_view spec)
   if (spec.starts_with("pty:")) {
     out.kind = EndpointSpec::Kind::kPty;
     out.path = std::string(spec.substr(4));
-    if (out.path.empty()) return "\"" + std::string(spec) + "\" names no path: " + std::string(kForms);
+    if (out.path.empty())
+      return "\"" + std::string(spec) + "\" names no path: " + std::string(kForms);
     return out;
   }
   if (spec.starts_with("tcp:")) {
@@ -44,7 +45,8 @@ std::variant<EndpointSpec, std::string> ParseEndpointSpec(std::string_view spec)
     } else if (const size_t colon = rest.rfind(':'); colon != std::string_view::npos) {
       out.address = std::string(rest.substr(0, colon));
       port_text = rest.substr(colon + 1);
-      if (out.address->empty()) return "\"" + std::string(spec) + "\" has an empty address: " + std::string(kForms);
+      if (out.address->empty())
+        return "\"" + std::string(spec) + "\" has an empty address: " + std::string(kForms);
     }
     const auto port = ParsePort(port_text);
     if (!port) {
@@ -94,12 +96,10 @@ void DeviceServer::Serve(devices::Device& device) {
 }
 
 void DeviceServer::Stop() {
+  // The link first: it then closes quietly, without calling the device.
+  if (link_) link_->Stop();
   if (pty_) pty_->Stop();
   if (tcp_) tcp_->Stop();
-  if (link_) {
-    link_->Stop();
-    link_->SetDevice(nullptr);
-  }
 }
 
 std::string DeviceServer::Where() const {

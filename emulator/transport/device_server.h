@@ -29,9 +29,9 @@ namespace moco::transport {
 struct EndpointSpec {
   enum class Kind { kPty, kTcp };
   Kind kind = Kind::kPty;
-  std::string path;               // kPty
+  std::string path;                    // kPty
   std::optional<std::string> address;  // kTcp, when given in the spec
-  uint16_t port = 0;              // kTcp
+  uint16_t port = 0;                   // kTcp
 };
 
 // Parses a spec; on failure returns a message naming the problem and the forms

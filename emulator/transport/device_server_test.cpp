@@ -66,7 +66,8 @@ class DeviceServerTest : public ::testing::Test {
 };
 
 TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
-  const fs::path file = fs::temp_directory_path() / ("moco_tap_" + std::to_string(getpid()) + ".jsonl");
+  const fs::path file =
+      fs::temp_directory_path() / ("moco_tap_" + std::to_string(getpid()) + ".jsonl");
   control::SessionHeader header;
   header.protocol = control::Protocol::kDfmoco;
   header.device = "echo";
@@ -118,7 +119,8 @@ TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
     EXPECT_GE(e.t_ns, last_t);
     last_t = e.t_ns;
     if (e.is_event) {
-      events.push_back(e.event["event"].get<std::string>() + " " + e.event["detail"].get<std::string>());
+      events.push_back(e.event["event"].get<std::string>() + " " +
+                       e.event["detail"].get<std::string>());
     } else if (e.from == control::Origin::kHost) {
       from_host.append(e.bytes.begin(), e.bytes.end());
     } else {

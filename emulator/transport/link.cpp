@@ -41,14 +41,15 @@ void Link::CancelTimer(sim::Scheduler::TimerId& id) {
 }
 
 ByteStream::Handler Link::Guard(void (Link::*member)(const ErrorCode&, size_t)) {
-  return [this, weak = std::weak_ptr<bool>(alive_), gen = stream_gen_, member](
-             const ErrorCode& ec, size_t n) {
+  return [this, weak = std::weak_ptr<bool>(alive_), gen = stream_gen_, member](const ErrorCode& ec,
+                                                                               size_t n) {
     if (weak.expired() || gen != stream_gen_) return;
     (this->*member)(ec, n);
   };
 }
 
 void Link::SetDevice(devices::Device* device) {
+  if (stopped_) return;
   device_ = device;
   if (device_ == nullptr) {
     in_.clear();
@@ -69,7 +70,7 @@ void Link::Write(wire::ByteView bytes) {
   const sim::TimeNs now = scheduler_.Now();
   stats_.bytes_from_device += bytes.size();
   if (options_.observer != nullptr) options_.observer->OnTraffic(now, Direction::kToHost, bytes);
-  if (cut_active()) {
+  if (now < cut_until_ns_) {
     stats_.cut_dropped += bytes.size();
     return;
   }
@@ -157,7 +158,7 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
   const sim::TimeNs now = driver_.Sync();
   stats_.bytes_from_host += n;
   const wire::ByteView bytes(read_buf_.data(), n);
-  if (cut_active()) {
+  if (now < cut_until_ns_) {
     stats_.cut_dropped += n;
   } else {
     for (const TimedBytes& chunk : faults_.Apply(Direction::kToDevice, bytes, now)) {
@@ -330,6 +331,10 @@ void Link::PowerCycle(sim::TimeNs off_ns) {
 void Link::Stop() {
   if (stopped_) return;
   stopped_ = true;
+  // Shutting down is not a host event: the device and the observer may
+  // already be gone (they are usually built after the link, so die first).
+  device_ = nullptr;
+  options_.observer = nullptr;
   CancelTimer(in_wake_);
   CancelTimer(out_wake_);
   CancelTimer(reclaim_timer_);

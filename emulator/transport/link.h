@@ -90,15 +90,15 @@ struct LinkOptions {
 };
 
 struct LinkStats {
-  uint64_t bytes_from_host = 0;   // read from streams
-  uint64_t bytes_to_device = 0;   // handed to the device
-  uint64_t bytes_from_device = 0; // written by the device
-  uint64_t bytes_to_host = 0;     // written to streams
-  uint64_t overflowed = 0;        // dropped: queue full
-  uint64_t discarded = 0;         // dropped: no host and !hold_while_closed, or queue cleared
-  uint64_t cut_dropped = 0;       // dropped during a link cut
-  uint64_t reclaimed = 0;         // taken back from a closed PTY and re-queued
-  uint64_t connections = 0;       // streams attached
+  uint64_t bytes_from_host = 0;    // read from streams
+  uint64_t bytes_to_device = 0;    // handed to the device
+  uint64_t bytes_from_device = 0;  // written by the device
+  uint64_t bytes_to_host = 0;      // written to streams
+  uint64_t overflowed = 0;         // dropped: queue full
+  uint64_t discarded = 0;          // dropped: no host and !hold_while_closed, or queue cleared
+  uint64_t cut_dropped = 0;        // dropped during a link cut
+  uint64_t reclaimed = 0;          // taken back from a closed PTY and re-queued
+  uint64_t connections = 0;        // streams attached
 };
 
 // The device end of a transport. Construct it, give it to the device as its
@@ -111,10 +111,11 @@ struct LinkStats {
 // when the line rate allows (a byte no earlier than the end of its own
 // character time) and the host is present.
 //
-// The driver must outlive the link; the device must outlive the link or be
-// detached with SetDevice(nullptr). Call Stop() before destroying the
-// io_context's other objects; destroying the link is safe at any time (pending
-// handlers then do nothing). Single-threaded: the io thread only.
+// The driver must outlive the link. The device and the observer must outlive
+// the link's service: until Stop() (or the destructor, which stops), neither
+// of which calls them, so they may be destroyed before the link itself.
+// Destroying the link is safe with handlers pending (they then do nothing).
+// Single-threaded: the io thread only.
 class Link final : public devices::ByteSink {
  public:
   Link(RealtimeDriver& driver, LinkOptions options);
@@ -149,11 +150,13 @@ class Link final : public devices::ByteSink {
   // queued or arriving meanwhile are dropped), and the current stream is
   // closed when `close_stream` (TCP: the host sees a disconnect).
   void Cut(sim::TimeNs duration_ns, bool close_stream);
-  bool cut_active() const { return scheduler_.Now() < cut_until_ns_; }
+  // Whether a cut is in force now (by the wall clock).
+  bool cut_active() { return driver_.NowNs() < cut_until_ns_; }
   // Power-cycles the device: PowerOff() now, PowerOn() after off_ns.
   void PowerCycle(sim::TimeNs off_ns);
 
-  // Closes the stream, cancels the link's timers and stops serving.
+  // Closes the stream, cancels the link's timers and stops serving, without
+  // calling the device or the observer. Idempotent.
   void Stop();
 
   const LinkStats& stats() const { return stats_; }

@@ -89,8 +89,9 @@ std::variant<FaultConfig, std::string> ParseFaultConfig(std::string_view spec) {
       continue;
     }
     const auto v = ParseDouble(value);
-    if (!v) return "fault value \"" + std::string(value) + "\" for " + std::string(key) +
-                   " is not a number";
+    if (!v)
+      return "fault value \"" + std::string(value) + "\" for " + std::string(key) +
+             " is not a number";
     auto set = [&](auto member) {
       if (to_device) config.to_device.*member = *v;
       if (to_host) config.to_host.*member = *v;

@@ -62,7 +62,8 @@ TEST(LinkFaultsTest, DifferentSeedDifferentOutput) {
   FaultInjector a(Everything(7, 0.05));
   FaultInjector b(Everything(8, 0.05));
   const wire::Bytes in = Pattern(5000);
-  EXPECT_NE(Flatten(a.Apply(Direction::kToHost, in, 0)), Flatten(b.Apply(Direction::kToHost, in, 0)));
+  EXPECT_NE(Flatten(a.Apply(Direction::kToHost, in, 0)),
+            Flatten(b.Apply(Direction::kToHost, in, 0)));
 }
 
 TEST(LinkFaultsTest, DirectionsDrawFromIndependentStreams) {
@@ -186,7 +187,8 @@ RC_GTEST_PROP(LinkFaultsProp, OutputIndependentOfChunking, ()) {
   size_t pos = 0;
   for (size_t cut : cuts) {
     const size_t n = std::min(cut, in.size() - pos);
-    const auto out = Flatten(pieces.Apply(Direction::kToDevice, wire::ByteView(in).subspan(pos, n), 0));
+    const auto out =
+        Flatten(pieces.Apply(Direction::kToDevice, wire::ByteView(in).subspan(pos, n), 0));
     got.insert(got.end(), out.begin(), out.end());
     pos += n;
   }

@@ -88,7 +88,8 @@ class PtyPort::MasterStream final : public AsioByteStream<asio::posix::stream_de
 
 PtyPort::PtyPort(Link& link, std::string link_path)
     : link_(link), link_path_(std::move(link_path)) {
-  if (link_path_.empty()) throw std::runtime_error("the PTY link path is empty: give a path such as /tmp/dmc16");
+  if (link_path_.empty())
+    throw std::runtime_error("the PTY link path is empty: give a path such as /tmp/dmc16");
   char name[256] = {};
   if (openpty(&master_fd_, &slave_fd_, name, nullptr, nullptr) != 0) {
     throw std::runtime_error("cannot open a pseudo-terminal: " + ErrnoText(errno) +
@@ -171,11 +172,11 @@ void PtyPort::Start() {
   master_fd_ = -1;
   // Until a host opens the slave, device output waits in the link's queue.
   link_.SetHostPresent(!detects_host());
-  link_.Attach(std::move(stream), [this, weak = std::weak_ptr<bool>(alive_)](
-                                      const std::string& reason) {
-    if (weak.expired()) return;
-    link_.Log("PTY " + slave_name_ + " failed: " + reason);
-  });
+  link_.Attach(std::move(stream),
+               [this, weak = std::weak_ptr<bool>(alive_)](const std::string& reason) {
+                 if (weak.expired()) return;
+                 link_.Log("PTY " + slave_name_ + " failed: " + reason);
+               });
   if (detects_host()) {
     inotify_ = std::make_unique<asio::posix::stream_descriptor>(io, inotify_fd_);
     WatchHost();
@@ -183,12 +184,11 @@ void PtyPort::Start() {
 }
 
 void PtyPort::WatchHost() {
-  inotify_->async_read_some(
-      asio::buffer(inotify_buf_),
-      [this, weak = std::weak_ptr<bool>(alive_)](const ErrorCode& ec, size_t n) {
-        if (weak.expired()) return;
-        OnInotify(ec, n);
-      });
+  inotify_->async_read_some(asio::buffer(inotify_buf_), [this, weak = std::weak_ptr<bool>(alive_)](
+                                                            const ErrorCode& ec, size_t n) {
+    if (weak.expired()) return;
+    OnInotify(ec, n);
+  });
 }
 
 void PtyPort::OnInotify(const ErrorCode& ec, size_t n) {

@@ -67,8 +67,8 @@ class Host {
 
 std::string TempDir() {
   static std::atomic<int> counter{0};
-  const fs::path dir = fs::temp_directory_path() /
-                       ("moco_pty_test_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+  const fs::path dir = fs::temp_directory_path() / ("moco_pty_test_" + std::to_string(getpid()) +
+                                                    "_" + std::to_string(counter++));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir.string();
@@ -82,7 +82,10 @@ std::string Pattern(size_t n, uint8_t salt) {
 
 class PtyPortTest : public ::testing::Test {
  protected:
-  void SetUp() override { dir_ = TempDir(); path_ = dir_ + "/dmc16"; }
+  void SetUp() override {
+    dir_ = TempDir();
+    path_ = dir_ + "/dmc16";
+  }
   void TearDown() override { fs::remove_all(dir_); }
 
   // Builds link, device, port; pacing as given.

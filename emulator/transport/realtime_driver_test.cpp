@@ -40,7 +40,8 @@ TEST(RealtimeDriverTest, RunsEventsInOrderNeverAheadOfTheWallClock) {
   ASSERT_TRUE(RunUntil(io, [&] { return order.size() == 5; }));
   EXPECT_EQ(order, (std::vector<int>{4, 3, 2, 1, 0}));
   EXPECT_FALSE(ahead);
-  for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], static_cast<TimeNs>(i + 1) * 2 * kNsPerMs);
+  for (size_t i = 0; i < seen.size(); ++i)
+    EXPECT_EQ(seen[i], static_cast<TimeNs>(i + 1) * 2 * kNsPerMs);
 }
 
 TEST(RealtimeDriverTest, KickArmsForEventsAddedOutsideTheScheduler) {
