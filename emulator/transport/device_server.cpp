@@ -2,6 +2,7 @@
 #include "transport/device_server.h"
 
 #include <charconv>
+#include <initializer_list>
 #include <stdexcept>
 
 namespace moco::transport {
@@ -10,6 +11,14 @@ namespace {
 constexpr std::string_view kForms =
     "use pty:<path> (e.g. pty:/tmp/dmc16), tcp:<port> or tcp:<address>:<port> "
     "(e.g. tcp:127.0.0.1:5000, tcp:127.0.0.1:0 for a free port)";
+
+// Concatenates pieces (also avoids g++ 12's false -Wrestrict on
+// "literal" + std::string at -O2).
+std::string Cat(std::initializer_list<std::string_view> parts) {
+  std::string out;
+  for (std::string_view p : parts) out.append(p);
+  return out;
+}
 
 std::optional<uint16_t> ParsePort(std::string_view text) {
   unsigned v = 0;
@@ -27,8 +36,7 @@ std::variant<EndpointSpec, std::string> ParseEndpointSpec(std::string_view spec)
   if (spec.starts_with("pty:")) {
     out.kind = EndpointSpec::Kind::kPty;
     out.path = std::string(spec.substr(4));
-    if (out.path.empty())
-      return "\"" + std::string(spec) + "\" names no path: " + std::string(kForms);
+    if (out.path.empty()) return Cat({"\"", spec, "\" names no path: ", kForms});
     return out;
   }
   if (spec.starts_with("tcp:")) {
@@ -38,25 +46,23 @@ std::variant<EndpointSpec, std::string> ParseEndpointSpec(std::string_view spec)
     if (!rest.empty() && rest.front() == '[') {
       const size_t close = rest.find(']');
       if (close == std::string_view::npos || close + 1 >= rest.size() || rest[close + 1] != ':') {
-        return "\"" + std::string(spec) + "\": an IPv6 address is written [addr]:port";
+        return Cat({"\"", spec, "\": an IPv6 address is written [addr]:port"});
       }
       out.address = std::string(rest.substr(1, close - 1));
       port_text = rest.substr(close + 2);
     } else if (const size_t colon = rest.rfind(':'); colon != std::string_view::npos) {
       out.address = std::string(rest.substr(0, colon));
       port_text = rest.substr(colon + 1);
-      if (out.address->empty())
-        return "\"" + std::string(spec) + "\" has an empty address: " + std::string(kForms);
+      if (out.address->empty()) return Cat({"\"", spec, "\" has an empty address: ", kForms});
     }
     const auto port = ParsePort(port_text);
     if (!port) {
-      return "\"" + std::string(port_text) + "\" in \"" + std::string(spec) +
-             "\" is not a port number 0..65535";
+      return Cat({"\"", port_text, "\" in \"", spec, "\" is not a port number 0..65535"});
     }
     out.port = *port;
     return out;
   }
-  return "unknown endpoint \"" + std::string(spec) + "\": " + std::string(kForms);
+  return Cat({"unknown endpoint \"", spec, "\": ", kForms});
 }
 
 DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeOptions options) {

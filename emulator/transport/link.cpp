@@ -219,6 +219,9 @@ void Link::Attach(std::unique_ptr<ByteStream> stream,
 }
 
 void Link::Detach() {
+  // Once stopped there is nothing attached, and the clock must not run: the
+  // device may be gone with its timers still pending.
+  if (stopped_) return;
   driver_.Sync();
   DetachInternal();
   driver_.Kick();
