@@ -146,7 +146,6 @@ TEST_F(TcpPortTest, DisconnectMidFrameThenReconnect) {
 
 TEST_F(TcpPortTest, DisconnectWhileTheDeviceIsWritingKeepsServing) {
   Serve();
-  link_->SetDevice(device_.get());
   {
     Client c(port_->port());
     ASSERT_TRUE(RunUntil(io_, [&] { return link_->attached(); }));
