@@ -1,0 +1,350 @@
+// The session logic shared by every transport: reader, writer with an
+// outgoing queue, line pacing, link faults and the recording tap.
+#include "transport/link.h"
+
+#include <algorithm>
+#include <iostream>
+
+namespace moco::transport {
+
+void LogToStderr(std::string_view line) { std::cerr << "mocosim: " << line << '\n'; }
+
+Link::Link(RealtimeDriver& driver, LinkOptions options)
+    : driver_(driver),
+      scheduler_(driver.scheduler()),
+      options_(std::move(options)),
+      faults_(options_.faults) {
+  if (!options_.log) options_.log = LogToStderr;
+}
+
+Link::~Link() {
+  Stop();
+  alive_.reset();
+}
+
+void Link::Log(std::string_view line) const {
+  std::string s = options_.name;
+  s += ": ";
+  s += line;
+  options_.log(s);
+}
+
+void Link::Event(std::string_view kind, std::string_view detail) {
+  if (options_.observer != nullptr) {
+    options_.observer->OnLinkEvent(scheduler_.Now(), kind, detail);
+  }
+}
+
+void Link::CancelTimer(sim::Scheduler::TimerId& id) {
+  if (id != sim::Scheduler::kNoTimer) scheduler_.Cancel(id);
+  id = sim::Scheduler::kNoTimer;
+}
+
+ByteStream::Handler Link::Guard(void (Link::*member)(const ErrorCode&, size_t)) {
+  return [this, weak = std::weak_ptr<bool>(alive_), gen = stream_gen_, member](const ErrorCode& ec,
+                                                                               size_t n) {
+    if (weak.expired() || gen != stream_gen_) return;
+    (this->*member)(ec, n);
+  };
+}
+
+void Link::SetDevice(devices::Device* device) {
+  if (stopped_) return;
+  device_ = device;
+  if (device_ == nullptr) {
+    in_.clear();
+    CancelTimer(in_wake_);
+    return;
+  }
+  const uint32_t rate = options_.pacing ? device_->Line().BytesPerSecond() : 0;
+  in_pacer_ = LinePacer(rate);
+  out_pacer_ = LinePacer(rate);
+  if (host_open_ && options_.report_host_link) device_->OnHostLink(true);
+  StartRead();
+}
+
+// ---- Device -> host ---------------------------------------------------------
+
+void Link::Write(wire::ByteView bytes) {
+  if (stopped_ || bytes.empty()) return;
+  const sim::TimeNs now = scheduler_.Now();
+  stats_.bytes_from_device += bytes.size();
+  if (options_.observer != nullptr) options_.observer->OnTraffic(now, Direction::kToHost, bytes);
+  if (now < cut_until_ns_) {
+    stats_.cut_dropped += bytes.size();
+    return;
+  }
+  if (!options_.hold_while_closed && !host_open_) {
+    stats_.discarded += bytes.size();
+    return;
+  }
+  for (const TimedBytes& chunk : faults_.Apply(Direction::kToHost, bytes, now)) {
+    for (uint8_t b : chunk.bytes) {
+      if (queued_bytes() >= options_.max_queue_bytes) {
+        ++stats_.overflowed;
+        if (!overflow_logged_) {
+          overflow_logged_ = true;
+          Log("outgoing queue full (" + std::to_string(options_.max_queue_bytes) +
+              " bytes, no host reading): dropping new device output");
+        }
+        continue;
+      }
+      out_.push_back({chunk.at_ns, b});
+    }
+  }
+  PumpWriter();
+}
+
+void Link::PumpWriter() {
+  if (stopped_ || writing_ || !host_open_ || out_.empty()) return;
+  CancelTimer(out_wake_);
+  const sim::TimeNs now = driver_.NowNs();
+  write_buf_.clear();
+  sim::TimeNs next_due = now;
+  while (!out_.empty() && write_buf_.size() < kMaxWriteChunk) {
+    const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
+    const sim::TimeNs due = out_pacer_.DueTime(ready);
+    if (due > now) {
+      next_due = due;
+      break;
+    }
+    out_pacer_.Take(ready);
+    write_buf_.push_back(out_.front().byte);
+    out_.pop_front();
+  }
+  if (!write_buf_.empty()) {
+    writing_ = true;
+    stream_->AsyncWriteAll(asio::buffer(write_buf_), Guard(&Link::OnWritten));
+  } else if (!out_.empty()) {
+    out_wake_ = scheduler_.At(next_due, [this] {
+      out_wake_ = sim::Scheduler::kNoTimer;
+      PumpWriter();
+    });
+  }
+}
+
+void Link::OnWritten(const ErrorCode& ec, size_t n) {
+  writing_ = false;
+  if (ec) {
+    StreamEnded("write failed: " + ec.message());
+    driver_.Kick();
+    return;
+  }
+  stats_.bytes_to_host += n;
+  write_buf_.clear();
+  if (!host_present_) Reclaim();
+  PumpWriter();
+  driver_.Kick();
+}
+
+// ---- Host -> device ---------------------------------------------------------
+
+void Link::StartRead() {
+  if (stopped_ || reading_ || !stream_ || device_ == nullptr || in_.size() >= kMaxInboundBytes) {
+    return;
+  }
+  reading_ = true;
+  stream_->AsyncReadSome(asio::buffer(read_buf_), Guard(&Link::OnRead));
+}
+
+void Link::OnRead(const ErrorCode& ec, size_t n) {
+  reading_ = false;
+  if (ec) {
+    StreamEnded(ec == asio::error::eof ? std::string("host closed the connection")
+                                       : "read failed: " + ec.message());
+    driver_.Kick();
+    return;
+  }
+  const sim::TimeNs now = driver_.Sync();
+  stats_.bytes_from_host += n;
+  const wire::ByteView bytes(read_buf_.data(), n);
+  if (now < cut_until_ns_) {
+    stats_.cut_dropped += n;
+  } else {
+    for (const TimedBytes& chunk : faults_.Apply(Direction::kToDevice, bytes, now)) {
+      for (uint8_t b : chunk.bytes) in_.push_back({in_pacer_.Take(chunk.at_ns), b});
+    }
+    DeliverInbound();
+  }
+  StartRead();
+  driver_.Kick();
+}
+
+void Link::DeliverInbound() {
+  CancelTimer(in_wake_);
+  if (device_ == nullptr) {
+    in_.clear();
+    return;
+  }
+  const sim::TimeNs now = scheduler_.Now();
+  wire::Bytes chunk;
+  while (!in_.empty() && in_.front().due_ns <= now) {
+    chunk.push_back(in_.front().byte);
+    in_.pop_front();
+  }
+  if (!in_.empty()) {
+    in_wake_ = scheduler_.At(in_.front().due_ns, [this] {
+      in_wake_ = sim::Scheduler::kNoTimer;
+      DeliverInbound();
+      StartRead();
+    });
+  }
+  if (!chunk.empty()) {
+    stats_.bytes_to_device += chunk.size();
+    if (options_.observer != nullptr) {
+      options_.observer->OnTraffic(now, Direction::kToDevice, chunk);
+    }
+    device_->OnHostBytes(chunk);
+  }
+}
+
+// ---- Streams and host presence ---------------------------------------------
+
+void Link::Attach(std::unique_ptr<ByteStream> stream,
+                  std::function<void(const std::string&)> on_end) {
+  if (stopped_) {
+    stream->Close();
+    return;
+  }
+  driver_.Sync();
+  DetachInternal();
+  stream_ = std::move(stream);
+  on_end_ = std::move(on_end);
+  ++stream_gen_;
+  ++stats_.connections;
+  UpdateHostOpen();
+  StartRead();
+  PumpWriter();
+  driver_.Kick();
+}
+
+void Link::Detach() {
+  // Once stopped there is nothing attached, and the clock must not run: the
+  // device may be gone with its timers still pending.
+  if (stopped_) return;
+  driver_.Sync();
+  DetachInternal();
+  driver_.Kick();
+}
+
+void Link::DetachInternal() {
+  if (!stream_) return;
+  stream_->Close();
+  stream_.reset();
+  ++stream_gen_;
+  reading_ = false;
+  writing_ = false;
+  write_buf_.clear();
+  on_end_ = nullptr;
+  CancelTimer(out_wake_);
+  UpdateHostOpen();
+}
+
+void Link::StreamEnded(const std::string& reason) {
+  auto on_end = std::move(on_end_);
+  driver_.Sync();
+  DetachInternal();
+  if (on_end) on_end(reason);
+}
+
+void Link::SetHostPresent(bool present) {
+  if (present == host_present_) return;
+  driver_.Sync();
+  host_present_ = present;
+  UpdateHostOpen();
+  driver_.Kick();
+}
+
+void Link::UpdateHostOpen() {
+  const bool open = stream_ != nullptr && host_present_ && !stopped_;
+  if (open == host_open_) return;
+  host_open_ = open;
+  Event("host_link", open ? "open" : "closed");
+  if (open) {
+    // Bytes held while the host was away start a fresh burst now.
+    send_floor_ns_ = driver_.NowNs();
+    out_pacer_.Reset();
+    reclaim_pos_ = 0;
+    CancelTimer(reclaim_timer_);
+  } else {
+    CancelTimer(out_wake_);
+    if (!options_.hold_while_closed) {
+      stats_.discarded += out_.size();
+      out_.clear();
+    } else if (stream_ != nullptr) {
+      if (!writing_) Reclaim();
+      CancelTimer(reclaim_timer_);
+      reclaim_timer_ = scheduler_.After(kReclaimRetryNs, [this] {
+        reclaim_timer_ = sim::Scheduler::kNoTimer;
+        if (!writing_) Reclaim();
+      });
+    }
+  }
+  if (device_ != nullptr && options_.report_host_link) device_->OnHostLink(open);
+  if (open) PumpWriter();
+}
+
+void Link::Reclaim() {
+  if (!stream_ || host_present_) return;
+  const wire::Bytes back = stream_->Reclaim();
+  if (back.empty()) return;
+  const sim::TimeNs now = scheduler_.Now();
+  auto pos = out_.begin() + static_cast<std::ptrdiff_t>(std::min(reclaim_pos_, out_.size()));
+  for (uint8_t b : back) {
+    pos = out_.insert(pos, OutByte{now, b});
+    ++pos;
+  }
+  reclaim_pos_ += back.size();
+  stats_.reclaimed += back.size();
+}
+
+// ---- Faults and lifecycle ---------------------------------------------------
+
+void Link::Cut(sim::TimeNs duration_ns, bool close_stream) {
+  if (stopped_) return;
+  const sim::TimeNs now = driver_.Sync();
+  cut_until_ns_ = std::max(cut_until_ns_, now + std::max<sim::TimeNs>(duration_ns, 0));
+  stats_.cut_dropped += in_.size() + out_.size();
+  in_.clear();
+  out_.clear();
+  reclaim_pos_ = 0;
+  CancelTimer(in_wake_);
+  CancelTimer(out_wake_);
+  Event("link_fault", "cut " + std::to_string(duration_ns));
+  Log("link cut for " + std::to_string(duration_ns / sim::kNsPerMs) + " ms");
+  if (close_stream) DetachInternal();
+  StartRead();
+  driver_.Kick();
+}
+
+void Link::PowerCycle(sim::TimeNs off_ns) {
+  if (stopped_ || device_ == nullptr) return;
+  driver_.Sync();
+  Event("power_cycle", "off " + std::to_string(off_ns));
+  Log("power cycle: off for " + std::to_string(off_ns / sim::kNsPerMs) + " ms");
+  CancelTimer(power_on_timer_);
+  device_->PowerOff();
+  power_on_timer_ = scheduler_.After(off_ns, [this] {
+    power_on_timer_ = sim::Scheduler::kNoTimer;
+    if (device_ != nullptr) device_->PowerOn();
+  });
+  driver_.Kick();
+}
+
+void Link::Stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  // Shutting down is not a host event: the device and the observer may
+  // already be gone (they are usually built after the link, so die first).
+  device_ = nullptr;
+  options_.observer = nullptr;
+  CancelTimer(in_wake_);
+  CancelTimer(out_wake_);
+  CancelTimer(reclaim_timer_);
+  CancelTimer(power_on_timer_);
+  DetachInternal();
+  in_.clear();
+  out_.clear();
+}
+
+}  // namespace moco::transport

@@ -1,0 +1,259 @@
+// Tests for the Link session (link.h) over an in-memory stream: the tap's
+// view and timestamps, the outgoing queue's cap and hold policy, reclaim
+// order, link cuts and power cycles, faults applied on the link.
+#include "transport/link.h"
+
+#include <gtest/gtest.h>
+
+#include "transport/test_support.h"
+
+namespace moco::transport {
+namespace {
+
+using sim::kNsPerMs;
+using testing::EchoDevice;
+using testing::RunUntil;
+
+// The far end of an in-memory stream, driven by the test.
+struct FakeEnd {
+  asio::io_context* io = nullptr;
+  std::string written;
+  ByteStream::Handler pending_read;
+  asio::mutable_buffer read_buf;
+  bool closed = false;
+  wire::Bytes to_reclaim;
+
+  void HostSends(std::string_view s) {
+    ASSERT_TRUE(pending_read) << "the link is not reading";
+    ASSERT_LE(s.size(), read_buf.size());
+    std::memcpy(read_buf.data(), s.data(), s.size());
+    asio::post(*io, [h = std::move(pending_read), n = s.size()] { h(ErrorCode(), n); });
+    pending_read = nullptr;
+  }
+  void HostHangsUp() {
+    ASSERT_TRUE(pending_read);
+    asio::post(*io, [h = std::move(pending_read)] { h(asio::error::eof, 0); });
+    pending_read = nullptr;
+  }
+};
+
+class FakeStream final : public ByteStream {
+ public:
+  explicit FakeStream(std::shared_ptr<FakeEnd> end) : end_(std::move(end)) {}
+  void AsyncReadSome(asio::mutable_buffer buffer, Handler handler) override {
+    end_->read_buf = buffer;
+    end_->pending_read = std::move(handler);
+  }
+  void AsyncWriteAll(asio::const_buffer buffer, Handler handler) override {
+    end_->written.append(static_cast<const char*>(buffer.data()), buffer.size());
+    asio::post(*end_->io, [h = std::move(handler), n = buffer.size()] { h(ErrorCode(), n); });
+  }
+  void Close() override {
+    end_->closed = true;
+    if (end_->pending_read) {
+      asio::post(*end_->io,
+                 [h = std::move(end_->pending_read)] { h(asio::error::operation_aborted, 0); });
+      end_->pending_read = nullptr;
+    }
+  }
+  wire::Bytes Reclaim() override { return std::exchange(end_->to_reclaim, {}); }
+  std::string PeerName() const override { return "fake"; }
+
+ private:
+  std::shared_ptr<FakeEnd> end_;
+};
+
+struct Recorded {
+  sim::TimeNs t_ns;
+  std::string what;  // "D:<bytes>" device wrote, "H:<bytes>" host bytes given to the device,
+                     // "E:kind detail"
+};
+
+class Recorder final : public TrafficObserver {
+ public:
+  void OnTraffic(sim::TimeNs t, Direction dir, wire::ByteView bytes) override {
+    log.push_back({t, std::string(dir == Direction::kToHost ? "D:" : "H:") +
+                          std::string(bytes.begin(), bytes.end())});
+  }
+  void OnLinkEvent(sim::TimeNs t, std::string_view kind, std::string_view detail) override {
+    log.push_back({t, "E:" + std::string(kind) + " " + std::string(detail)});
+  }
+  std::vector<Recorded> log;
+};
+
+class LinkTest : public ::testing::Test {
+ protected:
+  void Build(LinkOptions o) {
+    o.observer = &recorder_;
+    o.log = [this](std::string_view l) { log_ += std::string(l) + "\n"; };
+    link_ = std::make_unique<Link>(driver_, o);
+    device_ = std::make_unique<EchoDevice>(*link_);
+    device_->PowerOn();
+    link_->SetDevice(device_.get());
+    driver_.Start();
+  }
+  std::shared_ptr<FakeEnd> AttachFake() {
+    auto end = std::make_shared<FakeEnd>();
+    end->io = &io_;
+    link_->Attach(std::make_unique<FakeStream>(end));
+    return end;
+  }
+  LinkOptions Unpaced() {
+    LinkOptions o;
+    o.pacing = false;
+    return o;
+  }
+
+  asio::io_context io_;
+  sim::Scheduler scheduler_;
+  RealtimeDriver driver_{io_, scheduler_};
+  Recorder recorder_;
+  std::unique_ptr<Link> link_;
+  std::unique_ptr<EchoDevice> device_;
+  std::string log_;
+};
+
+TEST_F(LinkTest, TapSeesTheDevicesViewWithNonDecreasingSchedulerTimes) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  end->HostSends("ping");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "ping"; }));
+  ASSERT_EQ(recorder_.log.size(), 3u);
+  EXPECT_EQ(recorder_.log[0].what, "E:host_link open");
+  EXPECT_EQ(recorder_.log[1].what, "H:ping");
+  EXPECT_EQ(recorder_.log[2].what, "D:ping");
+  for (size_t i = 1; i < recorder_.log.size(); ++i) {
+    EXPECT_GE(recorder_.log[i].t_ns, recorder_.log[i - 1].t_ns);
+  }
+  EXPECT_LE(recorder_.log.back().t_ns, scheduler_.Now());
+}
+
+TEST_F(LinkTest, PacedHostBytesReachTheDeviceOneCharacterTimeApart) {
+  LinkOptions o;  // paced at the echo device's 115200 baud: 11520 bytes/s
+  Build(o);
+  auto end = AttachFake();
+  device_->echo = false;
+  end->HostSends("abc");
+  ASSERT_TRUE(RunUntil(io_, [&] { return device_->received == "abc"; }));
+  // Each byte is handed over at the scheduler time its stop bit ends.
+  std::vector<sim::TimeNs> times;
+  for (const auto& r : recorder_.log) {
+    if (r.what.starts_with("H:")) {
+      for (size_t i = 2; i < r.what.size(); ++i) times.push_back(r.t_ns);
+    }
+  }
+  ASSERT_EQ(times.size(), 3u);
+  EXPECT_EQ(times[1] - times[0], 173612 - 86806);
+  EXPECT_EQ(times[2] - times[1], 260417 - 173612);
+}
+
+TEST_F(LinkTest, QueueIsCappedAndOverflowIsCountedAndLogged) {
+  LinkOptions o = Unpaced();
+  o.max_queue_bytes = 10;
+  Build(o);
+  link_->SetHostPresent(false);  // nobody reading: output waits
+  AttachFake();
+  device_->Send("0123456789ABCDEF");
+  EXPECT_EQ(link_->queued_bytes(), 10u);
+  EXPECT_EQ(link_->stats().overflowed, 6u);
+  EXPECT_NE(log_.find("outgoing queue full (10 bytes"), std::string::npos) << log_;
+}
+
+TEST_F(LinkTest, HeldOutputFollowsReclaimedBytesInOrder) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  ASSERT_TRUE(link_->host_open());
+  device_->Send("AB");
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 2; }));
+  // The host leaves with "AB" unread in the stream; the stream gives it back.
+  end->to_reclaim = {'A', 'B'};
+  link_->SetHostPresent(false);
+  EXPECT_EQ(link_->stats().reclaimed, 2u);
+  device_->Send("CD");
+  end->to_reclaim = {};  // a later pass finds nothing more
+  link_->SetHostPresent(true);
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == 6; }));
+  EXPECT_EQ(end->written, "ABABCD");  // the far end re-reads AB (it never got it), then CD
+  EXPECT_EQ(device_->link_events, (std::vector<bool>{true, false, true}));
+}
+
+TEST_F(LinkTest, CutDropsEverythingForItsDurationThenRecovers) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  link_->Cut(30 * kNsPerMs, /*close_stream=*/false);
+  EXPECT_TRUE(link_->cut_active());
+  end->HostSends("lost");
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_from_host == 4; }));
+  EXPECT_EQ(device_->received, "");
+  device_->Send("gone");
+  EXPECT_EQ(link_->stats().cut_dropped, 8u);
+  ASSERT_TRUE(RunUntil(io_, [&] { return !link_->cut_active() && end->pending_read != nullptr; }));
+  end->HostSends("back");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "back"; }));
+  EXPECT_EQ(device_->received, "back");
+  bool cut_logged = false;
+  for (const auto& r : recorder_.log) cut_logged |= r.what == "E:link_fault cut 30000000";
+  EXPECT_TRUE(cut_logged);
+}
+
+TEST_F(LinkTest, CutWithCloseDropsTheConnection) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  link_->Cut(kNsPerMs, /*close_stream=*/true);
+  EXPECT_TRUE(end->closed);
+  EXPECT_FALSE(link_->attached());
+  EXPECT_EQ(device_->link_events, (std::vector<bool>{true, false}));
+}
+
+TEST_F(LinkTest, PowerCycleTurnsTheDeviceOffThenOnAfterTheDelay) {
+  Build(Unpaced());
+  AttachFake();
+  const sim::TimeNs off_at = driver_.Sync();
+  link_->PowerCycle(20 * kNsPerMs);
+  EXPECT_FALSE(device_->Powered());
+  EXPECT_EQ(device_->power_offs, 1);
+  sim::TimeNs on_at = 0;
+  ASSERT_TRUE(RunUntil(io_, [&] {
+    if (device_->Powered() && on_at == 0) on_at = scheduler_.Now();
+    return device_->Powered();
+  }));
+  EXPECT_EQ(device_->power_ons, 2);
+  EXPECT_GE(on_at - off_at, 20 * kNsPerMs);  // scheduler time, not wall time
+}
+
+TEST_F(LinkTest, FaultsOnTheLinkAreAppliedPerDirection) {
+  LinkOptions o = Unpaced();
+  o.faults.to_host.duplicate_rate = 1.0;  // device -> host doubled
+  Build(o);
+  auto end = AttachFake();
+  end->HostSends("xy");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == 4; }));
+  EXPECT_EQ(device_->received, "xy");  // to-device untouched
+  EXPECT_EQ(end->written, "xxyy");
+  EXPECT_EQ(link_->faults().counts(Direction::kToHost).duplicated, 2u);
+}
+
+TEST_F(LinkTest, HangUpDetachesAndReportsTheReason) {
+  Build(Unpaced());
+  auto end = std::make_shared<FakeEnd>();
+  end->io = &io_;
+  std::string reason;
+  link_->Attach(std::make_unique<FakeStream>(end), [&](const std::string& r) { reason = r; });
+  end->HostHangsUp();
+  ASSERT_TRUE(RunUntil(io_, [&] { return !reason.empty(); }));
+  EXPECT_EQ(reason, "host closed the connection");
+  EXPECT_FALSE(link_->attached());
+}
+
+TEST_F(LinkTest, DestroyingTheLinkWithWorkPendingIsSafe) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  device_->Send("pending");
+  link_.reset();  // the write completion is still queued in io_
+  io_.restart();
+  io_.run_for(std::chrono::milliseconds(20));
+  EXPECT_TRUE(end->closed);
+}
+
+}  // namespace
+}  // namespace moco::transport

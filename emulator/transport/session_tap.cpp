@@ -1,0 +1,24 @@
+// Records a link's tap as a session file (docs/sessions.md).
+#include "transport/session_tap.h"
+
+namespace moco::transport {
+
+void SessionTap::OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes) {
+  control::SessionEntry e;
+  e.t_ns = t_ns;
+  e.from = dir == Direction::kToDevice ? control::Origin::kHost : control::Origin::kDevice;
+  e.bytes.assign(bytes.begin(), bytes.end());
+  writer_.Append(e);
+}
+
+void SessionTap::OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) {
+  control::SessionEntry e;
+  e.t_ns = t_ns;
+  e.is_event = true;
+  e.event = nlohmann::json::object();
+  e.event["event"] = std::string(kind);
+  e.event["detail"] = std::string(detail);
+  writer_.Append(e);
+}
+
+}  // namespace moco::transport

@@ -1,0 +1,27 @@
+// Records a link's tap as a session file (docs/sessions.md): traffic lines
+// with the scheduler timestamps and link events, through control::SessionWriter.
+#ifndef MOCO_TRANSPORT_SESSION_TAP_H_
+#define MOCO_TRANSPORT_SESSION_TAP_H_
+
+#include "control/session.h"
+#include "transport/traffic.h"
+
+namespace moco::transport {
+
+// A TrafficObserver writing every chunk and event to a SessionWriter:
+// kToDevice -> "from": "host", kToHost -> "from": "device"; an event becomes
+// {"event": <kind>, "detail": <detail>}. The writer must outlive the tap and
+// its header should say "clock": "virtual" (times are scheduler times).
+class SessionTap final : public TrafficObserver {
+ public:
+  explicit SessionTap(control::SessionWriter& writer) : writer_(writer) {}
+  void OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes) override;
+  void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override;
+
+ private:
+  control::SessionWriter& writer_;
+};
+
+}  // namespace moco::transport
+
+#endif  // MOCO_TRANSPORT_SESSION_TAP_H_

@@ -1,0 +1,39 @@
+// The recording tap of a link (docs/sessions.md): every chunk that crosses the
+// device end of a link, with its scheduler timestamp, and the link's events.
+#ifndef MOCO_TRANSPORT_TRAFFIC_H_
+#define MOCO_TRANSPORT_TRAFFIC_H_
+
+#include <string_view>
+
+#include "sim/scheduler.h"
+#include "wire/bytes.h"
+
+namespace moco::transport {
+
+enum class Direction {
+  kToDevice,  // host -> device
+  kToHost,    // device -> host
+};
+
+std::string_view DirectionName(Direction d);  // "to-device" / "to-host"
+
+// Receives a link's traffic and events; called on the io thread. The observer
+// sees the device's view, which a replay reproduces exactly:
+//  - kToDevice: the bytes handed to Device::OnHostBytes (after link faults and
+//    line pacing), stamped with the scheduler time of that call;
+//  - kToHost: the bytes the device wrote to its ByteSink (before link faults
+//    and pacing), stamped with the scheduler time of the write.
+// Timestamps are non-decreasing across both directions and events.
+class TrafficObserver {
+ public:
+  virtual ~TrafficObserver() = default;
+  virtual void OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes) = 0;
+  // A link event: "host_link" (detail "open"/"closed"), "link_fault" (detail
+  // "cut <ns>"), "power_cycle" (detail "off <ns>"). Default: ignored.
+  virtual void OnLinkEvent(sim::TimeNs /*t_ns*/, std::string_view /*kind*/,
+                           std::string_view /*detail*/) {}
+};
+
+}  // namespace moco::transport
+
+#endif  // MOCO_TRANSPORT_TRAFFIC_H_
