@@ -369,19 +369,22 @@ void FrameDecoder::FeedImpl(ByteView chunk, Sink sink, void* ctx) {
       if (buf_len_ < need) return;  // chunk exhausted
       continue;
     }
-    if (step == Step::kGood) {
-      buf_len_ = 0;
-      break;
+    // After a good frame the buffer may hold bytes past it (left from a
+    // rescan); after a rejection, everything after the candidate's 'D'.
+    size_t from = need;
+    if (step == Step::kReject) {
+      ++skipped_;
+      from = 1;
     }
-    // Rejected: rescan the buffered bytes after the candidate's 'D'.
-    const void* d = buf_len_ > 1 ? std::memchr(buf_.data() + 1, kMarker0, buf_len_ - 1) : nullptr;
+    const void* d =
+        buf_len_ > from ? std::memchr(buf_.data() + from, kMarker0, buf_len_ - from) : nullptr;
     if (d == nullptr) {
-      skipped_ += buf_len_;
+      skipped_ += buf_len_ > from ? buf_len_ - from : 0;
       buf_len_ = 0;
       break;
     }
     const size_t at = static_cast<size_t>(static_cast<const uint8_t*>(d) - buf_.data());
-    skipped_ += at;
+    skipped_ += at - from;
     std::memmove(buf_.data(), buf_.data() + at, buf_len_ - at);
     buf_len_ -= at;
   }
