@@ -344,7 +344,6 @@ void Get(Fields& f, RtJogAll& m) {
   f.U32(m.fps_x1000, "FPS").U32(m.destination_frame, "DESTINATION");
 }
 
-constexpr size_t kBoomSwingTrackSize = 1 + 6 * 12 + 5 * 4;  // 93 bytes with TYPE
 constexpr size_t kCompensationSize = kBoomCompensationEntries * 4;
 
 void Put(Writer& w, const VirtConfig& m) {

@@ -392,11 +392,10 @@ void FrameDecoder::FeedImpl(ByteView chunk, Sink sink, void* ctx) {
 }
 
 void FrameDecoder::FinishImpl(Sink sink, void* ctx) {
-  std::array<uint8_t, kMaxFrameSize> rest;
+  // With at_end, ScanSpan never writes to buf_, so it can scan it in place.
   const size_t n = buf_len_;
-  std::memcpy(rest.data(), buf_.data(), n);
   buf_len_ = 0;
-  ScanSpan(rest.data(), n, /*at_end=*/true, sink, ctx);
+  ScanSpan(buf_.data(), n, /*at_end=*/true, sink, ctx);
   if (skipped_ != 0) {
     FramingError e;
     e.kind = FramingError::Kind::kSkipped;

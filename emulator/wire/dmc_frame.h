@@ -191,7 +191,9 @@ class FrameDecoder {
   void FeedImpl(ByteView chunk, Sink sink, void* ctx);
   void FinishImpl(Sink sink, void* ctx);
 
-  std::array<uint8_t, kMaxFrameSize> buf_{};  // buf_[0] == 'D' when buf_len_ > 0
+  // Bytes [0, buf_len_) are the pending candidate, buf_[0] == 'D'; the rest is
+  // never read, so it is left uninitialised.
+  std::array<uint8_t, kMaxFrameSize> buf_;
   size_t buf_len_ = 0;
   size_t skipped_ = 0;
 };
