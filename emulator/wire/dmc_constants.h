@@ -83,6 +83,8 @@ inline constexpr uint16_t kLegacyVirtJogOnLineType = 0x0204;
 
 constexpr uint16_t ToWire(MsgType t) { return static_cast<uint16_t>(t); }
 
+// The name functions below are defined in dmc_frame.cpp (library moco_wire).
+
 // True when `type` names one of the MsgType values above (without the ACK flag).
 bool IsKnownType(uint16_t type);
 

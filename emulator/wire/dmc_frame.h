@@ -128,8 +128,8 @@ StreamEvent ToStreamEvent(const FrameEvent& e);
 // kMaxDataLength is kOversize; when header + Length + 2 bytes are there, a zero
 // checksum gives a frame, otherwise ChecksumError. After kOversize or a
 // ChecksumError the scan resumes at the byte AFTER the candidate's 'D', so a
-// real frame swallowed by a false "DF" in noise is still found. Every stream
-// byte ends up in exactly one good frame or one kSkipped count.
+// real frame swallowed by a false "DF" in noise is still found. Once Finish()
+// has run, every stream byte is in exactly one good frame or one kSkipped count.
 //
 // Frame types with bits outside kReferenceTypeMask are delivered (the device
 // must answer them with ERR_UNSUPPORTED); see HasReferenceParserType().
