@@ -1,0 +1,1184 @@
+// DMC v2 message layouts (dmc-v2-protocol.txt "Message Types", each MSG_*
+// section's Request Data / Response Data tables; ERRATA dmc 1.3-1.10).
+#include "wire/dmc.h"
+
+#include <cstdio>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+
+namespace moco::dmc {
+namespace {
+
+using wire::Reader;
+using wire::Writer;
+using Kind = DecodeError::Kind;
+
+template <class... Ts>
+struct Overloaded : Ts... {
+  using Ts::operator()...;
+};
+template <class... Ts>
+Overloaded(Ts...) -> Overloaded<Ts...>;
+
+// --- Field reading with the first failure remembered ------------------------------
+
+class Fields {
+ public:
+  explicit Fields(Reader& r) : r_(r) {}
+  Fields& U8(uint8_t& v, const char* name) {
+    if (!err_ && !r_.U8(v)) err_ = r_.Truncated(name);
+    return *this;
+  }
+  Fields& U16(uint16_t& v, const char* name) {
+    if (!err_ && !r_.U16Le(v)) err_ = r_.Truncated(name);
+    return *this;
+  }
+  Fields& I16(int16_t& v, const char* name) {
+    if (!err_ && !r_.I16Le(v)) err_ = r_.Truncated(name);
+    return *this;
+  }
+  Fields& U32(uint32_t& v, const char* name) {
+    if (!err_ && !r_.U32Le(v)) err_ = r_.Truncated(name);
+    return *this;
+  }
+  Fields& I32(int32_t& v, const char* name) {
+    if (!err_ && !r_.I32Le(v)) err_ = r_.Truncated(name);
+    return *this;
+  }
+  Fields& Optional(std::optional<uint16_t>& v, const char* name) {
+    if (!err_ && !r_.empty()) {
+      uint16_t x = 0;
+      U16(x, name);
+      if (!err_) v = x;
+    }
+    return *this;
+  }
+  // START INDEX with the last-set flag split out.
+  Fields& StartIndex(uint32_t& index, bool& last, const char* name) {
+    uint32_t raw = 0;
+    U32(raw, name);
+    index = raw & kStartIndexMask;
+    last = (raw & kLastSetFlag) != 0;
+    return *this;
+  }
+  // At least one more byte must follow (a list of "one or more").
+  Fields& NotEmpty(const char* name) {
+    if (!err_ && r_.empty()) err_ = r_.Truncated(name);
+    return *this;
+  }
+  void Fail(DecodeError e) {
+    if (!err_) err_ = std::move(e);
+  }
+  bool ok() const { return !err_; }
+  Reader& reader() { return r_; }
+  std::optional<DecodeError>& error() { return err_; }
+
+ private:
+  Reader& r_;
+  std::optional<DecodeError> err_;
+};
+
+void StartIndexOut(Writer& w, uint32_t index, bool last) {
+  w.U32Le((index & kStartIndexMask) | (last ? kLastSetFlag : 0u));
+}
+
+// --- Layouts: Put (encode) and Get (decode) per struct ----------------------------------
+
+void Put(Writer& w, const Ack& m) {
+  if (m.width == AckWidth::k32) {
+    w.U32Le(m.code);
+  } else {
+    w.U16Le(static_cast<uint16_t>(m.code));
+  }
+}
+
+void Put(Writer& w, const Unknown& m) { w.Raw(m.data); }
+
+template <class T>
+requires(std::is_empty_v<T>) void Put(Writer&, const T&) {}
+template <class T>
+requires(std::is_empty_v<T>) void Get(Fields&, T&) {}
+
+void Put(Writer& w, const VirtAimPoint& m) {
+  w.U8(m.enable);
+  w.I32Le(m.x_x1000);
+  w.I32Le(m.y_x1000);
+  w.I32Le(m.z_x1000);
+}
+void Get(Fields& f, VirtAimPoint& m) {
+  f.U8(m.enable, "ENABLE").I32(m.x_x1000, "AIM-X").I32(m.y_x1000, "AIM-Y").I32(m.z_x1000, "AIM-Z");
+}
+
+void Put(Writer& w, const Dmx& m) {
+  w.U8(m.ramp);
+  w.U16Le(m.start_channel);
+  w.Raw(m.values);
+}
+void Get(Fields& f, Dmx& m) {
+  f.U8(m.ramp, "RAMP").U16(m.start_channel, "START CHANNEL").NotEmpty("LIGHT VALUE");
+  if (f.ok()) {
+    const ByteView rest = f.reader().Rest();
+    m.values.assign(rest.begin(), rest.end());
+  }
+}
+
+void Put(Writer& w, const GioOut& m) { w.U32Le(m.triggers); }
+void Get(Fields& f, GioOut& m) { f.U32(m.triggers, "TRIGGERS"); }
+
+void Put(Writer& w, const GioCam& m) { w.U32Le(m.flags); }
+void Get(Fields& f, GioCam& m) { f.U32(m.flags, "TRIGGERS"); }
+
+void Put(Writer& w, const MotorMove& m) {
+  w.U8(m.motor);
+  w.I32Le(m.position_steps);
+}
+void Get(Fields& f, MotorMove& m) { f.U8(m.motor, "MOTOR").I32(m.position_steps, "POSITION"); }
+
+void Put(Writer& w, const MotorStop& m) { w.U8(m.motor); }
+void Get(Fields& f, MotorStop& m) { f.U8(m.motor, "MOTOR"); }
+
+void Put(Writer& w, const MotorStopAll& m) {
+  if (m.flags) w.U32Le(*m.flags);
+}
+void Get(Fields& f, MotorStopAll& m) {
+  if (f.reader().empty()) return;
+  uint32_t flags = 0;
+  f.U32(flags, "Flags");
+  if (f.ok()) m.flags = flags;
+}
+
+void Put(Writer& w, const MotorResetPosition& m) {
+  w.U8(m.motor);
+  w.I32Le(m.position_steps);
+}
+void Get(Fields& f, MotorResetPosition& m) {
+  f.U8(m.motor, "MOTOR").I32(m.position_steps, "POSITION");
+}
+
+void Put(Writer& w, const MotorJog& m) {
+  w.U8(m.motor);
+  w.U16Le(m.speed);
+  w.I32Le(m.destination_steps);
+}
+void Get(Fields& f, MotorJog& m) {
+  f.U8(m.motor, "MOTOR").U16(m.speed, "SPEED").I32(m.destination_steps, "DESTINATION");
+}
+
+void Put(Writer& w, const MotorConfigure& m) {
+  w.U8(m.motor);
+  w.U8(m.flags);
+}
+void Get(Fields& f, MotorConfigure& m) { f.U8(m.motor, "MOTOR").U8(m.flags, "FLAGS"); }
+
+void Put(Writer& w, const MotorSetSpeed& m) {
+  w.U8(m.motor);
+  w.U32Le(m.max_velocity_steps_per_s);
+  w.U32Le(m.max_accel_steps_per_s2);
+}
+void Get(Fields& f, MotorSetSpeed& m) {
+  f.U8(m.motor, "MOTOR")
+      .U32(m.max_velocity_steps_per_s, "MAX VELOCITY")
+      .U32(m.max_accel_steps_per_s2, "MAX ACCEL");
+}
+
+void Put(Writer& w, const MotorSetLimits& m) {
+  w.U8(m.motor);
+  w.U8(m.lower_enable);
+  w.I32Le(m.lower_limit_steps);
+  w.U8(m.upper_enable);
+  w.I32Le(m.upper_limit_steps);
+  w.U8(m.hw_set);
+}
+void Get(Fields& f, MotorSetLimits& m) {
+  f.U8(m.motor, "MOTOR")
+      .U8(m.lower_enable, "LOWER ENABLE")
+      .I32(m.lower_limit_steps, "LOWER LIMIT")
+      .U8(m.upper_enable, "UPPER ENABLE")
+      .I32(m.upper_limit_steps, "UPPER LIMIT")
+      .U8(m.hw_set, "HW SET");
+}
+
+void Put(Writer& w, const RtUploadMoveBegin& m) {
+  w.U32Le(m.start_frame);
+  w.U32Le(m.end_frame);
+}
+void Get(Fields& f, RtUploadMoveBegin& m) {
+  f.U32(m.start_frame, "START FRAME").U32(m.end_frame, "END FRAME");
+}
+
+void Put(Writer& w, const RtUploadMoveAxis& m) {
+  w.U8(m.motor);
+  StartIndexOut(w, m.start_index, m.last_set);
+  for (int32_t p : m.positions_steps) w.I32Le(p);
+}
+void Get(Fields& f, RtUploadMoveAxis& m) {
+  f.U8(m.motor, "MOTOR").StartIndex(m.start_index, m.last_set, "START INDEX").NotEmpty("POSITION");
+  m.positions_steps.reserve(f.reader().remaining() / 4);
+  while (f.ok() && !f.reader().empty()) {
+    int32_t p = 0;
+    f.I32(p, "POSITION");
+    if (f.ok()) m.positions_steps.push_back(p);
+  }
+}
+
+void Put(Writer& w, const RtUploadMoveDmx& m) {
+  w.U16Le(m.channel);
+  StartIndexOut(w, m.start_index, m.last_set);
+  w.Raw(m.levels);
+}
+void Get(Fields& f, RtUploadMoveDmx& m) {
+  f.U16(m.channel, "CHANNEL")
+      .StartIndex(m.start_index, m.last_set, "START INDEX")
+      .NotEmpty("LEVEL");
+  if (f.ok()) {
+    const ByteView rest = f.reader().Rest();
+    m.levels.assign(rest.begin(), rest.end());
+  }
+}
+
+void Put(Writer& w, const RtUploadMoveTriggers& m) {
+  w.U32Le(m.mask);
+  for (const TriggerPoint& p : m.points) {
+    w.U32Le(p.frame_index);
+    w.U32Le(p.values);
+  }
+}
+void Get(Fields& f, RtUploadMoveTriggers& m) {
+  f.U32(m.mask, "MASK");
+  m.points.reserve(f.reader().remaining() / 8);
+  while (f.ok() && !f.reader().empty()) {
+    TriggerPoint p;
+    f.U32(p.frame_index, "FRAME").U32(p.values, "VALUES");
+    if (f.ok()) m.points.push_back(p);
+  }
+}
+
+void Put(Writer& w, const RtPositionFrame& m) { w.U32Le(m.frame); }
+void Get(Fields& f, RtPositionFrame& m) { f.U32(m.frame, "FRAME"); }
+
+void Put(Writer& w, const RtRunMove& m) {
+  w.U32Le(m.fps_x1000);
+  w.U32Le(m.start_frame);
+  w.U32Le(m.end_frame);
+  w.U32Le(m.preroll_ms);
+  w.U32Le(m.postroll_ms);
+  w.U8(m.sync_dmx);
+  w.U32Le(m.bloop_outputs);
+  w.U16Le(m.bloop_dmx_channel);
+  w.U16Le(m.bloop_time_ms);
+  // Each optional field only with all before it (ERRATA 1.7).
+  if (!m.flags) return;
+  w.U16Le(*m.flags);
+  if (!m.camera_open_angle_deg) return;
+  w.U16Le(*m.camera_open_angle_deg);
+  if (!m.camera_close_angle_deg) return;
+  w.U16Le(*m.camera_close_angle_deg);
+}
+void Get(Fields& f, RtRunMove& m) {
+  f.U32(m.fps_x1000, "FPS")
+      .U32(m.start_frame, "START FRAME")
+      .U32(m.end_frame, "END FRAME")
+      .U32(m.preroll_ms, "PRE-ROLL TIME")
+      .U32(m.postroll_ms, "POST-ROLL TIME")
+      .U8(m.sync_dmx, "SYNC DMX")
+      .U32(m.bloop_outputs, "BLOOP LOCATION")
+      .U16(m.bloop_dmx_channel, "BLOOP DMX CHANNEL")
+      .U16(m.bloop_time_ms, "BLOOP TIME")
+      .Optional(m.flags, "FLAGS")
+      .Optional(m.camera_open_angle_deg, "CAMERA OPEN ANGLE")
+      .Optional(m.camera_close_angle_deg, "CAMERA CLOSE ANGLE");
+}
+
+void PutMotors(Writer& w, const std::vector<BlurMotor>& motors) {
+  for (const BlurMotor& b : motors) {
+    w.U8(b.motor);
+    w.I32Le(b.pos_a_steps);
+    w.I32Le(b.pos_b_steps);
+  }
+}
+void GetMotors(Fields& f, std::vector<BlurMotor>& motors) {
+  motors.reserve(f.reader().remaining() / 9);
+  while (f.ok() && !f.reader().empty()) {
+    BlurMotor b;
+    f.U8(b.motor, "MOTOR").I32(b.pos_a_steps, "POS A").I32(b.pos_b_steps, "POS B");
+    if (f.ok()) motors.push_back(b);
+  }
+}
+
+void Put(Writer& w, const RtShootFrame& m) {
+  w.U32Le(m.frame);
+  w.U8(m.direction);
+  w.U32Le(m.exposure_ms);
+  w.U16Le(m.blur_percent_x10);
+  PutMotors(w, m.motors);
+}
+void Get(Fields& f, RtShootFrame& m) {
+  f.U32(m.frame, "FRAME")
+      .U8(m.direction, "DIRECTION")
+      .U32(m.exposure_ms, "EXPOSURE TIME")
+      .U16(m.blur_percent_x10, "BLUR PERCENT");
+  GetMotors(f, m.motors);
+}
+
+void Put(Writer& w, const RtShootFrame2& m) {
+  w.U32Le(m.frame);
+  w.U32Le(m.exposure_ms);
+  w.U16Le(m.open_angle_deg);
+  w.U16Le(m.close_angle_deg);
+  PutMotors(w, m.motors);
+}
+void Get(Fields& f, RtShootFrame2& m) {
+  f.U32(m.frame, "FRAME")
+      .U32(m.exposure_ms, "EXPOSURE TIME")
+      .U16(m.open_angle_deg, "OPEN ANGLE")
+      .U16(m.close_angle_deg, "CLOSE ANGLE");
+  GetMotors(f, m.motors);
+}
+
+void Put(Writer& w, const RtJogAll& m) {
+  w.U32Le(m.fps_x1000);
+  w.U32Le(m.destination_frame);
+}
+void Get(Fields& f, RtJogAll& m) {
+  f.U32(m.fps_x1000, "FPS").U32(m.destination_frame, "DESTINATION");
+}
+
+constexpr size_t kCompensationSize = kBoomCompensationEntries * 4;
+
+void Put(Writer& w, const VirtConfig& m) {
+  w.U8(m.rig_type());
+  std::visit(
+      Overloaded{
+          [](const VirtRigNone&) {},
+          [&w](const VirtRigBoomSwingTrack& r) {
+            for (const VirtAxisSetup* a : {&r.boom, &r.swing, &r.track, &r.pan, &r.tilt, &r.roll}) {
+              w.U32Le(a->motor);
+              w.I32Le(a->steps_per_unit);
+              w.I32Le(a->position_x100000);
+            }
+            w.I32Le(r.boom_length_x1000);
+            w.I32Le(r.boom_ext_x1000);
+            w.I32Le(r.nodal_x_x1000);
+            w.I32Le(r.nodal_y_x1000);
+            w.I32Le(r.nodal_z_x1000);
+            if (r.compensation) {
+              for (int32_t v : *r.compensation) w.I32Le(v);
+            }
+            if (r.safe_distance_x1000) w.I32Le(*r.safe_distance_x1000);
+          },
+          [&w](const VirtRigSwingPan& r) {
+            w.U32Le(r.swing.motor);
+            w.I32Le(r.swing.steps_per_unit);
+            w.U32Le(r.pan.motor);
+            w.I32Le(r.pan.steps_per_unit);
+          },
+          [&w](const VirtRigRaw& r) { w.Raw(r.data); },
+      },
+      m.rig);
+}
+
+void Get(Fields& f, VirtConfig& m) {
+  uint8_t type = 0;
+  f.U8(type, "TYPE");
+  if (!f.ok()) return;
+  Reader& r = f.reader();
+  switch (type) {
+    case static_cast<uint8_t>(RigType::kNone):
+      m.rig = VirtRigNone{};
+      return;
+    case static_cast<uint8_t>(RigType::kBoomSwingTrack): {
+      VirtRigBoomSwingTrack b;
+      static constexpr const char* kAxis[6][3] = {
+          {"BOOM motor", "BOOM spu", "BOOM pos"},    {"SWING motor", "SWING spu", "SWING pos"},
+          {"TRACK motor", "TRACK spu", "TRACK pos"}, {"PAN motor", "PAN spu", "PAN pos"},
+          {"TILT motor", "TILT spu", "TILT pos"},    {"ROLL motor", "ROLL spu", "ROLL pos"}};
+      VirtAxisSetup* axes[6] = {&b.boom, &b.swing, &b.track, &b.pan, &b.tilt, &b.roll};
+      for (int i = 0; i < 6; ++i) {
+        f.U32(axes[i]->motor, kAxis[i][0])
+            .I32(axes[i]->steps_per_unit, kAxis[i][1])
+            .I32(axes[i]->position_x100000, kAxis[i][2]);
+      }
+      f.I32(b.boom_length_x1000, "BOOM LENGTH")
+          .I32(b.boom_ext_x1000, "BOOM EXT")
+          .I32(b.nodal_x_x1000, "NODAL OFF X")
+          .I32(b.nodal_y_x1000, "NODAL OFF Y")
+          .I32(b.nodal_z_x1000, "NODAL OFF Z");
+      if (!f.ok()) return;
+      // ERRATA 1.7: the table and SAFE DISTANCE are each optional; the four
+      // possible lengths are distinct, so the form is known from the length.
+      const size_t rest = r.remaining();
+      if (rest != 0 && rest != 4 && rest != kCompensationSize && rest != kCompensationSize + 4) {
+        f.Fail(DecodeError{Kind::kBadLength, r.offset(),
+                           "boom-swing-track: expected 0, 4, 484 or 488 bytes after NODAL OFF Z, "
+                           "got " +
+                               std::to_string(rest)});
+        return;
+      }
+      if (rest >= kCompensationSize) {
+        b.compensation.emplace();
+        for (int32_t& v : *b.compensation) f.I32(v, "Boom Compensation Table");
+      }
+      if (r.remaining() == 4) {
+        int32_t safe = 0;
+        f.I32(safe, "SAFE DISTANCE");
+        b.safe_distance_x1000 = safe;
+      }
+      m.rig = std::move(b);
+      return;
+    }
+    case static_cast<uint8_t>(RigType::kSwingPan): {
+      VirtRigSwingPan s;
+      f.U32(s.swing.motor, "SWING motor")
+          .I32(s.swing.steps_per_unit, "SWING spu")
+          .U32(s.pan.motor, "PAN motor")
+          .I32(s.pan.steps_per_unit, "PAN spu");
+      m.rig = s;
+      return;
+    }
+    default: {
+      // No layout in the spec (3, 4) or not a spec type (8 and others): kept raw.
+      VirtRigRaw raw;
+      raw.type = type;
+      const ByteView rest = r.Rest();
+      raw.data.assign(rest.begin(), rest.end());
+      m.rig = std::move(raw);
+      return;
+    }
+  }
+}
+
+void Put(Writer& w, const VirtMove& m) {
+  w.U8(m.axis);
+  w.I32Le(m.position_x100000);
+}
+void Get(Fields& f, VirtMove& m) {
+  f.U8(m.axis, "VIRTUAL MOTOR").I32(m.position_x100000, "POSITION");
+}
+
+void Put(Writer& w, const VirtStop& m) { w.U8(m.axis); }
+void Get(Fields& f, VirtStop& m) { f.U8(m.axis, "VIRTUAL MOTOR"); }
+
+void Put(Writer& w, const VirtJog& m) {
+  w.U8(m.axis);
+  w.U16Le(m.speed);
+  w.I32Le(m.destination_x100000);
+}
+void Get(Fields& f, VirtJog& m) {
+  f.U8(m.axis, "MOTOR").U16(m.speed, "SPEED").I32(m.destination_x100000, "DESTINATION");
+}
+
+void Put(Writer& w, const VirtJogOnLine& m) {
+  w.U8(m.axis);
+  w.I16Le(m.speed);
+}
+void Get(Fields& f, VirtJogOnLine& m) { f.U8(m.axis, "AXIS").I16(m.speed, "SPEED"); }
+
+// Device side.
+
+void Put(Writer& w, const HiResponse& m) {
+  w.Raw(ByteView(m.name));
+  w.U8(m.fw_major);
+  w.U8(m.fw_minor);
+  w.U8(m.fw_rev);
+  w.U8(m.motor_count);
+  w.U16Le(m.dmx_count);
+  w.U8(m.gio_out_count);
+  w.U8(m.gio_in_count);
+  w.U8(m.hw_limit_count);
+  w.U32Le(m.upload_frame_count);
+  w.U32Le(m.capabilities);
+  if (m.protocol_version) w.U16Le(*m.protocol_version);
+}
+void Get(Fields& f, HiResponse& m) {
+  ByteView name;
+  if (!f.reader().Take(kHiNameSize, name)) {
+    f.Fail(f.reader().Truncated("NAME"));
+    return;
+  }
+  std::copy(name.begin(), name.end(), m.name.begin());
+  f.U8(m.fw_major, "FW MAJOR")
+      .U8(m.fw_minor, "FW MINOR")
+      .U8(m.fw_rev, "FW REV")
+      .U8(m.motor_count, "MOTOR COUNT")
+      .U16(m.dmx_count, "DMX COUNT")
+      .U8(m.gio_out_count, "GIO OUT COUNT")
+      .U8(m.gio_in_count, "GIO INPUT COUNT")
+      .U8(m.hw_limit_count, "HW LIMIT COUNT")
+      .U32(m.upload_frame_count, "UPLOAD FRAME COUNT")
+      .U32(m.capabilities, "CAPABILITIES")
+      .Optional(m.protocol_version, "PROTOCOL VERSION");
+}
+
+void Put(Writer& w, const MotorStatusResponse& m) {
+  w.U32Le(m.moving_bits);
+  w.U8(m.dmx_adjusting);
+}
+void Get(Fields& f, MotorStatusResponse& m) {
+  f.U32(m.moving_bits, "MOTOR STATUS").U8(m.dmx_adjusting, "DMX STATUS");
+}
+
+void Put(Writer& w, const MotorMoveResponse& m) { w.U8(m.moving); }
+void Get(Fields& f, MotorMoveResponse& m) { f.U8(m.moving, "MOTOR STATUS"); }
+
+void Put(Writer& w, const MotorPositionReport& m) {
+  w.U32Le(m.move_time_x1000);
+  for (int32_t p : m.positions_steps) w.I32Le(p);
+}
+void Get(Fields& f, MotorPositionReport& m) {
+  f.U32(m.move_time_x1000, "MOVE TIME");
+  m.positions_steps.reserve(f.reader().remaining() / 4);
+  while (f.ok() && !f.reader().empty()) {
+    int32_t p = 0;
+    f.I32(p, "MOTOR POS");
+    if (f.ok()) m.positions_steps.push_back(p);
+  }
+}
+
+void Put(Writer& w, const GioInReport& m) { w.U32Le(m.triggers); }
+void Get(Fields& f, GioInReport& m) { f.U32(m.triggers, "TRIGGERS"); }
+
+void Put(Writer& w, const MotorHardStop& m) {
+  w.U8(m.reason);
+  if (m.motor) {
+    w.U8(*m.motor);
+  } else if (HardStopHasMotor(m.reason)) {
+    w.U8(0);  // REQUIRES violated: keep the layout the reason demands
+  }
+}
+void Get(Fields& f, MotorHardStop& m) {
+  f.U8(m.reason, "REASON");
+  if (!f.ok()) return;
+  if (HardStopHasMotor(m.reason) || !f.reader().empty()) {
+    uint8_t motor = 0;
+    f.U8(motor, "MOTOR");
+    if (f.ok()) m.motor = motor;
+  }
+}
+
+void Put(Writer& w, const VirtPositionReport& m) {
+  w.I32Le(m.track_x100000);
+  w.I32Le(m.ew_x100000);
+  w.I32Le(m.ns_x100000);
+  w.I32Le(m.pan_x100000);
+  w.I32Le(m.tilt_x100000);
+  w.I32Le(m.roll_x100000);
+  if (m.aim) {
+    w.U8(m.aim->enabled);
+    w.I32Le(m.aim->x_x1000);
+    w.I32Le(m.aim->y_x1000);
+    w.I32Le(m.aim->z_x1000);
+  }
+}
+void Get(Fields& f, VirtPositionReport& m) {
+  f.I32(m.track_x100000, "vTrack POS")
+      .I32(m.ew_x100000, "vEW POS")
+      .I32(m.ns_x100000, "vNS POS")
+      .I32(m.pan_x100000, "vPan POS")
+      .I32(m.tilt_x100000, "vTilt POS")
+      .I32(m.roll_x100000, "vRoll POS");
+  if (!f.ok() || f.reader().empty()) return;
+  VirtAim aim;
+  f.U8(aim.enabled, "Aim pt enabled")
+      .I32(aim.x_x1000, "aim-x")
+      .I32(aim.y_x1000, "aim-y")
+      .I32(aim.z_x1000, "aim-z");
+  if (f.ok()) m.aim = aim;
+}
+
+// --- Dispatch --------------------------------------------------------------------
+
+template <class T, class Variant>
+Result<Variant> DecodeAs(ByteView data) {
+  T m{};
+  Reader r(data);
+  Fields f(r);
+  Get(f, m);
+  if (f.error()) return *f.error();
+  if (!r.empty()) return r.Trailing(TypeName(ToWire(T::kType)));
+  return Variant{std::move(m)};
+}
+
+template <class Variant>
+Result<Variant> DecodeAck(uint16_t type, ByteView data) {
+  Ack a;
+  a.type = static_cast<uint16_t>(type & ~kFlagAck);
+  Reader r(data);
+  if (data.size() == 2) {
+    uint16_t code = 0;
+    r.U16Le(code);
+    a.code = code;
+    a.width = AckWidth::k16;
+  } else if (data.size() == 4) {
+    r.U32Le(a.code);
+    a.width = AckWidth::k32;
+  } else if (data.size() < 2) {
+    return r.Truncated("Response Code");
+  } else if (data.size() == 3) {
+    return DecodeError{Kind::kBadLength, 0, "ACK response code must be 2 or 4 bytes, got 3"};
+  } else {
+    Reader skip(data);
+    ByteView code;
+    skip.Take(4, code);
+    return skip.Trailing("Response Code");
+  }
+  return Variant{a};
+}
+
+template <class... Ts>
+void PutAny(Writer& w, const std::variant<Ts...>& m) {
+  std::visit([&w](const auto& x) { Put(w, x); }, m);
+}
+
+template <class... Ts>
+uint16_t TypeOfAny(const std::variant<Ts...>& m) {
+  return std::visit(Overloaded{
+                        [](const Ack& a) { return static_cast<uint16_t>(a.type | kFlagAck); },
+                        [](const Unknown& u) { return u.type; },
+                        [](const auto& x) { return ToWire(std::decay_t<decltype(x)>::kType); },
+                    },
+                    m);
+}
+
+template <class Variant>
+void EncodeAny(uint32_t id, const Variant& m, Bytes& out) {
+  const size_t start = out.size();
+  out.resize(start + kHeaderSize);
+  const uint16_t type = TypeOfAny(m);
+  uint8_t* p = out.data() + start;
+  p[0] = kMarker0;
+  p[1] = kMarker1;
+  p[2] = static_cast<uint8_t>(id);
+  p[3] = static_cast<uint8_t>(id >> 8);
+  p[4] = static_cast<uint8_t>(id >> 16);
+  p[5] = static_cast<uint8_t>(id >> 24);
+  p[6] = static_cast<uint8_t>(type);
+  p[7] = static_cast<uint8_t>(type >> 8);
+  Writer w(out);
+  PutAny(w, m);
+  const size_t length = out.size() - start - kHeaderSize;
+  p = out.data() + start;
+  p[8] = static_cast<uint8_t>(length);
+  p[9] = static_cast<uint8_t>(length >> 8);
+  const auto check = CheckBytes(Fletcher16(ByteView(p, kHeaderSize + length)));
+  out.push_back(check[0]);
+  out.push_back(check[1]);
+}
+
+// --- Describe ----------------------------------------------------------------------
+
+class Line {
+ public:
+  explicit Line(std::string head) : s_(std::move(head)) {}
+  template <class T>
+  Line& Num(const char* key, T v) {
+    s_ += ' ';
+    s_ += key;
+    s_ += '=';
+    s_ += std::to_string(v);
+    return *this;
+  }
+  Line& Hex(const char* key, uint32_t v, int digits) {
+    s_ += ' ';
+    s_ += key;
+    s_ += '=';
+    s_ += HexText(v, digits);
+    return *this;
+  }
+  Line& Text(const char* key, std::string_view v) {
+    s_ += ' ';
+    s_ += key;
+    s_ += '=';
+    s_ += v;
+    return *this;
+  }
+  template <class Seq>
+  Line& List(const char* key, const Seq& seq) {
+    s_ += ' ';
+    s_ += key;
+    s_ += "=[";
+    bool first = true;
+    for (const auto& v : seq) {
+      if (!first) s_ += ',';
+      first = false;
+      s_ += std::to_string(v);
+    }
+    s_ += ']';
+    return *this;
+  }
+  std::string& str() { return s_; }
+
+  static std::string HexText(uint32_t v, int digits) {
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "0x%0*x", digits, static_cast<unsigned>(v));
+    return buf;
+  }
+
+ private:
+  std::string s_;
+};
+
+std::string Name(MsgType t) { return TypeName(ToWire(t)); }
+
+std::string Text(const Ack& m) {
+  Line l("ACK " + TypeName(m.type));
+  l.Text("code", AckCodeName(m.code));
+  if (m.width == AckWidth::k32) l.Num("code_bytes", 4);
+  return l.str();
+}
+std::string Text(const Unknown& m) {
+  return Line("UNKNOWN").Hex("type", m.type, 4).Text("data", wire::ToHex(m.data)).str();
+}
+template <class T>
+requires(std::is_empty_v<T>) std::string Text(const T&) { return Name(T::kType); }
+std::string Text(const VirtAimPoint& m) {
+  return Line(Name(m.kType))
+      .Num("enable", m.enable)
+      .Num("x", m.x_x1000)
+      .Num("y", m.y_x1000)
+      .Num("z", m.z_x1000)
+      .str();
+}
+std::string Text(const Dmx& m) {
+  return Line(Name(m.kType))
+      .Num("ramp", m.ramp)
+      .Num("start_channel", m.start_channel)
+      .List("values", m.values)
+      .str();
+}
+std::string Text(const GioOut& m) {
+  return Line(Name(m.kType)).Hex("triggers", m.triggers, 8).str();
+}
+std::string Text(const GioCam& m) { return Line(Name(m.kType)).Hex("flags", m.flags, 8).str(); }
+std::string Text(const MotorMove& m) {
+  return Line(Name(m.kType)).Num("motor", m.motor).Num("position", m.position_steps).str();
+}
+std::string Text(const MotorStop& m) { return Line(Name(m.kType)).Num("motor", m.motor).str(); }
+std::string Text(const MotorStopAll& m) {
+  Line l(Name(m.kType));
+  if (m.flags) l.Hex("flags", *m.flags, 8);
+  return l.str();
+}
+std::string Text(const MotorResetPosition& m) {
+  return Line(Name(m.kType)).Num("motor", m.motor).Num("position", m.position_steps).str();
+}
+std::string Text(const MotorJog& m) {
+  return Line(Name(m.kType))
+      .Num("motor", m.motor)
+      .Num("speed", m.speed)
+      .Num("destination", m.destination_steps)
+      .str();
+}
+std::string Text(const MotorConfigure& m) {
+  return Line(Name(m.kType)).Num("motor", m.motor).Hex("flags", m.flags, 2).str();
+}
+std::string Text(const MotorSetSpeed& m) {
+  return Line(Name(m.kType))
+      .Num("motor", m.motor)
+      .Num("max_velocity", m.max_velocity_steps_per_s)
+      .Num("max_accel", m.max_accel_steps_per_s2)
+      .str();
+}
+std::string Text(const MotorSetLimits& m) {
+  return Line(Name(m.kType))
+      .Num("motor", m.motor)
+      .Num("lower_enable", m.lower_enable)
+      .Num("lower", m.lower_limit_steps)
+      .Num("upper_enable", m.upper_enable)
+      .Num("upper", m.upper_limit_steps)
+      .Hex("hw_set", m.hw_set, 2)
+      .str();
+}
+std::string Text(const RtUploadMoveBegin& m) {
+  return Line(Name(m.kType)).Num("start_frame", m.start_frame).Num("end_frame", m.end_frame).str();
+}
+std::string Text(const RtUploadMoveAxis& m) {
+  return Line(Name(m.kType))
+      .Num("motor", m.motor)
+      .Num("start_index", m.start_index)
+      .Num("last", m.last_set ? 1 : 0)
+      .List("positions", m.positions_steps)
+      .str();
+}
+std::string Text(const RtUploadMoveDmx& m) {
+  return Line(Name(m.kType))
+      .Num("channel", m.channel)
+      .Num("start_index", m.start_index)
+      .Num("last", m.last_set ? 1 : 0)
+      .List("levels", m.levels)
+      .str();
+}
+std::string Text(const RtUploadMoveTriggers& m) {
+  Line l(Name(m.kType));
+  l.Hex("mask", m.mask, 8);
+  std::string points = "[";
+  for (size_t i = 0; i < m.points.size(); ++i) {
+    if (i != 0) points += ',';
+    points += std::to_string(m.points[i].frame_index) + ':' + Line::HexText(m.points[i].values, 8);
+  }
+  points += ']';
+  l.Text("points", points);
+  return l.str();
+}
+std::string Text(const RtPositionFrame& m) {
+  return Line(Name(m.kType)).Num("frame", m.frame).str();
+}
+std::string Text(const RtRunMove& m) {
+  Line l(Name(m.kType));
+  l.Num("fps", m.fps_x1000)
+      .Num("start_frame", m.start_frame)
+      .Num("end_frame", m.end_frame)
+      .Num("preroll_ms", m.preroll_ms)
+      .Num("postroll_ms", m.postroll_ms)
+      .Num("sync_dmx", m.sync_dmx)
+      .Hex("bloop_outputs", m.bloop_outputs, 8)
+      .Num("bloop_dmx_channel", m.bloop_dmx_channel)
+      .Num("bloop_ms", m.bloop_time_ms);
+  if (m.flags) {
+    l.Hex("flags", *m.flags, 4);
+    if (m.camera_open_angle_deg) {
+      l.Num("open_angle", *m.camera_open_angle_deg);
+      if (m.camera_close_angle_deg) l.Num("close_angle", *m.camera_close_angle_deg);
+    }
+  }
+  return l.str();
+}
+std::string MotorsText(const std::vector<BlurMotor>& motors) {
+  std::string s = "[";
+  for (size_t i = 0; i < motors.size(); ++i) {
+    if (i != 0) s += ',';
+    s += std::to_string(motors[i].motor) + ':' + std::to_string(motors[i].pos_a_steps) + ':' +
+         std::to_string(motors[i].pos_b_steps);
+  }
+  return s + ']';
+}
+std::string Text(const RtShootFrame& m) {
+  return Line(Name(m.kType))
+      .Num("frame", m.frame)
+      .Num("direction", m.direction)
+      .Num("exposure_ms", m.exposure_ms)
+      .Num("blur", m.blur_percent_x10)
+      .Text("motors", MotorsText(m.motors))
+      .str();
+}
+std::string Text(const RtShootFrame2& m) {
+  return Line(Name(m.kType))
+      .Num("frame", m.frame)
+      .Num("exposure_ms", m.exposure_ms)
+      .Num("open_angle", m.open_angle_deg)
+      .Num("close_angle", m.close_angle_deg)
+      .Text("motors", MotorsText(m.motors))
+      .str();
+}
+std::string Text(const RtJogAll& m) {
+  return Line(Name(m.kType)).Num("fps", m.fps_x1000).Num("destination", m.destination_frame).str();
+}
+std::string SetupText(const VirtAxisSetup& a) {
+  return std::to_string(a.motor) + ':' + std::to_string(a.steps_per_unit) + ':' +
+         std::to_string(a.position_x100000);
+}
+std::string Text(const VirtConfig& m) {
+  Line l(Name(m.kType));
+  l.Num("type", m.rig_type());
+  std::visit(Overloaded{
+                 [](const VirtRigNone&) {},
+                 [&l](const VirtRigBoomSwingTrack& r) {
+                   l.Text("boom", SetupText(r.boom))
+                       .Text("swing", SetupText(r.swing))
+                       .Text("track", SetupText(r.track))
+                       .Text("pan", SetupText(r.pan))
+                       .Text("tilt", SetupText(r.tilt))
+                       .Text("roll", SetupText(r.roll))
+                       .Num("boom_length", r.boom_length_x1000)
+                       .Num("boom_ext", r.boom_ext_x1000)
+                       .Text("nodal", std::to_string(r.nodal_x_x1000) + ',' +
+                                          std::to_string(r.nodal_y_x1000) + ',' +
+                                          std::to_string(r.nodal_z_x1000));
+                   if (r.compensation) l.List("compensation", *r.compensation);
+                   if (r.safe_distance_x1000) l.Num("safe_distance", *r.safe_distance_x1000);
+                 },
+                 [&l](const VirtRigSwingPan& r) {
+                   l.Text("swing", std::to_string(r.swing.motor) + ':' +
+                                       std::to_string(r.swing.steps_per_unit))
+                       .Text("pan", std::to_string(r.pan.motor) + ':' +
+                                        std::to_string(r.pan.steps_per_unit));
+                 },
+                 [&l](const VirtRigRaw& r) { l.Text("data", wire::ToHex(r.data)); },
+             },
+             m.rig);
+  return l.str();
+}
+std::string Text(const VirtMove& m) {
+  return Line(Name(m.kType)).Num("axis", m.axis).Num("position", m.position_x100000).str();
+}
+std::string Text(const VirtStop& m) { return Line(Name(m.kType)).Num("axis", m.axis).str(); }
+std::string Text(const VirtJog& m) {
+  return Line(Name(m.kType))
+      .Num("axis", m.axis)
+      .Num("speed", m.speed)
+      .Num("destination", m.destination_x100000)
+      .str();
+}
+std::string Text(const VirtJogOnLine& m) {
+  return Line(Name(m.kType)).Num("axis", m.axis).Num("speed", m.speed).str();
+}
+
+std::string Quoted(const std::string& s) {
+  std::string out = "\"";
+  for (unsigned char c : s) {
+    if (c >= 0x20 && c < 0x7f && c != '"' && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    }
+  }
+  return out + '"';
+}
+std::string Text(const HiResponse& m) {
+  Line l(Name(m.kType));
+  l.Text("name", Quoted(m.NameText()))
+      .Text("fw", std::to_string(m.fw_major) + '.' + std::to_string(m.fw_minor) + '.' +
+                      std::to_string(m.fw_rev))
+      .Num("motors", m.motor_count)
+      .Num("dmx", m.dmx_count)
+      .Num("gio_out", m.gio_out_count)
+      .Num("gio_in", m.gio_in_count)
+      .Num("hw_limits", m.hw_limit_count)
+      .Num("upload_frames", m.upload_frame_count)
+      .Hex("caps", m.capabilities, 8);
+  if (m.protocol_version) l.Num("protocol", *m.protocol_version);
+  return l.str();
+}
+std::string Text(const MotorStatusResponse& m) {
+  return Line(Name(m.kType)).Hex("moving", m.moving_bits, 8).Num("dmx", m.dmx_adjusting).str();
+}
+std::string Text(const MotorMoveResponse& m) {
+  return Line(Name(m.kType)).Num("moving", m.moving).str();
+}
+std::string Text(const MotorPositionReport& m) {
+  return Line(Name(m.kType))
+      .Num("time", m.move_time_x1000)
+      .List("positions", m.positions_steps)
+      .str();
+}
+std::string Text(const GioInReport& m) {
+  return Line(Name(m.kType)).Hex("triggers", m.triggers, 8).str();
+}
+std::string Text(const MotorHardStop& m) {
+  Line l(Name(m.kType));
+  l.Text("reason", HardStopReasonName(m.reason));
+  if (m.motor) l.Num("motor", *m.motor);
+  return l.str();
+}
+std::string Text(const VirtPositionReport& m) {
+  Line l(Name(m.kType));
+  l.Num("track", m.track_x100000)
+      .Num("ew", m.ew_x100000)
+      .Num("ns", m.ns_x100000)
+      .Num("pan", m.pan_x100000)
+      .Num("tilt", m.tilt_x100000)
+      .Num("roll", m.roll_x100000);
+  if (m.aim) {
+    l.Num("aim_enabled", m.aim->enabled)
+        .Text("aim", std::to_string(m.aim->x_x1000) + ',' + std::to_string(m.aim->y_x1000) + ',' +
+                         std::to_string(m.aim->z_x1000));
+  }
+  return l.str();
+}
+
+}  // namespace
+
+uint8_t VirtConfig::rig_type() const {
+  return std::visit(
+      Overloaded{
+          [](const VirtRigNone&) { return static_cast<uint8_t>(RigType::kNone); },
+          [](const VirtRigBoomSwingTrack&) {
+            return static_cast<uint8_t>(RigType::kBoomSwingTrack);
+          },
+          [](const VirtRigSwingPan&) { return static_cast<uint8_t>(RigType::kSwingPan); },
+          [](const VirtRigRaw& r) { return r.type; },
+      },
+      rig);
+}
+
+std::string HiResponse::NameText() const {
+  size_t n = 0;
+  while (n < name.size() && name[n] != 0) ++n;
+  return std::string(name.begin(), name.begin() + static_cast<std::ptrdiff_t>(n));
+}
+
+std::array<uint8_t, kHiNameSize> HiResponse::MakeName(std::string_view text) {
+  std::array<uint8_t, kHiNameSize> out{};
+  for (size_t i = 0; i < text.size() && i < out.size(); ++i) out[i] = static_cast<uint8_t>(text[i]);
+  return out;
+}
+
+Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data) {
+  using M = HostMessage;
+  if ((type & kFlagAck) != 0) return DecodeAck<M>(type, data);
+  switch (static_cast<MsgType>(type)) {
+    case MsgType::kHi:
+      return DecodeAs<HiRequest, M>(data);
+    case MsgType::kDmx:
+      return DecodeAs<Dmx, M>(data);
+    case MsgType::kGioOut:
+      return DecodeAs<GioOut, M>(data);
+    case MsgType::kGioIn:
+      return DecodeAs<GioInRequest, M>(data);
+    case MsgType::kGioCam:
+      return DecodeAs<GioCam, M>(data);
+    case MsgType::kMotorStatus:
+      return DecodeAs<MotorStatusRequest, M>(data);
+    case MsgType::kMotorMove:
+      return DecodeAs<MotorMove, M>(data);
+    case MsgType::kMotorStop:
+      return DecodeAs<MotorStop, M>(data);
+    case MsgType::kMotorStopAll:
+      return DecodeAs<MotorStopAll, M>(data);
+    case MsgType::kMotorGetPosition:
+      return DecodeAs<MotorGetPositionRequest, M>(data);
+    case MsgType::kMotorResetPosition:
+      return DecodeAs<MotorResetPosition, M>(data);
+    case MsgType::kMotorJog:
+      return DecodeAs<MotorJog, M>(data);
+    case MsgType::kMotorConfigure:
+      return DecodeAs<MotorConfigure, M>(data);
+    case MsgType::kMotorSetSpeed:
+      return DecodeAs<MotorSetSpeed, M>(data);
+    case MsgType::kMotorSetLimits:
+      return DecodeAs<MotorSetLimits, M>(data);
+    case MsgType::kRtUploadMoveBegin:
+      return DecodeAs<RtUploadMoveBegin, M>(data);
+    case MsgType::kRtUploadMoveAxis:
+      return DecodeAs<RtUploadMoveAxis, M>(data);
+    case MsgType::kRtUploadMoveDmx:
+      return DecodeAs<RtUploadMoveDmx, M>(data);
+    case MsgType::kRtUploadMoveTriggers:
+      return DecodeAs<RtUploadMoveTriggers, M>(data);
+    case MsgType::kRtUploadMoveEnd:
+      return DecodeAs<RtUploadMoveEnd, M>(data);
+    case MsgType::kRtPositionFrame:
+      return DecodeAs<RtPositionFrame, M>(data);
+    case MsgType::kRtRunMove:
+      return DecodeAs<RtRunMove, M>(data);
+    case MsgType::kRtShootFrame:
+      return DecodeAs<RtShootFrame, M>(data);
+    case MsgType::kRtShootFrame2:
+      return DecodeAs<RtShootFrame2, M>(data);
+    case MsgType::kRtGo:
+      return DecodeAs<RtGo, M>(data);
+    case MsgType::kRtStopLoop:
+      return DecodeAs<RtStopLoop, M>(data);
+    case MsgType::kRtJogAll:
+      return DecodeAs<RtJogAll, M>(data);
+    case MsgType::kVirtConfig:
+      return DecodeAs<VirtConfig, M>(data);
+    case MsgType::kVirtMove:
+      return DecodeAs<VirtMove, M>(data);
+    case MsgType::kVirtStop:
+      return DecodeAs<VirtStop, M>(data);
+    case MsgType::kVirtJog:
+      return DecodeAs<VirtJog, M>(data);
+    case MsgType::kVirtJogOnLine:
+      return DecodeAs<VirtJogOnLine, M>(data);
+    case MsgType::kVirtGetPosition:
+      return DecodeAs<VirtGetPositionRequest, M>(data);
+    case MsgType::kVirtAimPoint:
+      return DecodeAs<VirtAimPoint, M>(data);
+    // Sent only by devices: Dragonframe never sends these without kFlagAck.
+    case MsgType::kMotorHardStop:
+    case MsgType::kRtEnd:
+      break;
+  }
+  return M{Unknown{type, Bytes(data.begin(), data.end())}};
+}
+
+Result<HostMessage> DecodeHostMessage(const Frame& frame) {
+  return DecodeHostMessage(frame.type, frame.data);
+}
+
+Result<DeviceMessage> DecodeDeviceMessage(uint16_t type, ByteView data) {
+  using M = DeviceMessage;
+  if ((type & kFlagAck) != 0) return DecodeAck<M>(type, data);
+  switch (static_cast<MsgType>(type)) {
+    case MsgType::kHi:
+      return DecodeAs<HiResponse, M>(data);
+    case MsgType::kMotorStatus:
+      return DecodeAs<MotorStatusResponse, M>(data);
+    case MsgType::kMotorMove:
+      return DecodeAs<MotorMoveResponse, M>(data);
+    case MsgType::kMotorGetPosition:
+      return DecodeAs<MotorPositionReport, M>(data);
+    case MsgType::kGioIn:
+      return DecodeAs<GioInReport, M>(data);
+    case MsgType::kMotorHardStop:
+      return DecodeAs<MotorHardStop, M>(data);
+    case MsgType::kRtEnd:
+      return DecodeAs<RtEnd, M>(data);
+    case MsgType::kVirtGetPosition:
+      return DecodeAs<VirtPositionReport, M>(data);
+    case MsgType::kVirtAimPoint:
+      return DecodeAs<VirtAimPoint, M>(data);
+    default:
+      break;  // requests only: a device answers them with an ACK
+  }
+  return M{Unknown{type, Bytes(data.begin(), data.end())}};
+}
+
+Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame) {
+  return DecodeDeviceMessage(frame.type, frame.data);
+}
+
+uint16_t TypeOf(const HostMessage& m) { return TypeOfAny(m); }
+uint16_t TypeOf(const DeviceMessage& m) { return TypeOfAny(m); }
+
+void Encode(uint32_t id, const HostMessage& m, Bytes& out) { EncodeAny(id, m, out); }
+void Encode(uint32_t id, const DeviceMessage& m, Bytes& out) { EncodeAny(id, m, out); }
+
+Bytes Encode(uint32_t id, const HostMessage& m) {
+  Bytes out;
+  EncodeAny(id, m, out);
+  return out;
+}
+Bytes Encode(uint32_t id, const DeviceMessage& m) {
+  Bytes out;
+  EncodeAny(id, m, out);
+  return out;
+}
+
+void EncodeData(const HostMessage& m, Bytes& out) {
+  Writer w(out);
+  PutAny(w, m);
+}
+void EncodeData(const DeviceMessage& m, Bytes& out) {
+  Writer w(out);
+  PutAny(w, m);
+}
+
+std::string Describe(const HostMessage& m) {
+  return std::visit([](const auto& x) { return Text(x); }, m);
+}
+std::string Describe(const DeviceMessage& m) {
+  return std::visit([](const auto& x) { return Text(x); }, m);
+}
+
+AckCode SuggestedAck(const DecodeError& e) {
+  switch (e.kind) {
+    case Kind::kBadChecksum:
+      return AckCode::kErrChecksum;
+    case Kind::kUnknown:
+      return AckCode::kErrUnsupported;
+    case Kind::kBadValue:
+      return AckCode::kErrRange;
+    case Kind::kTruncated:
+    case Kind::kTrailing:
+    case Kind::kBadLength:
+    case Kind::kBadSyntax:
+      break;
+  }
+  return AckCode::kErrGeneral;
+}
+
+}  // namespace moco::dmc
