@@ -172,10 +172,9 @@ wire::Result<HostCommand> ParseHostLine(std::string_view line, const Dialect& di
   const bool known = w == "hi" || w == "ms" || w == "mm" || w == "mp" || w == "sm" || w == "sa" ||
                      w == "jm" || w == "im" || w == "pr" || w == "zm" || w == "np" || w == "bf" ||
                      w == "go";
-  // The sketch drops back to waiting for a command on an unknown word and never counts
-  // its arguments: no reply at all (FACTS).
+  // An unknown word gets no reply at all (FACTS), so its arguments are never counted.
   if (!known) return HostCommand{UnknownCommand{std::string(line)}};
-  // The sketch answers as soon as the 40th argument starts (FACTS: 40 or more).
+  // 40 or more arguments answer `error: too many args` (FACTS), whatever they hold.
   if (s.arg_count >= kMaxArgs) {
     return Error(Kind::kBadLength, s.args[kMaxArgs - 1].offset,
                  std::to_string(s.arg_count) + " arguments; at most " +
@@ -195,8 +194,8 @@ wire::Result<HostCommand> ParseHostLine(std::string_view line, const Dialect& di
   std::array<int32_t, kMaxArgs> v{};
   DecodeError error;
   if (!ParseAllInts(s, v, error)) {
-    // A wrong count is reported before a bad number when both apply, since the count
-    // is what the device checks first on a complete line.
+    // Reading: when both the count and a number are wrong, the count is reported
+    // (the answer is `parse error` either way).
     const bool count_ok = (w == "hi" || w == "ms" || w == "go") ? n == 0
                           : (w == "sa") ? (n == 0 || (dialect.stackshot && n == 1))
                           : (w == "mp" || w == "sm" || w == "zm")              ? n == 1
