@@ -617,9 +617,19 @@ struct PayloadDescriber {
   }
 };
 
-void DescribeHeader(std::string& out, uint16_t command, std::string_view action, uint8_t axis,
+// The name shown for a typed message: a ping received at CC_PING's table id
+// (NOR_ACCESS by the enum) is shown as "CC_PING(0x110a)".
+std::string TypedName(uint16_t command, const Payload& payload) {
+  if (command == kPingTableId && (std::holds_alternative<PingRequest>(payload) ||
+                                  std::holds_alternative<PingReply>(payload))) {
+    return "CC_PING(" + Hex(command, 4) + ")";
+  }
+  return CommandName(command);
+}
+
+void DescribeHeader(std::string& out, std::string name, std::string_view action, uint8_t axis,
                     bool sub_item, bool bit6) {
-  out = CommandName(command);
+  out = std::move(name);
   out.push_back(' ');
   out += action;
   out += " axis=";
@@ -1155,7 +1165,8 @@ bool IsValid(AxisType t) { return static_cast<uint32_t>(t) < kAxisTypeMax; }
 
 std::string Describe(const HostCommand& c) {
   std::string out;
-  DescribeHeader(out, c.command, ActionText(c.action), c.axis, c.sub_item, c.reserved_bit6);
+  DescribeHeader(out, TypedName(c.command, c.payload), ActionText(c.action), c.axis, c.sub_item,
+                 c.reserved_bit6);
   const CommandInfo* info = FindCommand(c.command);
   std::visit(PayloadDescriber{info ? info->field : std::string_view{}, out}, c.payload);
   return out;
@@ -1163,7 +1174,8 @@ std::string Describe(const HostCommand& c) {
 
 std::string Describe(const DeviceReply& r) {
   std::string out;
-  DescribeHeader(out, r.command, ActionText(r.status), r.axis, r.sub_item, r.reserved_bit6);
+  DescribeHeader(out, TypedName(r.command, r.payload), ActionText(r.status), r.axis, r.sub_item,
+                 r.reserved_bit6);
   const CommandInfo* info = FindCommand(r.command);
   std::visit(PayloadDescriber{info ? info->field : std::string_view{}, out}, r.payload);
   return out;
@@ -1171,8 +1183,8 @@ std::string Describe(const DeviceReply& r) {
 
 std::string Describe(const Packet& p) {
   std::string out;
-  DescribeHeader(out, p.command, ActionText(static_cast<Action>(p.action)), p.axis, p.sub_item,
-                 p.reserved_bit6);
+  DescribeHeader(out, CommandName(p.command), ActionText(static_cast<Action>(p.action)), p.axis,
+                 p.sub_item, p.reserved_bit6);
   if (!p.data.empty()) {
     out += " data=";
     out += wire::ToHex(p.data);
