@@ -200,6 +200,7 @@ uint32_t ReadU32(Reader& r) {
 }
 
 Result<Payload> ParseText(ByteView data) {
+  if (data.empty()) return Payload{Text{"", false}};
   const auto* nul = static_cast<const uint8_t*>(std::memchr(data.data(), 0, data.size()));
   if (nul == nullptr) {
     return Payload{Text{std::string(data.begin(), data.end()), false}};
@@ -452,7 +453,9 @@ std::string Hex(uint32_t v, int digits) {
 template <typename En>
 std::string EnumText(En v, std::string_view name) {
   if (!name.empty()) return std::string(name);
-  return "#" + std::to_string(static_cast<uint32_t>(v));
+  std::string out = "#";
+  out += std::to_string(static_cast<uint32_t>(v));
+  return out;
 }
 
 std::string QuoteText(const std::string& s) {
@@ -488,8 +491,21 @@ std::string StatusBitsText(uint32_t bits) {
   return out;
 }
 
+// "a..b" (built with += : GCC 12 at -O3 warns falsely on operator+ chains).
+std::string Span(uint32_t a, uint32_t b) {
+  std::string out = std::to_string(a);
+  out += "..";
+  out += std::to_string(b);
+  return out;
+}
+
 std::string PointText(const BezierPoint& p) {
-  return "(" + FormatF32(p.x) + "," + FormatF32(p.y) + ")";
+  std::string out = "(";
+  out += FormatF32(p.x);
+  out.push_back(',');
+  out += FormatF32(p.y);
+  out.push_back(')');
+  return out;
 }
 
 struct PayloadDescriber {
@@ -567,13 +583,13 @@ struct PayloadDescriber {
   }
   void operator()(const RailStack& s) {
     const auto mode = static_cast<RailMode>(s.mode);
-    Put("mode", s.mode <= 0xFF ? EnumText(mode, RailModeName(mode)) : "#" + std::to_string(s.mode));
+    Put("mode", s.mode <= 0xFF ? EnumText(mode, RailModeName(mode)) : EnumText(s.mode, {}));
     Put("steps", std::to_string(s.num_steps));
     Put("distance", std::to_string(s.distance));
-    Put("pano", std::to_string(s.pano_start_steps) + ".." + std::to_string(s.pano_stop_steps));
-    Put("x", std::to_string(s.x_start) + ".." + std::to_string(s.x_end));
-    Put("y", std::to_string(s.y_start) + ".." + std::to_string(s.y_end));
-    Put("z", std::to_string(s.z_start) + ".." + std::to_string(s.z_end));
+    Put("pano", Span(s.pano_start_steps, s.pano_stop_steps));
+    Put("x", Span(s.x_start, s.x_end));
+    Put("y", Span(s.y_start, s.y_end));
+    Put("z", Span(s.z_start, s.z_end));
     if (s.reserved) Put("reserved", Hex(*s.reserved, 8));
   }
   void operator()(const RailStatus& s) { Put("status", StatusBitsText(s.bits)); }
@@ -601,7 +617,9 @@ struct PayloadDescriber {
       if (c >= used && curve == BezierCurve{}) continue;
       std::string pts;
       for (const auto& p : curve.p) pts += PointText(p);
-      Put("c" + std::to_string(c), pts);
+      std::string key = "c";
+      key += std::to_string(c);
+      Put(key, pts);
     }
   }
   void operator()(const MotionStart& m) {
