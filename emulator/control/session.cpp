@@ -125,28 +125,6 @@ std::optional<SessionError> ParseEntry(const json& j, size_t line, int64_t prev_
 
 }  // namespace
 
-std::string_view ProtocolName(Protocol p) {
-  switch (p) {
-    case Protocol::kDmc:
-      return "dmc";
-    case Protocol::kDfmoco:
-      return "dfmoco";
-    case Protocol::kStackshot:
-      return "stackshot";
-    case Protocol::kStackshotDfmoco:
-      return "stackshot-dfmoco";
-  }
-  return "?";
-}
-
-std::optional<Protocol> ParseProtocol(std::string_view name) {
-  for (Protocol p :
-       {Protocol::kDmc, Protocol::kDfmoco, Protocol::kStackshot, Protocol::kStackshotDfmoco}) {
-    if (ProtocolName(p) == name) return p;
-  }
-  return std::nullopt;
-}
-
 std::variant<Session, SessionError> ParseSession(std::string_view text) {
   Session s;
   size_t line_no = 0;

@@ -14,16 +14,15 @@
 #include <nlohmann/json.hpp>
 
 #include "wire/bytes.h"
+#include "wire/transcript.h"
 
 namespace moco::control {
 
 inline constexpr int kSessionFormatVersion = 1;
 
-enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
-
-// "dmc", "dfmoco", "stackshot", "stackshot-dfmoco".
-std::string_view ProtocolName(Protocol p);
-std::optional<Protocol> ParseProtocol(std::string_view name);
+using wire::ParseProtocol;
+using wire::Protocol;
+using wire::ProtocolName;
 
 struct SessionHeader {
   Protocol protocol = Protocol::kDmc;

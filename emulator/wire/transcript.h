@@ -1,0 +1,52 @@
+// Human-readable transcripts of host/device traffic for any of the three
+// protocols: frames bytes per direction with each codec's streaming decoder and
+// describes every message (used by `mocosim decode` and the reports).
+#ifndef MOCO_WIRE_TRANSCRIPT_H_
+#define MOCO_WIRE_TRANSCRIPT_H_
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "wire/bytes.h"
+
+namespace moco::wire {
+
+enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
+
+// "dmc", "dfmoco", "stackshot", "stackshot-dfmoco".
+std::string_view ProtocolName(Protocol p);
+std::optional<Protocol> ParseProtocol(std::string_view name);
+
+enum class Side { kHost, kDevice };
+
+// One decoded item: a message, or a framing/checksum/parse problem.
+struct TranscriptLine {
+  Side from = Side::kHost;
+  bool problem = false;  // a checksum failure, skipped bytes, a line that does not parse
+  std::string text;
+};
+
+// Keeps one streaming decoder per direction. Not thread-safe.
+class TranscriptDecoder {
+ public:
+  explicit TranscriptDecoder(Protocol protocol);
+  ~TranscriptDecoder();
+  TranscriptDecoder(const TranscriptDecoder&) = delete;
+  TranscriptDecoder& operator=(const TranscriptDecoder&) = delete;
+
+  // Feeds a chunk that crossed the link from `from`; returns what it completed.
+  std::vector<TranscriptLine> Feed(Side from, ByteView bytes);
+  // End of the traffic: reports what is left pending in either direction.
+  std::vector<TranscriptLine> Finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace moco::wire
+
+#endif  // MOCO_WIRE_TRANSCRIPT_H_

@@ -1,0 +1,91 @@
+// Tests for the transcript decoder: each protocol's traffic framed per
+// direction, described, and problems (checksum, parse, leftovers) flagged.
+#include "wire/transcript.h"
+
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <string>
+
+#include "wire/dfmoco.h"
+#include "wire/dmc.h"
+#include "wire/stackshot.h"
+
+namespace moco::wire {
+namespace {
+
+ByteView View(std::string_view s) { return {reinterpret_cast<const uint8_t*>(s.data()), s.size()}; }
+
+TEST(TranscriptTest, ProtocolNamesRoundTrip) {
+  for (Protocol p :
+       {Protocol::kDmc, Protocol::kDfmoco, Protocol::kStackshot, Protocol::kStackshotDfmoco}) {
+    EXPECT_EQ(ParseProtocol(ProtocolName(p)), p);
+  }
+  EXPECT_FALSE(ParseProtocol("dmc2").has_value());
+}
+
+TEST(TranscriptTest, DmcFramesAreDescribedPerDirectionAndChecksumFailuresFlagged) {
+  TranscriptDecoder d(Protocol::kDmc);
+  Bytes hi;
+  dmc::Encode(7, dmc::HostMessage{dmc::HiRequest{}}, hi);
+  auto lines = d.Feed(Side::kHost, hi);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_FALSE(lines[0].problem);
+  EXPECT_EQ(lines[0].from, Side::kHost);
+  EXPECT_EQ(lines[0].text.rfind("#7 ", 0), 0u) << lines[0].text;
+  EXPECT_NE(lines[0].text.find("HI"), std::string::npos) << lines[0].text;
+
+  Bytes bad = hi;
+  bad[6] ^= 0x01;  // the Type field: the checksum no longer verifies
+  lines = d.Feed(Side::kHost, bad);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(lines[0].problem);
+  EXPECT_NE(lines[0].text.find("BAD CHECKSUM"), std::string::npos) << lines[0].text;
+}
+
+TEST(TranscriptTest, DfmocoLearnsDialectFromHiAndFlagsUnterminatedLine) {
+  TranscriptDecoder d(Protocol::kDfmoco);
+  auto lines = d.Feed(Side::kDevice, View("hi 1 4 1.3.0\r\n"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_FALSE(lines[0].problem);
+  // Protocol 1 has no jm velocity: a third argument is a parse problem.
+  lines = d.Feed(Side::kHost, View("jm 1 100 5000\r\n"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(lines[0].problem) << lines[0].text;
+  lines = d.Feed(Side::kHost, View("mm 1 25"));
+  EXPECT_TRUE(lines.empty());
+  lines = d.Finish();
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(lines[0].problem);
+  EXPECT_EQ(lines[0].from, Side::kHost);
+}
+
+TEST(TranscriptTest, StackshotReplyReadAsAnswerToLastHostAction) {
+  TranscriptDecoder d(Protocol::kStackshot);
+  // Spec section 2 example: read current position, X axis (checksum byte as hosts send it).
+  auto lines = d.Feed(Side::kHost, *FromHex("55 10 02 00 00 69"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_FALSE(lines[0].problem);
+  EXPECT_NE(lines[0].text.find("CC_RAIL_POSITION_CURRENT"), std::string::npos) << lines[0].text;
+}
+
+RC_GTEST_PROP(TranscriptProp, DmcChunkingDoesNotChangeTranscript,
+              (const std::vector<uint32_t>& ids, size_t chunk)) {
+  Bytes stream;
+  for (uint32_t id : ids) dmc::Encode(id, dmc::HostMessage{dmc::HiRequest{}}, stream);
+  const size_t step = 1 + chunk % 17;
+  TranscriptDecoder whole(Protocol::kDmc), pieces(Protocol::kDmc);
+  auto a = whole.Feed(Side::kHost, stream);
+  std::vector<TranscriptLine> b;
+  for (size_t i = 0; i < stream.size(); i += step) {
+    auto part =
+        pieces.Feed(Side::kHost, ByteView(stream).subspan(i, std::min(step, stream.size() - i)));
+    b.insert(b.end(), part.begin(), part.end());
+  }
+  RC_ASSERT(a.size() == ids.size());
+  RC_ASSERT(b.size() == a.size());
+  for (size_t i = 0; i < a.size(); ++i) RC_ASSERT(a[i].text == b[i].text);
+}
+
+}  // namespace
+}  // namespace moco::wire
