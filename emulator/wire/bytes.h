@@ -177,6 +177,14 @@ class Reader {
   size_t base_ = 0;
 };
 
+// Visitor built from lambdas, for std::visit over the codecs' message variants.
+template <class... Ts>
+struct Overloaded : Ts... {
+  using Ts::operator()...;
+};
+template <class... Ts>
+Overloaded(Ts...) -> Overloaded<Ts...>;
+
 // Lower-case hex without separators ("44460100").
 std::string ToHex(ByteView bytes);
 // Parses hex, ignoring spaces, colons and dashes; nullopt on an odd digit

@@ -15,13 +15,6 @@ namespace {
 using wire::DecodeError;
 using Kind = DecodeError::Kind;
 
-template <class... Ts>
-struct Overloaded : Ts... {
-  using Ts::operator()...;
-};
-template <class... Ts>
-Overloaded(Ts...) -> Overloaded<Ts...>;
-
 struct Token {
   std::string_view text;
   size_t offset = 0;
@@ -272,7 +265,7 @@ DeviceReply ErrorReply(const wire::DecodeError& e) {
 }
 
 void AppendHost(const HostCommand& command, std::string& out) {
-  std::visit(Overloaded{
+  std::visit(wire::Overloaded{
                  [&](const Hello&) { out.append("hi\r\n"); },
                  [&](const MotorStatusQuery&) { out.append("ms\r\n"); },
                  [&](const MoveMotor& c) {
@@ -335,7 +328,7 @@ std::string FormatHost(const HostCommand& command) {
 
 std::string Describe(const HostCommand& command) {
   return std::visit(
-      Overloaded{
+      wire::Overloaded{
           [](const Hello&) -> std::string { return "hello"; },
           [](const MotorStatusQuery&) -> std::string { return "motor status query"; },
           [](const MoveMotor& c) {
@@ -384,7 +377,7 @@ std::string Describe(const HostCommand& command) {
 }
 
 std::string_view CommandWord(const HostCommand& command) {
-  return std::visit(Overloaded{
+  return std::visit(wire::Overloaded{
                         [](const Hello&) -> std::string_view { return "hi"; },
                         [](const MotorStatusQuery&) -> std::string_view { return "ms"; },
                         [](const MoveMotor&) -> std::string_view { return "mm"; },
@@ -500,7 +493,7 @@ wire::Result<DeviceReply> ParseDeviceLine(std::string_view line, const Dialect& 
 }
 
 void AppendDevice(const DeviceReply& reply, std::string& out) {
-  std::visit(Overloaded{
+  std::visit(wire::Overloaded{
                  [&](const HelloReply& r) {
                    out.append("hi ");
                    AppendInt(out, r.protocol_major);
@@ -548,7 +541,7 @@ std::string FormatDevice(const DeviceReply& reply) {
 
 std::string Describe(const DeviceReply& reply, const Dialect& dialect) {
   return std::visit(
-      Overloaded{
+      wire::Overloaded{
           [](const HelloReply& r) {
             return "hello: protocol " + Str(r.protocol_major) + ", " + Str(r.motor_count) +
                    " motors, firmware " + r.version;

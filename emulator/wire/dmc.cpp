@@ -14,13 +14,6 @@ using wire::Reader;
 using wire::Writer;
 using Kind = DecodeError::Kind;
 
-template <class... Ts>
-struct Overloaded : Ts... {
-  using Ts::operator()...;
-};
-template <class... Ts>
-Overloaded(Ts...) -> Overloaded<Ts...>;
-
 // --- Field reading with the first failure remembered ------------------------------
 
 class Fields {
@@ -349,7 +342,7 @@ constexpr size_t kCompensationSize = kBoomCompensationEntries * 4;
 void Put(Writer& w, const VirtConfig& m) {
   w.U8(m.rig_type());
   std::visit(
-      Overloaded{
+      wire::Overloaded{
           [](const VirtRigNone&) {},
           [&w](const VirtRigBoomSwingTrack& r) {
             for (const VirtAxisSetup* a : {&r.boom, &r.swing, &r.track, &r.pan, &r.tilt, &r.roll}) {
@@ -632,7 +625,7 @@ void PutAny(Writer& w, const std::variant<Ts...>& m) {
 
 template <class... Ts>
 uint16_t TypeOfAny(const std::variant<Ts...>& m) {
-  return std::visit(Overloaded{
+  return std::visit(wire::Overloaded{
                         [](const Ack& a) { return static_cast<uint16_t>(a.type | kFlagAck); },
                         [](const Unknown& u) { return u.type; },
                         [](const auto& x) { return ToWire(std::decay_t<decltype(x)>::kType); },
@@ -642,27 +635,10 @@ uint16_t TypeOfAny(const std::variant<Ts...>& m) {
 
 template <class Variant>
 void EncodeAny(uint32_t id, const Variant& m, Bytes& out) {
-  const size_t start = out.size();
-  out.resize(start + kHeaderSize);
-  const uint16_t type = TypeOfAny(m);
-  uint8_t* p = out.data() + start;
-  p[0] = kMarker0;
-  p[1] = kMarker1;
-  p[2] = static_cast<uint8_t>(id);
-  p[3] = static_cast<uint8_t>(id >> 8);
-  p[4] = static_cast<uint8_t>(id >> 16);
-  p[5] = static_cast<uint8_t>(id >> 24);
-  p[6] = static_cast<uint8_t>(type);
-  p[7] = static_cast<uint8_t>(type >> 8);
+  const size_t start = BeginFrame(id, TypeOfAny(m), out);
   Writer w(out);
   PutAny(w, m);
-  const size_t length = out.size() - start - kHeaderSize;
-  p = out.data() + start;
-  p[8] = static_cast<uint8_t>(length);
-  p[9] = static_cast<uint8_t>(length >> 8);
-  const auto check = CheckBytes(Fletcher16(ByteView(p, kHeaderSize + length)));
-  out.push_back(check[0]);
-  out.push_back(check[1]);
+  EndFrame(start, out);
 }
 
 // --- Describe ----------------------------------------------------------------------
@@ -880,7 +856,7 @@ std::string SetupText(const VirtAxisSetup& a) {
 std::string Text(const VirtConfig& m) {
   Line l(Name(m.kType));
   l.Num("type", m.rig_type());
-  std::visit(Overloaded{
+  std::visit(wire::Overloaded{
                  [](const VirtRigNone&) {},
                  [&l](const VirtRigBoomSwingTrack& r) {
                    l.Text("boom", SetupText(r.boom))
@@ -992,7 +968,7 @@ std::string Text(const VirtPositionReport& m) {
 
 uint8_t VirtConfig::rig_type() const {
   return std::visit(
-      Overloaded{
+      wire::Overloaded{
           [](const VirtRigNone&) { return static_cast<uint8_t>(RigType::kNone); },
           [](const VirtRigBoomSwingTrack&) {
             return static_cast<uint8_t>(RigType::kBoomSwingTrack);

@@ -184,25 +184,32 @@ std::array<uint8_t, 2> CheckBytes(uint16_t sum) {
   return {static_cast<uint8_t>(c0), static_cast<uint8_t>(c1)};
 }
 
-void EncodeFrame(uint32_t id, uint16_t type, ByteView data, Bytes& out) {
-  const size_t length = std::min<size_t>(data.size(), 0xffff);
+size_t BeginFrame(uint32_t id, uint16_t type, Bytes& out) {
   const size_t start = out.size();
-  out.resize(start + kHeaderSize + length + kCheckSize);
+  wire::Writer w(out);
+  w.U8(kMarker0);
+  w.U8(kMarker1);
+  w.U32Le(id);
+  w.U16Le(type);
+  w.U16Le(0);  // Length, filled in by EndFrame
+  return start;
+}
+
+void EndFrame(size_t start, Bytes& out) {
+  const size_t length = std::min<size_t>(out.size() - start - kHeaderSize, 0xffff);
+  out.resize(start + kHeaderSize + length);
   uint8_t* p = out.data() + start;
-  p[0] = kMarker0;
-  p[1] = kMarker1;
-  p[2] = static_cast<uint8_t>(id);
-  p[3] = static_cast<uint8_t>(id >> 8);
-  p[4] = static_cast<uint8_t>(id >> 16);
-  p[5] = static_cast<uint8_t>(id >> 24);
-  p[6] = static_cast<uint8_t>(type);
-  p[7] = static_cast<uint8_t>(type >> 8);
   p[8] = static_cast<uint8_t>(length);
   p[9] = static_cast<uint8_t>(length >> 8);
-  if (length != 0) std::memcpy(p + kHeaderSize, data.data(), length);
   const auto check = CheckBytes(Fletcher16(ByteView(p, kHeaderSize + length)));
-  p[kHeaderSize + length] = check[0];
-  p[kHeaderSize + length + 1] = check[1];
+  out.push_back(check[0]);
+  out.push_back(check[1]);
+}
+
+void EncodeFrame(uint32_t id, uint16_t type, ByteView data, Bytes& out) {
+  const size_t start = BeginFrame(id, type, out);
+  out.insert(out.end(), data.begin(), data.begin() + std::min<size_t>(data.size(), 0xffff));
+  EndFrame(start, out);
 }
 
 Bytes EncodeFrame(const Frame& f) {

@@ -65,6 +65,13 @@ void EncodeFrame(uint32_t id, uint16_t type, ByteView data, Bytes& out);
 inline void EncodeFrame(const Frame& f, Bytes& out) { EncodeFrame(f.id, f.type, f.data, out); }
 Bytes EncodeFrame(const Frame& f);
 
+// Building a frame in place, for encoders that append the data section
+// themselves: BeginFrame writes marker, ID, Type and a Length placeholder and
+// returns the frame's start offset; EndFrame fills Length from the bytes
+// appended since (cut to 0xffff) and appends the check bytes.
+size_t BeginFrame(uint32_t id, uint16_t type, Bytes& out);
+void EndFrame(size_t start, Bytes& out);
+
 // Decodes exactly one complete frame. Errors (offsets from the first byte of
 // `bytes`): kTruncated (fewer than header + Length + 2 bytes), kBadValue
 // (marker is not 'D' 'F'), kBadLength (Length > kMaxDataLength), kTrailing
