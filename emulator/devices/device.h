@@ -8,7 +8,14 @@
 #include <cstdint>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
 #include "wire/bytes.h"
+
+namespace moco::sim {
+class Rig;
+class GioPort;
+}  // namespace moco::sim
 
 namespace moco::devices {
 
@@ -55,6 +62,14 @@ class Device {
   virtual void OnHostBytes(wire::ByteView bytes) = 0;
   // The host opened (true) or closed (false) the link. Most devices do not care.
   virtual void OnHostLink(bool /*open*/) {}
+
+  // The simulated hardware behind the device, for the run-time control
+  // channel (e-stop, limit switches, inputs). Null when the device has none.
+  virtual sim::Rig* rig() { return nullptr; }
+  virtual sim::GioPort* gio() { return nullptr; }
+  // A snapshot of the device's state (positions, motion, I/O, mode) for the
+  // control channel's "state" query and for logs. An object; {} when none.
+  virtual nlohmann::json State() const { return nlohmann::json::object(); }
 };
 
 }  // namespace moco::devices

@@ -1,0 +1,73 @@
+// Reading device profiles (fixtures/profiles/*.json): typed fields with
+// defaults and ranges, and start-up errors that name the field and the fix
+// (ARCHITECTURE house style 6: start-up errors are exceptions with a message
+// a user can act on).
+#ifndef MOCO_DEVICES_PROFILE_H_
+#define MOCO_DEVICES_PROFILE_H_
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace moco::devices {
+
+// A profile that cannot be used. what() names the file, the field, what was
+// found and what to write instead.
+class ProfileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads one JSON object of a profile. Every Get* returns the default when the
+// key is absent and throws ProfileError when present with the wrong type or
+// out of range. Finish() throws for keys nobody read (a typo such as
+// "motor_cout" must not silently fall back to a default).
+class ProfileReader {
+ public:
+  // `where` prefixes messages, e.g. "profile fixtures/profiles/dmc16.json".
+  // `path` is the object's location inside the document ("" for the root,
+  // "motors[2]" for a nested object). REQUIRES: `object` outlives the reader.
+  ProfileReader(const nlohmann::json& object, std::string where, std::string path = "");
+
+  bool Has(std::string_view key) const;
+  int64_t GetInt(std::string_view key, int64_t def, int64_t min, int64_t max);
+  double GetNumber(std::string_view key, double def, double min, double max);
+  bool GetBool(std::string_view key, bool def);
+  // max_bytes: the longest UTF-8 text accepted (0 = unlimited).
+  std::string GetString(std::string_view key, std::string_view def, size_t max_bytes = 0);
+  // An unsigned value written as a number or as a "0x..." hex string.
+  uint32_t GetFlags(std::string_view key, uint32_t def);
+  // A nested object or array (null json when absent); marks the key as read.
+  const nlohmann::json& GetRaw(std::string_view key);
+  // A reader for a nested object. Throws when present and not an object.
+  ProfileReader Child(std::string_view key);
+
+  // Throws ProfileError naming the first key that was never read.
+  void Finish() const;
+
+  // A ProfileError for `key` with the given complaint and fix.
+  [[noreturn]] void Fail(std::string_view key, std::string_view problem,
+                         std::string_view fix) const;
+  const std::string& where() const { return where_; }
+  std::string FieldName(std::string_view key) const;
+
+ private:
+  const nlohmann::json* Find(std::string_view key);
+
+  const nlohmann::json& object_;
+  std::string where_;
+  std::string path_;
+  std::vector<std::string> read_;
+};
+
+// Parses `text` as a JSON object; a syntax error throws ProfileError with the
+// byte offset. `where` as for ProfileReader.
+nlohmann::json ParseProfileText(std::string_view text, const std::string& where);
+
+}  // namespace moco::devices
+
+#endif  // MOCO_DEVICES_PROFILE_H_
