@@ -1,0 +1,165 @@
+// Reading and writing the DMC-16 profile (see dmc16_profile.h).
+#include "devices/dmc16/dmc16_profile.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "devices/profile.h"
+
+namespace moco::devices {
+
+dmc::HiResponse Dmc16Profile::Hi() const {
+  dmc::HiResponse hi;
+  hi.name = dmc::HiResponse::MakeName(name);
+  hi.fw_major = fw_major;
+  hi.fw_minor = fw_minor;
+  hi.fw_rev = fw_rev;
+  hi.motor_count = motor_count;
+  hi.dmx_count = dmx_channels;
+  hi.gio_out_count = gio_outputs;
+  hi.gio_in_count = gio_inputs;
+  hi.hw_limit_count = hw_limit_sets;
+  hi.upload_frame_count = upload_frame_count;
+  hi.capabilities = capabilities;
+  hi.protocol_version = protocol_version;
+  return hi;
+}
+
+Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where) {
+  Dmc16Profile p;
+  ProfileReader r(j, where);
+  const std::string model = r.GetString("model", "dmc16");
+  if (model != "dmc16") {
+    r.Fail("model", "is \"" + model + "\", but this is a DMC-16 profile",
+           "use \"dmc16\", or pass the profile to the device it describes");
+  }
+  p.name = r.GetString("name", p.name, dmc::kHiNameSize);
+  {
+    ProfileReader fw = r.Child("firmware");
+    p.fw_major = static_cast<uint8_t>(fw.GetInt("major", p.fw_major, 0, 255));
+    p.fw_minor = static_cast<uint8_t>(fw.GetInt("minor", p.fw_minor, 0, 255));
+    p.fw_rev = static_cast<uint8_t>(fw.GetInt("rev", p.fw_rev, 0, 255));
+    fw.Finish();
+  }
+  p.motor_count = static_cast<uint8_t>(r.GetInt("motor_count", p.motor_count, 0, dmc::kMaxMotors));
+  p.dmx_channels =
+      static_cast<uint16_t>(r.GetInt("dmx_channels", p.dmx_channels, 0, dmc::kMaxDmxChannels));
+  p.gio_outputs = static_cast<uint8_t>(r.GetInt("gio_outputs", p.gio_outputs, 0, dmc::kMaxGio));
+  p.gio_inputs = static_cast<uint8_t>(r.GetInt("gio_inputs", p.gio_inputs, 0, dmc::kMaxGio));
+  p.hw_limit_sets = static_cast<uint8_t>(r.GetInt("hw_limit_sets", p.hw_limit_sets, 0, 0x7f));
+  // The store is sized by this: 1M frames of 32 motors is 128 MiB, the most accepted.
+  p.upload_frame_count =
+      static_cast<uint32_t>(r.GetInt("upload_frame_count", p.upload_frame_count, 1, 1'000'000));
+  p.capabilities = r.GetFlags("capabilities", p.capabilities);
+  constexpr uint32_t kVirtual = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                                dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz | dmc::kCapAimPoint;
+  if ((p.capabilities & kVirtual) != 0) {
+    r.Fail("capabilities", "advertises virtual modes or the aim point (bits 0x007c)",
+           "clear those bits: this DMC-16 model has no rig kinematics to honour them");
+  }
+  const int64_t version = r.GetInt("protocol_version", 2, 0, 0xffff);
+  p.protocol_version = version == 0 ? std::nullopt : std::optional<uint16_t>(version);
+  const int64_t width = r.GetInt("ack_width_bits", 16, 16, 32);
+  if (width != 16 && width != 32) {
+    r.Fail("ack_width_bits", "is " + std::to_string(width), "use 16 (the spec) or 32 (FACTS)");
+  }
+  p.ack_width = width == 32 ? dmc::AckWidth::k32 : dmc::AckWidth::k16;
+  p.baud = static_cast<uint32_t>(r.GetInt("baud", p.baud, 300, 4'000'000));
+  p.position_report_interval_ms = static_cast<uint32_t>(
+      r.GetInt("position_report_interval_ms", p.position_report_interval_ms, 10, 10'000));
+  p.hard_stop_window_ms =
+      static_cast<uint32_t>(r.GetInt("hard_stop_window_ms", p.hard_stop_window_ms, 0, 60'000));
+  p.gio_debounce_ms =
+      static_cast<uint32_t>(r.GetInt("gio_debounce_ms", p.gio_debounce_ms, 0, 10'000));
+  p.dmx_ramp_rate_per_s = r.GetNumber("dmx_ramp_rate_per_s", p.dmx_ramp_rate_per_s, 0.001, 1e6);
+  {
+    ProfileReader m = r.Child("motion");
+    p.max_velocity_steps_per_s =
+        m.GetNumber("max_velocity_steps_per_s", p.max_velocity_steps_per_s, 0.001, 1e7);
+    p.max_accel_steps_per_s2 =
+        m.GetNumber("max_accel_steps_per_s2", p.max_accel_steps_per_s2, 0.001, 1e9);
+    p.hard_stop_multiple = m.GetNumber("hard_stop_multiple", p.hard_stop_multiple, 1, 1000);
+    p.motors_enabled = m.GetBool("motors_enabled", p.motors_enabled);
+    m.Finish();
+  }
+  const nlohmann::json& sets = r.GetRaw("limit_sets");
+  if (!sets.is_null()) {
+    if (!sets.is_array()) {
+      r.Fail("limit_sets", "must be an array", "write [ {\"set\": 1, \"low_steps\": -1000}, ... ]");
+    }
+    for (size_t i = 0; i < sets.size(); ++i) {
+      ProfileReader s(sets[i], where, "limit_sets[" + std::to_string(i) + "]");
+      Dmc16LimitSet ls;
+      ls.set = static_cast<int>(s.GetInt("set", 0, 1, p.hw_limit_sets == 0 ? 1 : p.hw_limit_sets));
+      if (!s.Has("set")) s.Fail("set", "is missing", "give the limit set number 1..hw_limit_sets");
+      if (p.hw_limit_sets == 0) {
+        s.Fail("set", "names a set, but hw_limit_sets is 0",
+               "raise hw_limit_sets or drop limit_sets");
+      }
+      constexpr int64_t kI32Min = INT32_MIN, kI32Max = INT32_MAX;
+      if (s.Has("low_steps")) ls.low_steps = s.GetInt("low_steps", 0, kI32Min, kI32Max);
+      if (s.Has("high_steps")) ls.high_steps = s.GetInt("high_steps", 0, kI32Min, kI32Max);
+      if (ls.low_steps && ls.high_steps && *ls.low_steps >= *ls.high_steps) {
+        s.Fail("high_steps", "is not above low_steps", "place the high switch above the low one");
+      }
+      s.Finish();
+      p.limit_sets.push_back(ls);
+    }
+  }
+  r.Finish();
+  return p;
+}
+
+Dmc16Profile LoadDmc16Profile(const std::string& path) {
+  const std::string where = "profile " + path;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw ProfileError(where +
+                       ": cannot be read; check the path (the default profile is "
+                       "fixtures/profiles/dmc16.json)");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return Dmc16ProfileFromJson(ParseProfileText(text.str(), where), where);
+}
+
+nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
+  char caps[16];
+  std::snprintf(caps, sizeof caps, "0x%04x", p.capabilities);
+  nlohmann::json sets = nlohmann::json::array();
+  for (const Dmc16LimitSet& s : p.limit_sets) {
+    nlohmann::json e = {{"set", s.set}};
+    if (s.low_steps) e["low_steps"] = *s.low_steps;
+    if (s.high_steps) e["high_steps"] = *s.high_steps;
+    sets.push_back(e);
+  }
+  return {
+      {"model", "dmc16"},
+      {"name", p.name},
+      {"firmware", {{"major", p.fw_major}, {"minor", p.fw_minor}, {"rev", p.fw_rev}}},
+      {"motor_count", p.motor_count},
+      {"dmx_channels", p.dmx_channels},
+      {"gio_outputs", p.gio_outputs},
+      {"gio_inputs", p.gio_inputs},
+      {"hw_limit_sets", p.hw_limit_sets},
+      {"upload_frame_count", p.upload_frame_count},
+      {"capabilities", caps},
+      {"protocol_version", p.protocol_version.value_or(0)},
+      {"ack_width_bits", p.ack_width == dmc::AckWidth::k32 ? 32 : 16},
+      {"baud", p.baud},
+      {"position_report_interval_ms", p.position_report_interval_ms},
+      {"hard_stop_window_ms", p.hard_stop_window_ms},
+      {"gio_debounce_ms", p.gio_debounce_ms},
+      {"dmx_ramp_rate_per_s", p.dmx_ramp_rate_per_s},
+      {"motion",
+       {{"max_velocity_steps_per_s", p.max_velocity_steps_per_s},
+        {"max_accel_steps_per_s2", p.max_accel_steps_per_s2},
+        {"hard_stop_multiple", p.hard_stop_multiple},
+        {"motors_enabled", p.motors_enabled}}},
+      {"limit_sets", sets},
+  };
+}
+
+}  // namespace moco::devices

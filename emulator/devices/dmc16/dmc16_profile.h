@@ -1,0 +1,75 @@
+// The DMC-16's description (fixtures/profiles/dmc16.json): what MSG_HI
+// advertises (dmc-v2-protocol.txt "MSG_HI", "Capabilities"; ERRATA dmc 3),
+// the line, the motion defaults and the rig's limit-switch placement.
+#ifndef MOCO_DEVICES_DMC16_DMC16_PROFILE_H_
+#define MOCO_DEVICES_DMC16_DMC16_PROFILE_H_
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "wire/dmc.h"
+
+namespace moco::devices {
+
+struct Dmc16LimitSet {
+  int set = 1;  // 1..hw_limit_sets
+  std::optional<int64_t> low_steps;
+  std::optional<int64_t> high_steps;
+};
+
+struct Dmc16Profile {
+  std::string name = "DMC-16";  // <= 32 bytes UTF-8 (HI NAME)
+  uint8_t fw_major = 2;
+  uint8_t fw_minor = 2;
+  uint8_t fw_rev = 0;
+  uint8_t motor_count = 16;     // 0..32
+  uint16_t dmx_channels = 512;  // 0..512
+  uint8_t gio_outputs = 8;      // 0..32
+  uint8_t gio_inputs = 8;       // 0..32
+  uint8_t hw_limit_sets = 16;   // 0..32
+  uint32_t upload_frame_count = 10000;
+  // Real-time moves, go-motion 1 and 2, couple motors, looping, camera
+  // trigger; the virtual modes (0x003c) and aim point (0x0040) stay off until
+  // the device models a rig.
+  uint32_t capabilities = 0x0783;
+  // HI PROTOCOL VERSION; nullopt sends the 49-byte HI of older devices (FACTS).
+  std::optional<uint16_t> protocol_version = 2;
+  dmc::AckWidth ack_width = dmc::AckWidth::k16;
+  uint32_t baud = 115200;
+
+  // Unsolicited MOTOR_GET_POSITION cadence while anything moves (spec: "about
+  // every 0.10 seconds"; dmc-lite uses 50 ms).
+  uint32_t position_report_interval_ms = 100;
+  // A second STOP_ALL within this window hard-stops (MSG_MOTOR_STOP_ALL).
+  uint32_t hard_stop_window_ms = 1000;
+  uint32_t gio_debounce_ms = 20;
+  double dmx_ramp_rate_per_s = 255;  // MSG_DMX RAMP=1 speed, value units per second
+
+  // Motion defaults until MSG_MOTOR_SET_SPEED.
+  double max_velocity_steps_per_s = 5000;
+  double max_accel_steps_per_s2 = 10000;
+  double hard_stop_multiple = 4;
+  // Motors start enabled (MSG_MOTOR_CONFIGURE flag 0x01) at power-on.
+  bool motors_enabled = true;
+  std::vector<Dmc16LimitSet> limit_sets;
+
+  // The HI response this profile advertises.
+  dmc::HiResponse Hi() const;
+  bool Has(uint32_t capability) const { return (capabilities & capability) != 0; }
+};
+
+// Reads a profile object; absent fields keep the defaults above. Throws
+// ProfileError naming the field and the fix. `where` prefixes messages.
+Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where);
+// Reads a profile file. Throws ProfileError (unreadable file, bad JSON, bad field).
+Dmc16Profile LoadDmc16Profile(const std::string& path);
+// The profile as JSON (every field), for State() and for writing a template.
+nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p);
+
+}  // namespace moco::devices
+
+#endif  // MOCO_DEVICES_DMC16_DMC16_PROFILE_H_

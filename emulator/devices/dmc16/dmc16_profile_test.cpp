@@ -1,0 +1,73 @@
+// The DMC-16 profile: the shipped default, and errors that name the field.
+#include "devices/dmc16/dmc16_profile.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "devices/profile.h"
+
+namespace moco::devices {
+namespace {
+
+std::string SourceDir() {
+  const char* d = std::getenv("MOCO_SOURCE_DIR");
+  return d != nullptr ? d : ".";
+}
+
+std::string ErrorOf(const nlohmann::json& j) {
+  try {
+    Dmc16ProfileFromJson(j, "profile t.json");
+  } catch (const ProfileError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Dmc16Profile, ShippedProfileMatchesTheDefaults) {
+  const Dmc16Profile p = LoadDmc16Profile(SourceDir() + "/fixtures/profiles/dmc16.json");
+  const Dmc16Profile d;
+  EXPECT_EQ(p.Hi(), d.Hi());
+  EXPECT_EQ(p.baud, 115200u);
+  EXPECT_EQ(Dmc16ProfileToJson(p), Dmc16ProfileToJson(d));
+}
+
+TEST(Dmc16Profile, RoundTripsThroughJson) {
+  Dmc16Profile p;
+  p.motor_count = 3;
+  p.capabilities = 0x0003;
+  p.protocol_version.reset();
+  p.ack_width = dmc::AckWidth::k32;
+  p.limit_sets = {{2, -5, 5}, {1, std::nullopt, 9}};
+  const Dmc16Profile q = Dmc16ProfileFromJson(Dmc16ProfileToJson(p), "x");
+  EXPECT_EQ(Dmc16ProfileToJson(q), Dmc16ProfileToJson(p));
+  EXPECT_EQ(q.Hi(), p.Hi());
+}
+
+TEST(Dmc16Profile, ErrorsNameTheFieldAndTheFix) {
+  EXPECT_NE(ErrorOf({{"motor_count", 40}}).find("\"motor_count\" is 40, outside 0..32"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({{"capabilities", "0x0004"}}).find("virtual modes"), std::string::npos);
+  EXPECT_NE(ErrorOf({{"model", "dfmoco"}}).find("\"model\""), std::string::npos);
+  EXPECT_NE(ErrorOf({{"ack_width_bits", 24}}).find("use 16"), std::string::npos);
+  EXPECT_NE(ErrorOf({{"motion", {{"max_velocity_steps_per_s", -1}}}})
+                .find("\"motion.max_velocity_steps_per_s\""),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({{"limit_sets", {{{"set", 1}, {"low_steps", 5}, {"high_steps", 1}}}}})
+                .find("limit_sets[0].high_steps"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({{"nmae", "x"}}).find("\"nmae\" is not a known field"), std::string::npos);
+  EXPECT_NE(ErrorOf({{"name", std::string(33, 'x')}}).find("at most 32 bytes"), std::string::npos);
+}
+
+TEST(Dmc16Profile, MissingFileNamesThePath) {
+  try {
+    LoadDmc16Profile("/nonexistent/dmc.json");
+    FAIL();
+  } catch (const ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dmc.json"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace moco::devices

@@ -1,0 +1,889 @@
+// The emulated DMC-16 against dmc-v2-protocol.txt, in virtual time: every
+// message, every error reply, the unsolicited messages and real-time moves.
+#include "devices/dmc16/dmc16.h"
+
+#include <gtest/gtest.h>
+#include <rapidcheck.h>
+#include <rapidcheck/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "devices/dmc16/dmc16_test_support.h"
+
+namespace moco::devices {
+namespace {
+
+using dmc::AckCode;
+using sim::kNsPerMs;
+using testing::Host;
+using testing::Out;
+
+constexpr std::optional<AckCode> kOk = AckCode::kOk;
+
+Dmc16Profile SmallProfile() {
+  Dmc16Profile p;
+  p.motor_count = 4;
+  p.hw_limit_sets = 2;
+  p.gio_inputs = 4;
+  p.gio_outputs = 4;
+  p.dmx_channels = 16;
+  p.upload_frame_count = 5000;
+  p.limit_sets.push_back({1, -1000, 1000});
+  return p;
+}
+
+// --- power-on, HI, framing -------------------------------------------------------------
+
+TEST(Dmc16Hi, PowerOnAnnouncesHiWithTheProfile) {
+  Host h;
+  ASSERT_EQ(h.out().size(), 1u);
+  const auto* hi = std::get_if<dmc::HiResponse>(&h.out()[0].msg);
+  ASSERT_NE(hi, nullptr);
+  EXPECT_EQ(hi->NameText(), "DMC-16");
+  EXPECT_EQ(hi->motor_count, 16);
+  EXPECT_EQ(hi->dmx_count, 512);
+  EXPECT_EQ(hi->capabilities, 0x0783u);
+  EXPECT_EQ(hi->protocol_version, std::optional<uint16_t>(2));
+  EXPECT_EQ(h.out()[0].t_ns, 0);
+}
+
+TEST(Dmc16Hi, RequestIsAnsweredWithTheRequestId) {
+  Host h;
+  const uint32_t id = h.Send(dmc::HiRequest{});
+  const Out& r = h.Reply(id);
+  EXPECT_EQ(r.type, dmc::ToWire(dmc::MsgType::kHi));
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(r.msg));
+}
+
+TEST(Dmc16Hi, LegacyProfileSendsThe49ByteForm) {
+  Dmc16Profile p;
+  p.protocol_version.reset();
+  Host h(p);
+  const auto& hi = std::get<dmc::HiResponse>(h.out()[0].msg);
+  EXPECT_FALSE(hi.protocol_version.has_value());
+}
+
+TEST(Dmc16Hi, PowerCycleAnnouncesAgainAndForgetsState) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{2, 500}), kOk);
+  h.device().PowerOff();
+  EXPECT_FALSE(h.device().Powered());
+  const size_t before = h.out().size();
+  h.Send(dmc::HiRequest{});  // ignored while off
+  EXPECT_EQ(h.out().size(), before);
+  h.device().PowerOn();
+  ASSERT_EQ(h.out().size(), before + 1);
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(h.out().back().msg));
+  EXPECT_EQ(h.Pos(2), 0);
+}
+
+TEST(Dmc16Framing, BadChecksumGetsErrChecksumWithTheRequestIdAndType) {
+  Host h;
+  wire::Bytes f = dmc::Encode(77, dmc::HostMessage{dmc::MotorStop{1}});
+  f[10] ^= 0x01;  // the motor byte
+  h.SendRaw(f);
+  const Out& r = h.Reply(77);
+  const auto* a = std::get_if<dmc::Ack>(&r.msg);
+  ASSERT_NE(a, nullptr);
+  EXPECT_EQ(a->type, dmc::ToWire(dmc::MsgType::kMotorStop));
+  EXPECT_EQ(a->code, dmc::ToWire(AckCode::kErrChecksum));
+}
+
+TEST(Dmc16Framing, DamagedHostAckIsNeverAnswered) {
+  Host h;
+  wire::Bytes f = dmc::Encode(5, dmc::HostMessage{dmc::Ack{0x0034, dmc::ToWire(AckCode::kOk)}});
+  f[10] ^= 0x01;
+  const size_t before = h.out().size();
+  h.SendRaw(f);
+  h.Send(dmc::Ack{0x0034, dmc::ToWire(AckCode::kOk)});
+  EXPECT_EQ(h.out().size(), before);
+  EXPECT_EQ(h.device().stats().host_acks, 1u);
+}
+
+TEST(Dmc16Framing, UnknownAndUnadvertisedTypesAreUnsupported) {
+  Host h;
+  EXPECT_EQ(h.Request(dmc::Unknown{0x0077, {}}), AckCode::kErrUnsupported);
+  EXPECT_EQ(h.Request(dmc::VirtGetPositionRequest{}), AckCode::kErrUnsupported);
+  EXPECT_EQ(h.Request(dmc::VirtMove{1, 100}), AckCode::kErrUnsupported);
+  Dmc16Profile p;
+  p.capabilities = 0;  // no real-time, no go-motion, no looping
+  p.dmx_channels = 0;
+  Host bare(p);
+  EXPECT_EQ(bare.Request(dmc::RtUploadMoveBegin{0, 10}), AckCode::kErrUnsupported);
+  EXPECT_EQ(bare.Request(dmc::RtShootFrame2{}), AckCode::kErrUnsupported);
+  EXPECT_EQ(bare.Request(dmc::RtStopLoop{}), AckCode::kErrUnsupported);
+  EXPECT_EQ(bare.Request(dmc::Dmx{0, 1, {5}}), AckCode::kErrUnsupported);
+  EXPECT_EQ(bare.Request(dmc::RtGo{}), AckCode::kErrUnsupported);
+}
+
+TEST(Dmc16Framing, WrongLengthIsErrGeneral) {
+  Host h;
+  wire::Bytes f;
+  dmc::EncodeFrame(9, dmc::ToWire(dmc::MsgType::kMotorMove), wire::Bytes{1, 2}, f);
+  h.SendRaw(f);
+  EXPECT_EQ(h.AckOf(9), AckCode::kErrGeneral);
+}
+
+TEST(Dmc16Framing, HostHardStopHaltsEverythingAndIsAcked) {
+  Host h(SmallProfile());
+  h.Send(dmc::MotorMove{1, 900});
+  h.RunMs(200);
+  EXPECT_EQ(h.Request(dmc::Unknown{dmc::ToWire(dmc::MsgType::kMotorHardStop), {}}), kOk);
+  h.Settle();
+  EXPECT_LT(h.Pos(1), 900);
+}
+
+// --- motors -------------------------------------------------------------------------------
+
+TEST(Dmc16Motor, MoveAnswersMovingThenReportsPositionsUntilItStops) {
+  Host h(SmallProfile());
+  const uint32_t id = h.Send(dmc::MotorMove{3, 4000});
+  const auto* r = std::get_if<dmc::MotorMoveResponse>(&h.Reply(id).msg);
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->moving, 1);
+  const uint32_t st = h.Send(dmc::MotorStatusRequest{});
+  EXPECT_EQ(std::get<dmc::MotorStatusResponse>(h.Reply(st).msg).moving_bits, 0b0100u);
+  h.Settle();
+  EXPECT_EQ(h.Pos(3), 4000);
+  const auto reports = h.All<dmc::MotorPositionReport>();
+  ASSERT_GE(reports.size(), 3u);
+  // About every 100 ms while moving, then one at the stop with the final position.
+  for (size_t i = 1; i + 1 < reports.size(); ++i) {
+    EXPECT_EQ(reports[i].first - reports[i - 1].first, 100 * kNsPerMs);
+  }
+  EXPECT_EQ(reports.back().second.positions_steps.size(), 4u);
+  EXPECT_EQ(reports.back().second.positions_steps[2], 4000);
+  const sim::TimeNs stop_ns = h.device().rig_ref().motor(3).CurrentPlan().EndNs();
+  EXPECT_EQ(reports.back().first, stop_ns);
+  // Nothing more once at rest.
+  const size_t n = h.out().size();
+  h.RunMs(1000);
+  EXPECT_EQ(h.out().size(), n);
+}
+
+TEST(Dmc16Motor, MoveToCurrentPositionAnswersNotMoving) {
+  Host h(SmallProfile());
+  const uint32_t id = h.Send(dmc::MotorMove{1, 0});
+  EXPECT_EQ(std::get<dmc::MotorMoveResponse>(h.Reply(id).msg).moving, 0);
+}
+
+TEST(Dmc16Motor, BadMotorNumbersAreErrRange) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(dmc::MotorMove{0, 10}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorMove{5, 10}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorStop{9}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorResetPosition{0, 1}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorJog{7, 100, 5}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorConfigure{5, 1}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorSetSpeed{5, 100, 100}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorSetLimits{5, 0, 0, 0, 0, 0}), AckCode::kErrRange);
+}
+
+TEST(Dmc16Motor, GetPositionHasOnePositionPerMotor) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{4, -123}), kOk);
+  const uint32_t id = h.Send(dmc::MotorGetPositionRequest{});
+  const auto& r = std::get<dmc::MotorPositionReport>(h.Reply(id).msg);
+  EXPECT_EQ(r.positions_steps, (std::vector<int32_t>{0, 0, 0, -123}));
+}
+
+TEST(Dmc16Motor, ResetPositionIsAckedThenConfirmedByAnUpdate) {
+  Host h(SmallProfile());
+  const uint32_t id = h.Send(dmc::MotorResetPosition{2, 777});
+  ASSERT_EQ(h.AckOf(id), kOk);
+  const auto& last = h.out().back();
+  const auto* r = std::get_if<dmc::MotorPositionReport>(&last.msg);
+  ASSERT_NE(r, nullptr) << "a position update follows the ACK";
+  EXPECT_EQ(r->positions_steps[1], 777);
+  EXPECT_LT(last.id, 0x10000u) << "the update carries a device-side ID";
+  // While moving: refused.
+  h.Send(dmc::MotorMove{2, 2000});
+  EXPECT_EQ(h.Request(dmc::MotorResetPosition{2, 0}), AckCode::kErrMoving);
+}
+
+TEST(Dmc16Motor, SoftLimitsRefuseMovesBeyondThem) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, -50, 1, 80, 0}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 81}), AckCode::kErrSoftUp);
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, -51}), AckCode::kErrSoftLow);
+  EXPECT_EQ(h.AckOf(h.Send(dmc::MotorMove{1, 80})), std::nullopt);
+  // Lower above upper, unknown enable values, unknown sets: range errors.
+  EXPECT_EQ(h.Request(dmc::MotorSetLimits{1, 1, 10, 1, 5, 0}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorSetLimits{1, 2, 0, 0, 0, 0}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorSetLimits{1, 0, 0, 0, 0, 3}), AckCode::kErrRange);
+}
+
+TEST(Dmc16Motor, JogStopsAtTheSoftLimitAndChecksSpeed) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{2, 0, 0, 1, 300, 0}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorJog{2, 0, 1000}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorJog{2, 10001, 1000}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::MotorJog{2, 10000, 1000}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(2), 300);
+}
+
+TEST(Dmc16Motor, InchingIsSlowerThanFullSpeedJog) {
+  Host a(SmallProfile());
+  Host b(SmallProfile());
+  ASSERT_EQ(a.Request(dmc::MotorJog{1, 10000, 200}), kOk);
+  ASSERT_EQ(b.Request(dmc::MotorJog{1, 100, 200}), kOk);
+  a.RunMs(300);
+  b.RunMs(300);
+  EXPECT_GT(a.Pos(1), b.Pos(1));
+}
+
+TEST(Dmc16Motor, DisabledMotorRefusesToMove) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorBlurEnabled | 0x30}), kOk);
+  EXPECT_FALSE(h.device().rig_ref().motor(1).enabled());
+  EXPECT_TRUE(h.device().rig_ref().motor(1).blur());
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 10}), AckCode::kErrGeneral);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorEnabled}), kOk);
+  EXPECT_EQ(h.AckOf(h.Send(dmc::MotorMove{1, 10})), std::nullopt);
+}
+
+TEST(Dmc16Motor, SetSpeedChangesTheMoveDuration) {
+  Host slow(SmallProfile());
+  Host fast(SmallProfile());
+  EXPECT_EQ(slow.Request(dmc::MotorSetSpeed{1, 0, 100}), AckCode::kErrRange);
+  EXPECT_EQ(slow.Request(dmc::MotorSetSpeed{1, 100, 0}), AckCode::kErrRange);
+  ASSERT_EQ(slow.Request(dmc::MotorSetSpeed{1, 1000, 2000}), kOk);
+  ASSERT_EQ(fast.Request(dmc::MotorSetSpeed{1, 8000, 16000}), kOk);
+  slow.Send(dmc::MotorMove{1, 10000});
+  fast.Send(dmc::MotorMove{1, 10000});
+  // Trapezoid: 10000/1000 + 1000/2000 = 10.5 s versus 10000/8000 + 8000/16000 = 1.75 s.
+  EXPECT_EQ(slow.device().rig_ref().motor(1).CurrentPlan().EndNs(), 10'500'000'000);
+  EXPECT_EQ(fast.device().rig_ref().motor(1).CurrentPlan().EndNs(), 1'750'000'000);
+}
+
+TEST(Dmc16Motor, SecondStopAllWithinTheWindowHardStops) {
+  auto stop_time = [](bool twice) {
+    Host h(SmallProfile());
+    h.Send(dmc::MotorMove{1, 100000});
+    h.RunMs(1000);  // cruising at 5000 steps/s
+    EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    if (twice) {
+      EXPECT_EQ(h.Request(dmc::MotorStopAll{dmc::kStopAllSilent}), kOk);
+    }
+    return h.device().rig_ref().motor(1).CurrentPlan().EndNs() - h.now();
+  };
+  const sim::TimeNs soft = stop_time(false);
+  const sim::TimeNs hard = stop_time(true);
+  EXPECT_EQ(soft, 500 * kNsPerMs);  // 5000 / 10000
+  EXPECT_EQ(hard, 125 * kNsPerMs);  // 5000 / (4 * 10000)
+}
+
+TEST(Dmc16Motor, StopAllOutsideTheWindowIsAnOrdinaryStop) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+  h.RunMs(1500);
+  h.Send(dmc::MotorMove{1, 100000});
+  h.RunMs(1000);
+  EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+  EXPECT_EQ(h.device().rig_ref().motor(1).CurrentPlan().EndNs() - h.now(), 500 * kNsPerMs);
+}
+
+TEST(Dmc16Motor, MotorStopDecelerates) {
+  Host h(SmallProfile());
+  h.Send(dmc::MotorMove{2, 100000});
+  h.RunMs(1000);
+  ASSERT_EQ(h.Request(dmc::MotorStop{2}), kOk);
+  h.Settle();
+  // At 1 s: 1250 steps of ramp + 2500 of cruise; from 5000 steps/s at
+  // 10000 steps/s^2 the stop takes 1250 steps more.
+  EXPECT_EQ(h.Pos(2), 1250 + 2500 + 1250);
+}
+
+// --- limits and e-stop ----------------------------------------------------------------------
+
+TEST(Dmc16Safety, LimitSwitchTripSendsHardStopWithMotorAndEnd) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{2, 0, 0, 0, 0, 1}), kOk);
+  h.Send(dmc::MotorMove{2, 5000});
+  h.Settle();
+  EXPECT_EQ(h.Pos(2), 1000);  // the set's high switch
+  const auto stops = h.All<dmc::MotorHardStop>();
+  ASSERT_EQ(stops.size(), 1u);
+  EXPECT_EQ(stops[0].second.reason, 1);
+  EXPECT_EQ(stops[0].second.motor, std::optional<uint8_t>(2));
+  EXPECT_EQ(h.Request(dmc::MotorMove{2, 1200}), AckCode::kErrHardUp);
+  EXPECT_EQ(h.AckOf(h.Send(dmc::MotorMove{2, 0})), std::nullopt) << "moving away is allowed";
+}
+
+TEST(Dmc16Safety, SwappedSetGuardsTheOtherEnd) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 0, 0, 0, 0, 0x82}), kOk);
+  h.device().rig()->ForceInput(2, sim::SwitchInput::kLow, true);
+  // With 0x80 the LOW input guards the upper end.
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 10}), AckCode::kErrHardUp);
+  EXPECT_EQ(h.AckOf(h.Send(dmc::MotorMove{1, -10})), std::nullopt);
+}
+
+TEST(Dmc16Safety, EStopHaltsReportsReasonZeroAndRefusesMoves) {
+  Host h(SmallProfile());
+  h.Send(dmc::MotorMove{1, 3000});
+  h.RunMs(300);
+  h.device().rig()->EngageEStop();
+  const auto stops = h.All<dmc::MotorHardStop>();
+  ASSERT_EQ(stops.size(), 1u);
+  EXPECT_EQ(stops[0].second.reason, 0);
+  EXPECT_FALSE(stops[0].second.motor.has_value());
+  EXPECT_FALSE(h.device().rig_ref().AnyMoving());
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 10}), AckCode::kErrGeneral);
+  h.device().rig()->ReleaseEStop();
+  EXPECT_EQ(h.AckOf(h.Send(dmc::MotorMove{1, 10})), std::nullopt);
+}
+
+// --- I/O --------------------------------------------------------------------------------------
+
+TEST(Dmc16Io, DmxImmediateRampedAndRangeChecked) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(dmc::Dmx{0, 0, {1}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::Dmx{0, 16, {1, 2}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::Dmx{2, 1, {1}}), AckCode::kErrRange);
+  ASSERT_EQ(h.Request(dmc::Dmx{0, 15, {10, 20}}), kOk);
+  EXPECT_EQ(h.device().dmx().Value(15), 10);
+  EXPECT_EQ(h.device().dmx().Value(16), 20);
+  ASSERT_EQ(h.Request(dmc::Dmx{1, 1, {255}}), kOk);
+  const uint32_t st = h.Send(dmc::MotorStatusRequest{});
+  EXPECT_EQ(std::get<dmc::MotorStatusResponse>(h.Reply(st).msg).dmx_adjusting, 1);
+  h.RunMs(1001);  // 255 units at 255/s
+  EXPECT_EQ(h.device().dmx().Value(1), 255);
+  const uint32_t st2 = h.Send(dmc::MotorStatusRequest{});
+  EXPECT_EQ(std::get<dmc::MotorStatusResponse>(h.Reply(st2).msg).dmx_adjusting, 0);
+}
+
+TEST(Dmc16Io, GioOutputsInputsAndUnsolicitedChange) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(dmc::GioOut{0x10}), AckCode::kErrRange);
+  ASSERT_EQ(h.Request(dmc::GioOut{0x5}), kOk);
+  EXPECT_EQ(h.device().gio_ref().outputs(), 0x5u);
+  h.device().gio()->SetRawInput(1, true);
+  h.RunMs(5);
+  EXPECT_TRUE(h.All<dmc::GioInReport>().empty()) << "not before the debounce time";
+  h.RunMs(20);
+  auto reports = h.All<dmc::GioInReport>();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].second.triggers, 0x2u);
+  // A glitch shorter than the debounce is never reported.
+  h.device().gio()->SetRawInput(2, true);
+  h.RunMs(3);
+  h.device().gio()->SetRawInput(2, false);
+  h.RunMs(100);
+  EXPECT_EQ(h.All<dmc::GioInReport>().size(), 1u);
+  // An input beyond GIO INPUT COUNT is not visible.
+  h.device().gio()->SetRawInput(9, true);
+  h.RunMs(100);
+  EXPECT_EQ(h.All<dmc::GioInReport>().size(), 1u);
+  const uint32_t id = h.Send(dmc::GioInRequest{});
+  EXPECT_EQ(std::get<dmc::GioInReport>(h.Reply(id).msg).triggers, 0x2u);
+}
+
+TEST(Dmc16Io, GioCamDrivesTheCameraLines) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::GioCam{dmc::kGioCamShutter | dmc::kGioCamMeter}), kOk);
+  EXPECT_TRUE(h.device().camera().level(sim::CameraPort::kShutter));
+  EXPECT_TRUE(h.device().camera().level(sim::CameraPort::kMeter));
+  ASSERT_EQ(h.Request(dmc::GioCam{0}), kOk);
+  EXPECT_FALSE(h.device().camera().level(sim::CameraPort::kShutter));
+}
+
+// --- uploads and real-time moves ----------------------------------------------------------------
+
+// Uploads frames 10..10+n-1: motor 1 moves `step` per frame from 0, motor 2
+// holds 50 (sent as a one-value last set), DMX channel 3 counts frames.
+void UploadRamp(Host& h, uint32_t n, int32_t step, uint32_t start = 10) {
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{start, start + n - 1}), kOk);
+  std::vector<int32_t> pos;
+  for (uint32_t i = 0; i < n; ++i) pos.push_back(static_cast<int32_t>(i) * step);
+  for (uint32_t i = 0; i < n; i += 200) {
+    const uint32_t len = std::min<uint32_t>(200, n - i);
+    dmc::RtUploadMoveAxis a;
+    a.motor = 1;
+    a.start_index = i;
+    a.last_set = i + len == n;
+    a.positions_steps.assign(pos.begin() + i, pos.begin() + i + len);
+    ASSERT_EQ(h.Request(a), kOk);
+  }
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{2, 0, true, {50}}), kOk);
+  std::vector<uint8_t> levels;
+  for (uint32_t i = 0; i < n; ++i) levels.push_back(static_cast<uint8_t>(i));
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveDmx{
+                3, 0, true,
+                std::vector<uint8_t>(levels.begin(), levels.begin() + std::min<uint32_t>(n, 500))}),
+            kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kOk);
+}
+
+dmc::RtRunMove RunMove(uint32_t start, uint32_t end, uint32_t fps_x1000, uint32_t pre_ms,
+                       uint32_t post_ms) {
+  dmc::RtRunMove r;
+  r.fps_x1000 = fps_x1000;
+  r.start_frame = start;
+  r.end_frame = end;
+  r.preroll_ms = pre_ms;
+  r.postroll_ms = post_ms;
+  return r;
+}
+
+TEST(Dmc16Upload, RangeAndOrderErrors) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, false, {1}}), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveEnd{}), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveBegin{10, 9}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 5000}), AckCode::kErrRange) << "5001 frames";
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 4999}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{100, 109}), kOk);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveAxis{5, 0, false, {1}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 8, false, {1, 2, 3}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveDmx{17, 0, false, {1}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveTriggers{1, {{10, 1}}}), AckCode::kErrRange);
+  // A gap without a last set leaves frames without a position.
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, false, {1, 2, 3}}), kOk);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveEnd{}), AckCode::kErrGeneral);
+  EXPECT_FALSE(h.device().upload().complete());
+}
+
+TEST(Dmc16Upload, LastSetRepeatsTheFinalValueToTheEnd) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{100, 109}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, false, {5, 6}}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 2, true, {7, 8}}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kOk);
+  const RtMove& u = h.device().upload();
+  EXPECT_EQ(u.Position(1, 100), 5);
+  EXPECT_EQ(u.Position(1, 103), 8);
+  EXPECT_EQ(u.Position(1, 109), 8);
+}
+
+TEST(Dmc16Upload, PositionFrameSendsMotorsAndDmxToTheFrame) {
+  Host h(SmallProfile());
+  UploadRamp(h, 100, 20);
+  EXPECT_EQ(h.Request(dmc::RtPositionFrame{9}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtPositionFrame{110}), AckCode::kErrRange);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{60}), kOk);
+  EXPECT_EQ(h.device().dmx().Value(3), 50);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 1000);
+  EXPECT_EQ(h.Pos(2), 50);
+  EXPECT_EQ(h.Pos(3), 0) << "a motor without uploaded data stays";
+  const auto reports = h.All<dmc::MotorPositionReport>();
+  EXPECT_EQ(reports.back().second.move_time_x1000, 60000u);
+}
+
+TEST(Dmc16Upload, RunMoveWithoutUploadOrGoWithoutRunAreRefused) {
+  Host h(SmallProfile());
+  EXPECT_EQ(h.Request(RunMove(10, 20, 24000, 1000, 1000)), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::RtPositionFrame{10}), AckCode::kErrGeneral);
+  UploadRamp(h, 50, 10);
+  EXPECT_EQ(h.Request(RunMove(10, 10, 24000, 1000, 1000)), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(RunMove(10, 80, 24000, 1000, 1000)), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(RunMove(10, 20, 0, 1000, 1000)), AckCode::kErrRange);
+}
+
+TEST(Dmc16Run, PrerollPositionGivesFullSpeedAtTheStartFrame) {
+  Host h(SmallProfile());
+  UploadRamp(h, 200, 10);  // 10 steps per frame: 240 steps/s at 24 fps
+  ASSERT_EQ(h.Request(RunMove(20, 150, 24000, 1000, 500)), kOk);
+  h.Settle();
+  // Start frame 20 is index 10: position 100; pre-roll covers v*T/2 = 120 steps.
+  EXPECT_EQ(h.Pos(1), 100 - 120);
+  EXPECT_EQ(h.device().ModeName(), "armed-run");
+}
+
+TEST(Dmc16Run, GoPlaysTheMoveReportingEveryFrameThenRtEnd) {
+  Host h(SmallProfile());
+  UploadRamp(h, 200, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 150, 24000, 1000, 500)), kOk);
+  h.Settle();
+  const size_t mark = h.out().size();
+  const sim::TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), AckCode::kErrMoving);
+  h.Settle();
+  std::vector<Out> after(h.out().begin() + static_cast<long>(mark), h.out().end());
+  std::vector<std::pair<sim::TimeNs, dmc::MotorPositionReport>> frames;
+  sim::TimeNs rt_end = -1;
+  for (const Out& o : after) {
+    if (const auto* r = std::get_if<dmc::MotorPositionReport>(&o.msg)) {
+      if (rt_end < 0) frames.emplace_back(o.t_ns, *r);
+    }
+    if (std::holds_alternative<dmc::RtEnd>(o.msg)) rt_end = o.t_ns;
+  }
+  // Frames 20..150 inclusive, then the stop report before RT_END.
+  ASSERT_EQ(frames.size(), 131u + 1u);
+  for (uint32_t k = 0; k <= 130; ++k) {
+    const auto& [t, r] = frames[k];
+    EXPECT_EQ(r.move_time_x1000, (20 + k) * 1000) << k;
+    const double ideal = static_cast<double>(t_go) + 1e9 + k * 1e9 / 24.0;
+    EXPECT_GE(static_cast<double>(t), ideal - 1) << k;
+    EXPECT_LT(static_cast<double>(t), ideal + 2) << k;
+    // Step-accurate: on each frame the motor is on the uploaded position.
+    EXPECT_EQ(r.positions_steps[0], static_cast<int32_t>((10 + k) * 10)) << k;
+    EXPECT_EQ(r.positions_steps[1], 50);
+  }
+  ASSERT_GT(rt_end, 0);
+  // Post-roll: 240 steps/s to rest in 0.5 s covers 60 steps.
+  EXPECT_EQ(h.Pos(1), 1400 + 60);
+  EXPECT_EQ(rt_end, frames[130].first + 500 * kNsPerMs);
+  EXPECT_EQ(h.device().ModeName(), "idle");
+  // The plan never held more than a window of frames.
+  EXPECT_LT(h.device().rig_ref().motor(1).HeapBytes(), 16u * 1024u);
+}
+
+TEST(Dmc16Run, DmxAndTriggersFollowTheFrames) {
+  Host h(SmallProfile());
+  UploadRamp(h, 100, 5);
+  // Reupload with triggers: redo begin to include them.
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{10, 109}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, {0}}), kOk);
+  std::vector<uint8_t> lv(100);
+  for (size_t i = 0; i < lv.size(); ++i) lv[i] = static_cast<uint8_t>(2 * i);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveDmx{3, 0, true, lv}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveTriggers{0x3, {{5, 0x1}, {6, 0x3}}}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kOk);
+  dmc::RtRunMove r = RunMove(10, 30, 10000, 0, 0);
+  r.sync_dmx = 1;
+  ASSERT_EQ(h.Request(r), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  const sim::TimeNs t0 = h.now();
+  h.scheduler().RunUntil(t0 + 500 * kNsPerMs + 1);  // frame 15 (index 5)
+  EXPECT_EQ(h.device().dmx().Value(3), 10);
+  EXPECT_EQ(h.device().gio_ref().outputs(), 0x1u);
+  h.scheduler().RunUntil(t0 + 600 * kNsPerMs + 1);
+  EXPECT_EQ(h.device().gio_ref().outputs(), 0x3u);
+  h.scheduler().RunUntil(t0 + 700 * kNsPerMs + 1);
+  EXPECT_EQ(h.device().gio_ref().outputs(), 0x0u) << "frames without an entry turn triggers off";
+  EXPECT_EQ(h.device().dmx().Value(3), 14);
+}
+
+TEST(Dmc16Run, PrerollAndPostrollPastSoftLimitsAreRefused) {
+  Host h(SmallProfile());
+  UploadRamp(h, 200, 10);
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, 0, 1, 1990, 0}), kOk);
+  // Start frame 10 is at 0: the pre-roll would go below 0.
+  EXPECT_EQ(h.Request(RunMove(10, 100, 24000, 1000, 0)), AckCode::kErrPreroll);
+  // End frame 209 is at 1990: the post-roll would pass the upper limit.
+  EXPECT_EQ(h.Request(RunMove(20, 209, 24000, 0, 1000)), AckCode::kErrPostroll);
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, 0, 1, 500, 0}), kOk);
+  EXPECT_EQ(h.Request(RunMove(20, 100, 24000, 0, 0)), AckCode::kErrSoftUp) << "path passes 500";
+  EXPECT_EQ(h.Request(RunMove(20, 50, 24000, 0, 0)), kOk);
+}
+
+TEST(Dmc16Run, GoWhileMovingOrOutOfPositionIsRefused) {
+  Host h(SmallProfile());
+  UploadRamp(h, 200, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 150, 24000, 1000, 500)), kOk);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrMoving) << "still going to the pre-roll";
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{1, 0}), kOk);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+}
+
+TEST(Dmc16Run, StopAllDuringARunEndsItWithRtEnd) {
+  Host h(SmallProfile());
+  UploadRamp(h, 200, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 150, 24000, 1000, 500)), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  h.RunMs(2000);
+  ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+  h.Settle();
+  EXPECT_EQ(h.device().ModeName(), "idle");
+  EXPECT_FALSE(h.device().rig_ref().AnyMoving());
+}
+
+TEST(Dmc16Run, LimitTripDuringARunSendsHardStopAndRtEnd) {
+  Dmc16Profile p = SmallProfile();
+  p.limit_sets = {{1, std::nullopt, 700}};
+  Host h(p);
+  UploadRamp(h, 200, 10);
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 0, 0, 0, 0, 1}), kOk);
+  ASSERT_EQ(h.Request(RunMove(20, 150, 24000, 1000, 500)), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  h.Settle();
+  ASSERT_EQ(h.All<dmc::MotorHardStop>().size(), 1u);
+  EXPECT_EQ(h.All<dmc::MotorHardStop>()[0].second.reason, 1);
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+  EXPECT_EQ(h.Pos(1), 700);
+}
+
+TEST(Dmc16Run, PingPongPlaysBackAndForthUntilStopLoop) {
+  Host h(SmallProfile());
+  UploadRamp(h, 60, 10);
+  dmc::RtRunMove r = RunMove(10, 40, 24000, 500, 500);
+  r.flags = dmc::kPlayPingPong;
+  ASSERT_EQ(h.Request(r), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  const size_t mark = h.out().size();
+  // First pass, then the reverse pass has begun.
+  h.RunMs(500 + 1250 + 500 + 2000);
+  ASSERT_EQ(h.Request(dmc::RtStopLoop{}), kOk);
+  h.Settle();
+  std::vector<uint32_t> times;
+  for (size_t i = mark; i < h.out().size(); ++i) {
+    if (const auto* p = std::get_if<dmc::MotorPositionReport>(&h.out()[i].msg)) {
+      times.push_back(p->move_time_x1000);
+    }
+  }
+  // Forward 10..40, then 40 down to 10: a falling run of MOVE TIME follows a rising one.
+  auto it = std::find(times.begin(), times.end(), 40000u);
+  ASSERT_NE(it, times.end());
+  auto down = std::find(it + 1, times.end(), 39000u);
+  EXPECT_NE(down, times.end()) << "the reverse pass reports frames backwards";
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+  EXPECT_EQ(h.Pos(1), -60) << "ends past frame 10 (at 0) after the reverse post-roll";
+}
+
+TEST(Dmc16Run, CameraStillsOpenAndCloseAtTheAnglesOfEveryFrame) {
+  Host h(SmallProfile());
+  UploadRamp(h, 30, 10);
+  dmc::RtRunMove r = RunMove(10, 14, 10000, 0, 0);
+  r.flags = dmc::kPlayCameraStills;
+  r.camera_open_angle_deg = 90;
+  r.camera_close_angle_deg = 270;
+  ASSERT_EQ(h.Request(r), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  const sim::TimeNs t0 = h.now();
+  h.Settle();
+  std::vector<sim::CameraPort::Edge> edges = h.device().camera().Trace();
+  ASSERT_EQ(edges.size(), 8u);  // 4 frame intervals, open and close each
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(edges[2 * k].time_ns,
+              t0 + static_cast<sim::TimeNs>(k) * 100 * kNsPerMs + 25 * kNsPerMs);
+    EXPECT_TRUE(edges[2 * k].level);
+    EXPECT_EQ(edges[2 * k + 1].time_ns,
+              t0 + static_cast<sim::TimeNs>(k) * 100 * kNsPerMs + 75 * kNsPerMs);
+    EXPECT_FALSE(edges[2 * k + 1].level);
+  }
+  // Camera flags without the capability are a range error.
+  Dmc16Profile p = SmallProfile();
+  p.capabilities &= ~dmc::kCapRtCameraTrigger;
+  Host no_cam(p);
+  UploadRamp(no_cam, 30, 10);
+  EXPECT_EQ(no_cam.Request(r), AckCode::kErrRange);
+}
+
+TEST(Dmc16Shoot, ShootFrame2BlursBetweenTheAnglesWithTheShutterOpen) {
+  Host h(SmallProfile());
+  UploadRamp(h, 30, 10);
+  dmc::RtShootFrame2 s;
+  s.frame = 15;
+  s.exposure_ms = 500;
+  s.open_angle_deg = 90;
+  s.close_angle_deg = 270;
+  s.motors = {{1, 1000, 1400}};
+  ASSERT_EQ(h.Request(s), kOk);
+  h.Settle();
+  // Opens at 1100, closes at 1300: 400 steps/s; ramp 400^2/(2*10000) = 8 steps.
+  EXPECT_EQ(h.Pos(1), 1092);
+  EXPECT_EQ(h.Pos(2), 50) << "a motor of the move that is not blurred goes to the frame";
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  const sim::TimeNs t_go = h.now();
+  const sim::Plan plan = h.device().rig_ref().motor(1).CurrentPlan();
+  h.Settle();
+  const auto edges = h.device().camera().Trace();
+  ASSERT_EQ(edges.size(), 2u);
+  const sim::TimeNs open = edges[0].time_ns;
+  EXPECT_EQ(open - t_go, 40 * kNsPerMs);  // 2 * 8 / 400 s
+  EXPECT_EQ(edges[1].time_ns - open, 500 * kNsPerMs);
+  EXPECT_NEAR(static_cast<double>(plan.StepsAt(open)), 1100, 1);
+  EXPECT_NEAR(static_cast<double>(plan.StepsAt(open + 250 * kNsPerMs)), 1200, 1);
+  EXPECT_NEAR(static_cast<double>(plan.StepsAt(edges[1].time_ns)), 1300, 1);
+  EXPECT_EQ(h.Pos(1), 1308);
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+}
+
+TEST(Dmc16Shoot, ShootFrameChecksItsArguments) {
+  Host h(SmallProfile());
+  UploadRamp(h, 30, 10);
+  dmc::RtShootFrame s;
+  s.frame = 15;
+  s.exposure_ms = 100;
+  s.blur_percent_x10 = 500;
+  s.motors = {{1, 0, 100}};
+  EXPECT_EQ(h.Request(dmc::RtShootFrame{99, 1, 100, 500, {}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtShootFrame{15, 1, 0, 500, {}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtShootFrame{15, 1, 100, 1001, {}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtShootFrame{15, 1, 100, 500, {{9, 0, 1}}}), AckCode::kErrRange);
+  EXPECT_EQ(h.Request(dmc::RtShootFrame{15, 1, 1, 1000, {{1, 0, 100000}}}), AckCode::kErrRange)
+      << "faster than the motor's max velocity";
+  ASSERT_EQ(h.Request(s), kOk);
+  h.Settle();
+  // 50% blur centred: angles 90..270 -> 25..75, 500 steps/s, ramp 12.5 -> 12 (floor).
+  EXPECT_EQ(h.Pos(1), 12);
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 88);
+  EXPECT_EQ(h.device().camera().exposures(), 1u);
+}
+
+TEST(Dmc16JogAll, OnlyFromAFramePositionAndEndsOnTheDestination) {
+  Host h(SmallProfile());
+  UploadRamp(h, 100, 10);
+  EXPECT_EQ(h.Request(dmc::RtJogAll{24000, 50}), AckCode::kErrNotInPosition);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{20}), kOk);
+  EXPECT_EQ(h.Request(dmc::RtJogAll{24000, 50}), AckCode::kErrNotInPosition) << "still moving";
+  h.Settle();
+  EXPECT_EQ(h.Request(dmc::RtJogAll{24000, 500}), AckCode::kErrRange);
+  ASSERT_EQ(h.Request(dmc::RtJogAll{24000, 50}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 400);
+  EXPECT_EQ(h.device().ModeName(), "idle");
+  EXPECT_TRUE(h.All<dmc::RtEnd>().empty());
+  // On frame 50 now: a jog back works at once.
+  ASSERT_EQ(h.Request(dmc::RtJogAll{48000, 30}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 200);
+}
+
+// --- laws -------------------------------------------------------------------------------------
+
+// A generator of host requests with arbitrary field values in their layouts.
+rc::Gen<dmc::HostMessage> GenRequest() {
+  using namespace rc;
+  auto motor = gen::inRange<uint8_t>(0, 6);
+  auto pos = gen::inRange<int32_t>(-3000, 3000);
+  return gen::oneOf(
+      gen::just(dmc::HostMessage{dmc::HiRequest{}}),
+      gen::just(dmc::HostMessage{dmc::MotorStatusRequest{}}),
+      gen::just(dmc::HostMessage{dmc::MotorGetPositionRequest{}}),
+      gen::just(dmc::HostMessage{dmc::GioInRequest{}}), gen::just(dmc::HostMessage{dmc::RtGo{}}),
+      gen::just(dmc::HostMessage{dmc::RtUploadMoveEnd{}}),
+      gen::map(gen::pair(motor, pos),
+               [](auto p) {
+                 return dmc::HostMessage{dmc::MotorMove{p.first, p.second}};
+               }),
+      gen::map(motor, [](uint8_t m) { return dmc::HostMessage{dmc::MotorStop{m}}; }),
+      gen::just(dmc::HostMessage{dmc::MotorStopAll{}}),
+      gen::map(gen::pair(motor, pos),
+               [](auto p) {
+                 return dmc::HostMessage{dmc::MotorResetPosition{p.first, p.second}};
+               }),
+      gen::map(
+          gen::tuple(motor, gen::inRange<uint16_t>(0, 10002), pos),
+          [](auto t) {
+            return dmc::HostMessage{dmc::MotorJog{std::get<0>(t), std::get<1>(t), std::get<2>(t)}};
+          }),
+      gen::map(gen::pair(motor, gen::arbitrary<uint8_t>()),
+               [](auto p) {
+                 return dmc::HostMessage{dmc::MotorConfigure{p.first, p.second}};
+               }),
+      gen::map(gen::pair(gen::inRange<uint32_t>(0, 30), gen::inRange<uint32_t>(0, 30)),
+               [](auto p) {
+                 return dmc::HostMessage{dmc::RtUploadMoveBegin{p.first, p.second}};
+               }),
+      gen::map(gen::pair(motor, gen::inRange<uint32_t>(0, 40)),
+               [](auto p) {
+                 return dmc::HostMessage{dmc::RtUploadMoveAxis{p.first, p.second, true, {7, 9}}};
+               }),
+      gen::map(gen::inRange<uint32_t>(0, 40),
+               [](uint32_t f) { return dmc::HostMessage{dmc::RtPositionFrame{f}}; }),
+      gen::map(
+          gen::pair(gen::inRange<uint32_t>(0, 40), gen::inRange<uint32_t>(0, 40)),
+          [](auto p) { return dmc::HostMessage{RunMove(p.first, p.second, 24000, 200, 200)}; }),
+      gen::map(gen::inRange<uint32_t>(0, 40),
+               [](uint32_t f) {
+                 return dmc::HostMessage{dmc::RtJogAll{24000, f}};
+               }),
+      gen::map(gen::inRange<uint16_t>(0, 0x300),
+               [](uint16_t t) {
+                 return dmc::HostMessage{dmc::Unknown{t, {}}};
+               }),
+      gen::map(gen::arbitrary<uint32_t>(),
+               [](uint32_t t) { return dmc::HostMessage{dmc::GioOut{t}}; }));
+}
+
+RC_GTEST_PROP(Dmc16Laws, EveryRequestGetsExactlyOneAnswerWithItsIdAndALegalType, ()) {
+  const auto requests = *rc::gen::container<std::vector<dmc::HostMessage>>(GenRequest());
+  const auto gaps_ms =
+      *rc::gen::container<std::vector<int>>(requests.size(), rc::gen::inRange(0, 400));
+  Host h(SmallProfile());
+  std::map<uint32_t, uint16_t> sent;  // id -> type
+  for (size_t i = 0; i < requests.size(); ++i) {
+    const uint16_t type = dmc::TypeOf(requests[i]);
+    if (std::holds_alternative<dmc::Unknown>(requests[i]) && dmc::IsKnownType(type)) {
+      continue;  // a known type with an empty body is a different request
+    }
+    sent[h.Send(requests[i])] = type;
+    h.RunMs(gaps_ms[i]);
+  }
+  h.Settle();
+  std::map<uint32_t, int> answers;
+  for (const Out& o : h.out()) {
+    auto it = sent.find(o.id);
+    if (it == sent.end()) {
+      RC_ASSERT(o.id < 0x10000u);  // unsolicited: a device-side ID
+      continue;
+    }
+    ++answers[o.id];
+    const uint16_t base = static_cast<uint16_t>(o.type & ~dmc::kFlagAck);
+    RC_ASSERT(base == it->second);
+  }
+  for (const auto& [id, type] : sent) RC_ASSERT(answers[id] == 1);
+}
+
+RC_GTEST_PROP(Dmc16Laws, AnyChunkingGivesTheSameOutput, ()) {
+  const auto requests = *rc::gen::container<std::vector<dmc::HostMessage>>(GenRequest());
+  wire::Bytes stream;
+  uint32_t id = 0x20000;
+  for (const auto& r : requests) dmc::Encode(id++, r, stream);
+  const auto cuts =
+      *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(0, stream.size() + 1));
+  Host whole(SmallProfile());
+  whole.SendRaw(stream);
+  Host pieces(SmallProfile());
+  std::vector<size_t> c = cuts;
+  c.push_back(0);
+  c.push_back(stream.size());
+  std::sort(c.begin(), c.end());
+  for (size_t i = 0; i + 1 < c.size(); ++i) {
+    pieces.SendRaw(wire::Bytes(stream.begin() + static_cast<long>(c[i]),
+                               stream.begin() + static_cast<long>(c[i + 1])));
+  }
+  whole.Settle();
+  pieces.Settle();
+  RC_ASSERT(whole.out().size() == pieces.out().size());
+  for (size_t i = 0; i < whole.out().size(); ++i) {
+    RC_ASSERT(whole.out()[i].id == pieces.out()[i].id);
+    RC_ASSERT(whole.out()[i].type == pieces.out()[i].type);
+    RC_ASSERT(whole.out()[i].msg == pieces.out()[i].msg);
+  }
+}
+
+RC_GTEST_PROP(Dmc16Laws, NoiseNeverCrashesAndGoodFramesAfterItAreAnswered, ()) {
+  const auto noise = *rc::gen::container<std::vector<uint8_t>>(rc::gen::arbitrary<uint8_t>());
+  Host h(SmallProfile());
+  h.SendRaw(noise);
+  // A frame cut short by noise may swallow bytes; the decoder resyncs from
+  // the next marker, so a clean request after enough idle bytes is answered.
+  h.device().OnHostLink(false);
+  h.device().OnHostLink(true);
+  const uint32_t id = h.Send(dmc::HiRequest{});
+  h.Settle();
+  int n = 0;
+  for (const Out& o : h.out()) n += o.id == id ? 1 : 0;
+  RC_ASSERT(n == 1);
+}
+
+TEST(Dmc16State, StateReportsPositionsModeAndCounters) {
+  Host h(SmallProfile());
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{3, 42}), kOk);
+  const nlohmann::json s = h.device().State();
+  EXPECT_EQ(s["model"], "dmc16");
+  EXPECT_EQ(s["mode"], "idle");
+  EXPECT_EQ(s["motors"][2]["position_steps"], 42);
+  EXPECT_EQ(s["stats"]["requests"], 1);
+}
+
+}  // namespace
+}  // namespace moco::devices
