@@ -8,6 +8,10 @@ void SessionTap::OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes
   e.t_ns = t_ns;
   e.from = dir == Direction::kToDevice ? control::Origin::kHost : control::Origin::kDevice;
   e.bytes.assign(bytes.begin(), bytes.end());
+  if (decoder_) {
+    const wire::Side side = dir == Direction::kToDevice ? wire::Side::kHost : wire::Side::kDevice;
+    for (const wire::TranscriptLine& l : decoder_->Feed(side, bytes)) e.decoded.push_back(l.text);
+  }
   writer_.Append(e);
 }
 

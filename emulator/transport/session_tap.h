@@ -3,8 +3,12 @@
 #ifndef MOCO_TRANSPORT_SESSION_TAP_H_
 #define MOCO_TRANSPORT_SESSION_TAP_H_
 
+#include <memory>
+#include <optional>
+
 #include "control/session.h"
 #include "transport/traffic.h"
+#include "wire/transcript.h"
 
 namespace moco::transport {
 
@@ -12,14 +16,20 @@ namespace moco::transport {
 // kToDevice -> "from": "host", kToHost -> "from": "device"; an event becomes
 // {"event": <kind>, "detail": <detail>}. The writer must outlive the tap and
 // its header should say "clock": "virtual" (times are scheduler times).
+// With a protocol, each traffic line also carries "decoded": the one-line
+// descriptions of the messages that chunk completed.
 class SessionTap final : public TrafficObserver {
  public:
-  explicit SessionTap(control::SessionWriter& writer) : writer_(writer) {}
+  explicit SessionTap(control::SessionWriter& writer,
+                      std::optional<wire::Protocol> protocol = std::nullopt)
+      : writer_(writer),
+        decoder_(protocol ? std::make_unique<wire::TranscriptDecoder>(*protocol) : nullptr) {}
   void OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes) override;
   void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override;
 
  private:
   control::SessionWriter& writer_;
+  std::unique_ptr<wire::TranscriptDecoder> decoder_;
 };
 
 }  // namespace moco::transport

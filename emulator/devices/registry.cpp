@@ -1,0 +1,40 @@
+// The device models by name (see registry.h).
+#include "devices/registry.h"
+
+#include <stdexcept>
+
+#include "devices/dmc16/dmc16.h"
+
+namespace moco::devices {
+
+const std::vector<DeviceModel>& DeviceModels() {
+  static const std::vector<DeviceModel> kModels = {
+      {"dmc16", "DMC-16 motion controller, DMC v2 binary protocol", wire::Protocol::kDmc,
+       "fixtures/profiles/dmc16.json"},
+  };
+  return kModels;
+}
+
+const DeviceModel* FindDeviceModel(std::string_view name) {
+  for (const DeviceModel& m : DeviceModels()) {
+    if (m.name == name) return &m;
+  }
+  return nullptr;
+}
+
+std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
+                                     sim::Scheduler& scheduler, ByteSink& out) {
+  if (model == "dmc16") {
+    Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
+    return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
+  }
+  std::string known;
+  for (const DeviceModel& m : DeviceModels()) {
+    if (!known.empty()) known += ", ";
+    known += m.name;
+  }
+  throw std::invalid_argument("unknown device model \"" + std::string(model) +
+                              "\"; the models are: " + known);
+}
+
+}  // namespace moco::devices

@@ -1,0 +1,296 @@
+// Serving emulated devices in one process (see serve.h).
+#include "transport/serve.h"
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "control/session.h"
+#include "devices/profile.h"
+#include "devices/registry.h"
+#include "transport/link_faults.h"
+#include "transport/session_tap.h"
+#include "wire/transcript.h"
+
+namespace moco::transport {
+
+LogLevel ParseLogLevel(std::string_view text) {
+  if (text == "error") return LogLevel::kError;
+  if (text == "warn") return LogLevel::kWarn;
+  if (text == "info") return LogLevel::kInfo;
+  if (text == "debug") return LogLevel::kDebug;
+  throw std::invalid_argument("unknown log level \"" + std::string(text) +
+                              "\"; use error, warn, info or debug");
+}
+
+namespace {
+
+// Sends a link's traffic to several observers.
+class TeeObserver final : public TrafficObserver {
+ public:
+  void Add(TrafficObserver* o) { observers_.push_back(o); }
+  bool empty() const { return observers_.empty(); }
+  void OnTraffic(sim::TimeNs t, Direction d, wire::ByteView b) override {
+    for (TrafficObserver* o : observers_) o->OnTraffic(t, d, b);
+  }
+  void OnLinkEvent(sim::TimeNs t, std::string_view k, std::string_view d) override {
+    for (TrafficObserver* o : observers_) o->OnLinkEvent(t, k, d);
+  }
+
+ private:
+  std::vector<TrafficObserver*> observers_;
+};
+
+// --log-level debug: every message in and out as a transcript line.
+class DebugTap final : public TrafficObserver {
+ public:
+  DebugTap(wire::Protocol p, std::string name, LogFn log)
+      : decoder_(p), name_(std::move(name)), log_(std::move(log)) {}
+  void OnTraffic(sim::TimeNs t, Direction d, wire::ByteView b) override {
+    const wire::Side side = d == Direction::kToDevice ? wire::Side::kHost : wire::Side::kDevice;
+    for (const wire::TranscriptLine& l : decoder_.Feed(side, b)) {
+      char stamp[32];
+      std::snprintf(stamp, sizeof stamp, "%.6f", static_cast<double>(t) / 1e9);
+      log_(name_ + " " + stamp + (side == wire::Side::kHost ? " host -> dev  " : " dev  -> host ") +
+           (l.problem ? "!! " : "") + l.text);
+    }
+  }
+
+ private:
+  wire::TranscriptDecoder decoder_;
+  std::string name_;
+  LogFn log_;
+};
+
+}  // namespace
+
+struct Emulator::Served {
+  DeviceConfig config;
+  std::unique_ptr<control::SessionWriter> writer;
+  std::unique_ptr<SessionTap> tap;
+  std::unique_ptr<DebugTap> debug;
+  TeeObserver tee;
+  std::unique_ptr<DeviceServer> server;
+  std::unique_ptr<devices::Device> device;
+};
+
+Emulator::Emulator(EmulatorConfig config, LogFn log)
+    : config_(std::move(config)), log_(std::move(log)), driver_(io_, scheduler_) {
+  if (!log_) log_ = LogToStderr;
+  if (config_.devices.empty()) {
+    throw ConfigError("no device to serve; give at least one (e.g. --pty /tmp/dmc16)");
+  }
+  std::set<std::string> names;
+  std::map<std::string, int> per_model;
+  for (DeviceConfig& d : config_.devices) {
+    if (d.name.empty()) {
+      const int n = ++per_model[d.model];
+      d.name = n == 1 ? d.model : d.model + "-" + std::to_string(n);
+    }
+    if (!names.insert(d.name).second) {
+      throw ConfigError("two devices are named \"" + d.name + "\"; give each a unique \"name\"");
+    }
+  }
+  try {
+    for (const DeviceConfig& d : config_.devices) {
+      const devices::DeviceModel* model = devices::FindDeviceModel(d.model);
+      if (model == nullptr) {
+        std::string known;
+        for (const auto& m : devices::DeviceModels())
+          known += (known.empty() ? "" : ", ") + std::string(m.name);
+        throw ConfigError(d.name + ": unknown model \"" + d.model + "\"; the models are " + known);
+      }
+      auto s = std::make_unique<Served>();
+      s->config = d;
+      if (!d.record_path.empty()) {
+        control::SessionHeader h;
+        h.protocol = model->protocol;
+        h.device = std::string(model->name);
+        h.clock = "virtual";
+        h.note = "recorded by mocosim from " + d.endpoint;
+        s->writer = std::make_unique<control::SessionWriter>(d.record_path, h);
+        s->tap = std::make_unique<SessionTap>(*s->writer, model->protocol);
+        s->tee.Add(s->tap.get());
+      }
+      if (config_.log_level >= LogLevel::kDebug) {
+        s->debug = std::make_unique<DebugTap>(model->protocol, d.name, log_);
+        s->tee.Add(s->debug.get());
+      }
+      ServeOptions opts;
+      opts.no_pacing = d.no_pacing;
+      opts.bind_address = config_.bind_address;
+      if (!d.faults.empty()) {
+        auto parsed = ParseFaultConfig(d.faults);
+        if (const auto* err = std::get_if<std::string>(&parsed)) {
+          throw ConfigError(d.name + ": bad fault config \"" + d.faults + "\": " + *err);
+        }
+        opts.faults = std::get<FaultConfig>(parsed);
+      }
+      opts.observer = s->tee.empty() ? nullptr : &s->tee;
+      const std::string name = d.name;
+      const LogLevel level = config_.log_level;
+      LogFn sink = log_;
+      opts.log = [name, level, sink](std::string_view line) {
+        if (level >= LogLevel::kInfo) sink(name + ": " + std::string(line));
+      };
+      try {
+        s->server = std::make_unique<DeviceServer>(driver_, d.endpoint, opts);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(d.name + ": " + e.what());
+      }
+      try {
+        s->device = devices::CreateDevice(d.model, d.profile_path, scheduler_, s->server->sink());
+      } catch (const devices::ProfileError&) {
+        throw;
+      } catch (const std::exception& e) {
+        throw ConfigError(d.name + ": " + e.what());
+      }
+      served_.push_back(std::move(s));
+    }
+  } catch (...) {
+    for (auto& s : served_) {
+      if (s->server) s->server->Stop();
+    }
+    throw;
+  }
+}
+
+Emulator::~Emulator() { Stop(); }
+
+const std::string& Emulator::name(size_t i) const { return served_[i]->config.name; }
+devices::Device& Emulator::device(size_t i) { return *served_[i]->device; }
+DeviceServer& Emulator::server(size_t i) { return *served_[i]->server; }
+
+void Emulator::Log(LogLevel level, std::string_view line) const {
+  if (level <= config_.log_level) log_(line);
+}
+
+void Emulator::Start() {
+  for (auto& s : served_) {
+    s->server->Serve(*s->device);
+  }
+  driver_.Start();
+  for (auto& s : served_) {
+    driver_.Sync();
+    s->device->PowerOn();
+    Log(LogLevel::kError, s->config.name + " (" + s->config.model + ") on " + s->server->Where());
+  }
+  driver_.Kick();
+  signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM);
+  signals_->async_wait([this](const ErrorCode& ec, int sig) {
+    if (ec) return;
+    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    Stop();
+  });
+  if (hooks_.on_started) hooks_.on_started();
+}
+
+int Emulator::Run() {
+  io_.run();
+  Stop();
+  return exit_code_;
+}
+
+void Emulator::Stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  if (hooks_.on_stopping) hooks_.on_stopping();
+  if (signals_) {
+    ErrorCode ignored;
+    signals_->cancel(ignored);
+  }
+  for (auto& s : served_) {
+    if (s->server) s->server->Stop();
+  }
+  driver_.Stop();
+  for (auto& s : served_) {
+    if (s->writer) {
+      std::string error;
+      if (!s->writer->Finish(&error)) {
+        Log(LogLevel::kError, s->config.name + ": recording not completed: " + error);
+        exit_code_ = 1;
+      } else {
+        Log(LogLevel::kInfo, s->config.name + ": recorded " + s->writer->path().string());
+      }
+    }
+  }
+  io_.stop();
+}
+
+// --- run files ----------------------------------------------------------------------------------
+
+EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
+                              const std::string& base_dir) {
+  EmulatorConfig c;
+  auto path_of = [&](const std::string& p) {
+    if (p.empty()) return p;
+    std::filesystem::path fp(p);
+    return fp.is_absolute() ? p : (std::filesystem::path(base_dir) / fp).string();
+  };
+  try {
+    devices::ProfileReader r(j, where);
+    c.control_path = path_of(r.GetString("control", ""));
+    c.scenario_path = path_of(r.GetString("scenario", ""));
+    c.bind_address = r.GetString("bind", c.bind_address);
+    const std::string level = r.GetString("log_level", "info");
+    try {
+      c.log_level = ParseLogLevel(level);
+    } catch (const std::invalid_argument&) {
+      r.Fail("log_level", "is \"" + level + "\"", "use error, warn, info or debug");
+    }
+    const nlohmann::json& devs = r.GetRaw("devices");
+    if (!devs.is_array() || devs.empty()) {
+      r.Fail("devices", devs.is_null() ? "is missing" : "must be a non-empty array",
+             "list the devices: \"devices\": [{\"model\": \"dmc16\", \"endpoint\": "
+             "\"pty:/tmp/dmc16\"}]");
+    }
+    for (size_t i = 0; i < devs.size(); ++i) {
+      devices::ProfileReader d(devs[i], where, "devices[" + std::to_string(i) + "]");
+      DeviceConfig dc;
+      dc.model = d.GetString("model", "dmc16");
+      if (devices::FindDeviceModel(dc.model) == nullptr) {
+        std::string known;
+        for (const auto& m : devices::DeviceModels())
+          known += (known.empty() ? "" : ", ") + std::string(m.name);
+        d.Fail("model", "is \"" + dc.model + "\", not a known model", "use one of: " + known);
+      }
+      dc.name = d.GetString("name", "");
+      dc.endpoint = d.GetString("endpoint", "");
+      if (dc.endpoint.empty()) {
+        d.Fail("endpoint", "is missing", "give \"pty:/path\" or \"tcp:127.0.0.1:5000\"");
+      }
+      if (dc.endpoint.rfind("pty:", 0) == 0) {
+        dc.endpoint = "pty:" + path_of(dc.endpoint.substr(4));
+      }
+      dc.profile_path = path_of(d.GetString("profile", ""));
+      dc.record_path = path_of(d.GetString("record", ""));
+      dc.no_pacing = d.GetBool("no_pacing", false);
+      dc.faults = d.GetString("faults", "");
+      d.Finish();
+      c.devices.push_back(dc);
+    }
+    r.Finish();
+  } catch (const devices::ProfileError& e) {
+    throw ConfigError(e.what());
+  }
+  return c;
+}
+
+EmulatorConfig LoadRunConfig(const std::string& path) {
+  const std::string where = "run file " + path;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(where + ": cannot be read; check the path");
+  std::ostringstream text;
+  text << in.rdbuf();
+  try {
+    const nlohmann::json j = devices::ParseProfileText(text.str(), where);
+    return ParseRunConfig(j, where, std::filesystem::path(path).parent_path().string());
+  } catch (const devices::ProfileError& e) {
+    throw ConfigError(e.what());
+  }
+}
+
+}  // namespace moco::transport

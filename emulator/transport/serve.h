@@ -1,0 +1,124 @@
+// Serving emulated devices in one process (`mocosim dmc16`, `mocosim run`):
+// the io_context, the real-time driver of the one clock, one DeviceServer per
+// device, session recordings, the control socket and scenario, and a clean
+// shutdown on SIGINT/SIGTERM (symlinks removed, recordings closed).
+#ifndef MOCO_TRANSPORT_SERVE_H_
+#define MOCO_TRANSPORT_SERVE_H_
+
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "devices/device.h"
+#include "sim/scheduler.h"
+#include "transport/asio.h"
+#include "transport/device_server.h"
+#include "transport/realtime_driver.h"
+
+namespace moco::transport {
+
+enum class LogLevel { kError, kWarn, kInfo, kDebug };
+// "error", "warn", "info", "debug"; throws std::invalid_argument otherwise.
+LogLevel ParseLogLevel(std::string_view text);
+
+// One device to serve.
+struct DeviceConfig {
+  std::string name;  // unique in the run; defaults to the model name (+ "-2", ...)
+  std::string model = "dmc16";
+  std::string endpoint;      // "pty:/tmp/dmc16", "tcp:127.0.0.1:5000", "tcp:5000"
+  std::string profile_path;  // empty: the model's built-in profile
+  std::string record_path;   // empty: no recording
+  bool no_pacing = false;
+  std::string faults;  // link fault config, e.g. "seed=1,drop=0.01"; empty: off
+};
+
+struct EmulatorConfig {
+  std::vector<DeviceConfig> devices;
+  std::string control_path;   // JSON-lines control socket; empty: none
+  std::string scenario_path;  // timed events; empty: none
+  std::string bind_address = "127.0.0.1";
+  LogLevel log_level = LogLevel::kInfo;
+};
+
+// A run file (`mocosim run devices.json`) that cannot be used; what() names
+// the field and the fix.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Parses a run file:
+//   {"devices": [{"model": "dmc16", "endpoint": "pty:/tmp/dmc16", "name": "a",
+//                 "profile": "...", "record": "...", "no_pacing": false,
+//                 "faults": "..."}, ...],
+//    "control": "/tmp/mocosim.sock", "scenario": "...", "bind": "127.0.0.1",
+//    "log_level": "info"}
+// Relative paths are taken relative to `base_dir`. Throws ConfigError.
+EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
+                              const std::string& base_dir);
+EmulatorConfig LoadRunConfig(const std::string& path);
+
+// Hooks for the control socket and scenario, set up by the caller that owns
+// moco_control (kept out of this library so that transport does not depend
+// on the control channel).
+struct EmulatorHooks {
+  // Called after Start() with every device served; may return a handler for
+  // control-socket lines (nullptr: none). Runs on the io thread.
+  std::function<void()> on_started;
+  std::function<void()> on_stopping;
+};
+
+class Emulator {
+ public:
+  // Builds every device and opens every endpoint. Throws std::runtime_error
+  // (ProfileError, ConfigError, a taken port, an unusable PTY path) with a
+  // message naming the device and the fix; nothing is left open then.
+  Emulator(EmulatorConfig config, LogFn log = LogToStderr);
+  ~Emulator();
+  Emulator(const Emulator&) = delete;
+  Emulator& operator=(const Emulator&) = delete;
+
+  // Powers every device on and starts the clock; logs where each one is.
+  void Start();
+  // Runs the io loop until Stop() or SIGINT/SIGTERM; returns the exit code
+  // (0, or 1 when a recording could not be completed).
+  int Run();
+  // Stops serving: endpoints closed, symlinks removed, recordings completed.
+  // Idempotent; safe from an io handler.
+  void Stop();
+
+  asio::io_context& io() { return io_; }
+  sim::Scheduler& scheduler() { return scheduler_; }
+  RealtimeDriver& driver() { return driver_; }
+  size_t size() const { return served_.size(); }
+  // REQUIRES: i < size().
+  const std::string& name(size_t i) const;
+  devices::Device& device(size_t i);
+  DeviceServer& server(size_t i);
+  const EmulatorConfig& config() const { return config_; }
+  void Log(LogLevel level, std::string_view line) const;
+  void SetHooks(EmulatorHooks hooks) { hooks_ = std::move(hooks); }
+
+ private:
+  struct Served;
+
+  EmulatorConfig config_;
+  LogFn log_;
+  EmulatorHooks hooks_;
+  asio::io_context io_;
+  sim::Scheduler scheduler_;
+  RealtimeDriver driver_;
+  std::vector<std::unique_ptr<Served>> served_;
+  std::unique_ptr<asio::signal_set> signals_;
+  bool stopped_ = false;
+  int exit_code_ = 0;
+};
+
+}  // namespace moco::transport
+
+#endif  // MOCO_TRANSPORT_SERVE_H_
