@@ -1,0 +1,177 @@
+// Served DMC-16s end to end over a real PTY and a real TCP socket, the run
+// file reader, and start-up errors that name the problem.
+#include "transport/serve.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "control/session.h"
+#include "transport/dmc_host_client.h"
+
+namespace moco::transport {
+namespace {
+
+using testing::DmcHostClient;
+namespace fs = std::filesystem;
+
+fs::path TempDir() {
+  const fs::path d =
+      fs::temp_directory_path() / ("moco_serve_test_" + std::to_string(getpid()) + "_" +
+                                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// Talks DMC v2 to served device `i`: HI, a move with its position updates, status.
+void Exercise(Emulator& e, size_t i) {
+  DeviceServer& s = e.server(i);
+  const int fd =
+      s.pty() != nullptr ? testing::OpenPtyHost(s.pty_path()) : testing::ConnectTcp(s.tcp_port());
+  ASSERT_GE(fd, 0);
+  DmcHostClient c(fd);
+  ASSERT_TRUE(c.Send(0x10001, dmc::HiRequest{}));
+  auto hi = c.ReplyTo(0x10001, 5000);
+  ASSERT_TRUE(hi.has_value());
+  ASSERT_TRUE(std::holds_alternative<dmc::HiResponse>(hi->msg));
+  EXPECT_EQ(std::get<dmc::HiResponse>(hi->msg).NameText(), "DMC-16");
+  ASSERT_TRUE(c.Send(0x10002, dmc::MotorMove{2, 300}));
+  auto mv = c.ReplyTo(0x10002, 5000);
+  ASSERT_TRUE(mv.has_value());
+  EXPECT_EQ(std::get<dmc::MotorMoveResponse>(mv->msg).moving, 1);
+  // Position updates arrive until the motor stops on 300.
+  bool arrived = false;
+  for (int n = 0; n < 100 && !arrived; ++n) {
+    auto f = c.Next(5000);
+    ASSERT_TRUE(f.has_value());
+    if (const auto* p = std::get_if<dmc::MotorPositionReport>(&f->msg)) {
+      arrived = p->positions_steps.at(1) == 300;
+    }
+  }
+  EXPECT_TRUE(arrived);
+  ASSERT_TRUE(c.Send(0x10003, dmc::MotorStatusRequest{}));
+  auto st = c.ReplyTo(0x10003, 5000);
+  ASSERT_TRUE(st.has_value());
+  EXPECT_EQ(std::get<dmc::MotorStatusResponse>(st->msg).moving_bits, 0u);
+  EXPECT_EQ(c.bad_frames(), 0u);
+  close(fd);
+}
+
+TEST(Serve, Dmc16EndToEndOverPtyAndTcpWithRecording) {
+  const fs::path dir = TempDir();
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig pty;
+  pty.endpoint = "pty:" + (dir / "dmc16").string();
+  pty.record_path = (dir / "pty.jsonl").string();
+  DeviceConfig tcp;
+  tcp.endpoint = "tcp:127.0.0.1:0";
+  config.devices = {pty, tcp};
+  {
+    Emulator e(config, [](std::string_view) {});
+    EXPECT_EQ(e.name(0), "dmc16");
+    EXPECT_EQ(e.name(1), "dmc16-2");
+    e.Start();
+    std::thread io([&] { e.Run(); });
+    Exercise(e, 0);
+    Exercise(e, 1);
+    asio::post(e.io(), [&] { e.Stop(); });
+    io.join();
+    EXPECT_FALSE(fs::exists(dir / "dmc16")) << "the symlink is removed on stop";
+  }
+  auto loaded = control::LoadSession(dir / "pty.jsonl");
+  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
+  const control::Session& s = std::get<control::Session>(loaded);
+  EXPECT_EQ(s.header.protocol, control::Protocol::kDmc);
+  bool saw_move = false;
+  for (const auto& entry : s.entries) {
+    for (const auto& d : entry.decoded)
+      saw_move = saw_move || d.find("MOTOR_MOVE motor=2") != std::string::npos;
+  }
+  EXPECT_TRUE(saw_move) << "recorded traffic carries decoded lines";
+  fs::remove_all(dir);
+}
+
+TEST(Serve, TakenTcpPortIsAClearErrorAndLeavesNothingOpen) {
+  const fs::path dir = TempDir();
+  EmulatorConfig first;
+  DeviceConfig d;
+  d.endpoint = "tcp:127.0.0.1:0";
+  first.devices = {d};
+  Emulator a(first, [](std::string_view) {});
+  EmulatorConfig second;
+  DeviceConfig p;
+  p.endpoint = "pty:" + (dir / "x").string();
+  DeviceConfig t;
+  t.endpoint = "tcp:127.0.0.1:" + std::to_string(a.server(0).tcp_port());
+  second.devices = {p, t};
+  try {
+    Emulator b(second, [](std::string_view) {});
+    FAIL() << "a taken port must be refused";
+  } catch (const std::exception& ex) {
+    EXPECT_NE(std::string(ex.what()).find("dmc16-2"), std::string::npos) << ex.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "x")) << "the PTY opened first was closed again";
+  fs::remove_all(dir);
+}
+
+TEST(Serve, BadProfileNamesTheField) {
+  const fs::path dir = TempDir();
+  std::ofstream(dir / "p.json") << R"({"motor_count": 99})";
+  EmulatorConfig c;
+  DeviceConfig d;
+  d.endpoint = "tcp:127.0.0.1:0";
+  d.profile_path = (dir / "p.json").string();
+  c.devices = {d};
+  try {
+    Emulator e(c, [](std::string_view) {});
+    FAIL();
+  } catch (const std::exception& ex) {
+    EXPECT_NE(std::string(ex.what()).find("\"motor_count\" is 99"), std::string::npos) << ex.what();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(RunConfig, ParsesDevicesAndResolvesRelativePaths) {
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "control": "ctl.sock", "log_level": "warn",
+    "devices": [{"model": "dmc16", "endpoint": "pty:dev/a", "record": "a.jsonl"},
+                {"endpoint": "tcp:5000", "name": "b", "no_pacing": true, "faults": "drop=0.1"}]})");
+  const EmulatorConfig c = ParseRunConfig(j, "run file r.json", "/base");
+  ASSERT_EQ(c.devices.size(), 2u);
+  EXPECT_EQ(c.control_path, "/base/ctl.sock");
+  EXPECT_EQ(c.log_level, LogLevel::kWarn);
+  EXPECT_EQ(c.devices[0].endpoint, "pty:/base/dev/a");
+  EXPECT_EQ(c.devices[0].record_path, "/base/a.jsonl");
+  EXPECT_EQ(c.devices[1].name, "b");
+  EXPECT_TRUE(c.devices[1].no_pacing);
+}
+
+TEST(RunConfig, ErrorsNameTheField) {
+  auto error_of = [](const char* text) {
+    try {
+      ParseRunConfig(nlohmann::json::parse(text), "run file r.json", "/b");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of(R"({})").find("\"devices\" is missing"), std::string::npos);
+  EXPECT_NE(error_of(R"({"devices": [{"model": "dmc99", "endpoint": "tcp:1"}]})")
+                .find("devices[0].model"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"devices": [{"model": "dmc16"}]})").find("devices[0].endpoint"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"devices": [{"endpoint": "tcp:1", "recrod": "x"}]})")
+                .find("\"devices[0].recrod\" is not a known field"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(R"({"log_level": "loud", "devices": [{"endpoint": "tcp:1"}]})").find("log_level"),
+      std::string::npos);
+}
+
+}  // namespace
+}  // namespace moco::transport
