@@ -1,6 +1,6 @@
 // Benchmarks of the simulation core: scheduler events per second, analytic
 // step edges per second with 32 motors moving, memory of a long move, DFMoco
-// chunked-run queries.
+// chunked-run queries, StackShot Bezier fitting.
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sim/planner_dfmoco.h"
+#include "sim/planner_stackshot.h"
 #include "sim/rig.h"
 #include "sim/scheduler.h"
 #include "sim/step_trace.h"
@@ -203,6 +204,37 @@ void BM_DfmocoForEachEdge(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(edges), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_DfmocoForEachEdge)->Unit(benchmark::kMillisecond);
+
+// Fitting a four-curve CC_MOTION_CONFIG spline (a 60 s keyframed move over
+// 400 mm at 80 steps/mm) into constant-acceleration segments within
+// kSplineToleranceSteps; reports the segment count and plan bytes.
+void BM_StackshotSplineFit(benchmark::State& state) {
+  MotionCurves m{};
+  auto curve = [](double t0, double y0, double t3, double y3) {
+    BezierCurve c;
+    const double d = (t3 - t0) / 3;
+    c.p = {BezierPoint{t0, y0}, BezierPoint{t0 + d, y0}, BezierPoint{t3 - d, y3},
+           BezierPoint{t3, y3}};
+    return c;
+  };
+  m[0] = curve(0, 0, 15, 120);
+  m[1] = curve(15, 120, 30, 400);
+  m[2] = curve(30, 400, 45, 250);
+  m[3] = curve(45, 250, 60, 0);
+  const SplineOrFault r = MakeSpline(m, 80, 20000);
+  size_t segments = 0;
+  size_t plan_bytes = 0;
+  for (auto _ : state) {
+    const std::vector<Segment> segs = SplineSegments(*r.spline);
+    segments = segs.size();
+    const Plan plan = Plan::Build(0, 0, 0, segs);
+    plan_bytes = plan.HeapBytes();
+    benchmark::DoNotOptimize(plan.EndSteps());
+  }
+  state.counters["segments"] = static_cast<double>(segments);
+  state.counters["plan_bytes"] = static_cast<double>(plan_bytes);
+}
+BENCHMARK(BM_StackshotSplineFit)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace moco::sim
