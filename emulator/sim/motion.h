@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <tuple>
 #include <utility>
@@ -42,15 +43,41 @@ struct StepEdge {
   bool operator==(const StepEdge&) const = default;
 };
 
+// The velocities of a chunked run (see Segment::chunks): a step generator
+// that loads a new constant velocity every chunk (DFMoco, FACTS.md).
+class ChunkVelocities {
+ public:
+  virtual ~ChunkVelocities() = default;
+  // Velocity of piece j (0-based) of the run, the piece that starts at
+  // x_steps (relative to the plan origin). Must be deterministic and finite.
+  virtual double Velocity(int64_t j, double x_steps) const = 0;
+  // Heap bytes held by the object itself (for memory reports).
+  virtual size_t HeapBytes() const { return 0; }
+};
+
 // Constant-acceleration piece of motion. Times in seconds after the plan's
 // origin; positions in steps relative to the plan's origin_steps.
+//
+// Chunked run: with chunks > 1 the segment stands for `chunks` consecutive
+// constant-velocity pieces of duration_s each (a_steps_per_s2 is ignored).
+// Piece j moves at chunk_velocities->Velocity(j, x_j), or at v0_steps_per_s
+// for every piece when chunk_velocities is null. The pieces are laid end to
+// end exactly as that many separate Segments would be (each one's start time
+// and position chained from the previous one's EndTime()/EndPosition() in
+// floating point), so a run has bit for bit the step edges of its expansion
+// while a plan holds it in O(1) memory. REQUIRES: the nonzero piece
+// velocities of one run share a sign (else Plan::Build expands the run).
 struct Segment {
   double t0_s = 0;
   double duration_s = 0;
   double x0_steps = 0;
   double v0_steps_per_s = 0;
   double a_steps_per_s2 = 0;
+  int64_t chunks = 1;
+  std::shared_ptr<const ChunkVelocities> chunk_velocities;
 
+  bool IsRun() const { return chunks > 1; }
+  // Of one piece: for a run, of its first piece.
   double EndTime() const { return t0_s + duration_s; }
   // REQUIRES: 0 <= tau_s <= duration_s (not checked; the formula extends).
   double PositionAt(double tau_s) const {
@@ -59,7 +86,7 @@ struct Segment {
   double VelocityAt(double tau_s) const { return v0_steps_per_s + a_steps_per_s2 * tau_s; }
   double EndPosition() const { return PositionAt(duration_s); }
   double EndVelocity() const { return VelocityAt(duration_s); }
-  // +1, -1, or 0 for a segment that does not move.
+  // +1, -1, or 0 for a segment that does not move (of one piece).
   int Direction() const;
 };
 
@@ -124,7 +151,38 @@ class Plan {
     int64_t p_start;  // step position (relative) at the segment's start
     int64_t edges;    // edges inside the segment
     int8_t dir;
+    int32_t run = -1;  // index into runs_ for a chunked run
   };
+  // Start state of one piece of a run.
+  struct PieceMark {
+    int64_t j;
+    double t_s;
+    double x_steps;
+    int64_t edges_before;  // edges of the run's earlier pieces
+  };
+  struct RunInfo {
+    double end_t_s;  // chained end of the last piece
+    double end_x_steps;
+    std::vector<PieceMark> marks;  // every kRunMarkStride pieces, from piece 0
+  };
+  // A piece of a run being walked: its start, velocity and edges.
+  struct PieceCursor {
+    PieceMark at;
+    double v_steps_per_s;
+    int64_t edges;
+  };
+  static constexpr int64_t kRunMarkStride = 128;
+
+  // Run piece helpers (i: the run's segment index).
+  Segment PieceSegment(size_t i, const PieceCursor& c) const;
+  PieceCursor MakeCursor(size_t i, const PieceMark& m) const;
+  void NextPiece(size_t i, PieceCursor& c) const;
+  // The piece holding the run's edge k (0 <= k < edges).
+  PieceCursor PieceOfEdge(size_t i, int64_t k) const;
+  // The last piece starting at or before relative time rel_ns.
+  PieceCursor PieceAt(size_t i, double rel_ns) const;
+  // Time of edge k_local of the piece under the cursor.
+  TimeNs PieceEdgeTime(size_t i, const PieceCursor& c, int64_t k_local) const;
   // Time of the k-th edge (0-based) of segment i.
   TimeNs EdgeTime(size_t i, int64_t k) const;
   // Index of the segment in effect at time T (the last with t0 <= T).
@@ -141,6 +199,7 @@ class Plan {
   TimeNs quantum_ns_ = 1;
   std::vector<Segment> segs_;
   std::vector<SegInfo> info_;
+  std::vector<RunInfo> runs_;
 };
 
 // Seconds from the segment start until x reaches `threshold_steps`, for a
@@ -159,6 +218,19 @@ int64_t Plan::ForEachEdge(TimeNs from_ns, TimeNs to_ns, Sink&& sink) const {
   if (from_ns >= origin_ns_) std::tie(i, k) = Locate(from_ns);
   for (; i < segs_.size(); ++i, k = 0) {
     const SegInfo& info = info_[i];
+    if (info.run >= 0) {
+      if (k >= info.edges) continue;
+      PieceCursor c = PieceOfEdge(i, k);
+      for (; k < info.edges; ++k) {
+        while (k >= c.at.edges_before + c.edges) NextPiece(i, c);
+        const TimeNs t = PieceEdgeTime(i, c, k - c.at.edges_before);
+        if (t > to_ns) return emitted;
+        const int64_t step = origin_steps_ + info.p_start + info.dir * (k + 1);
+        sink(StepEdge{t, step, info.dir});
+        ++emitted;
+      }
+      continue;
+    }
     for (; k < info.edges; ++k) {
       const TimeNs t = EdgeTime(i, k);
       if (t > to_ns) return emitted;

@@ -22,7 +22,10 @@ inline constexpr double kDfmocoMaxStepsPerS = 20'000;  // one step per two ticks
 // profile's position at the chunk's end. A command takes effect at the next
 // chunk boundary (the current chunk runs out first); a chunk whose velocity
 // reverses the previous one's sign is preceded by one idle chunk. Step edges
-// fall on 25 us ticks.
+// fall on 25 us ticks. Each stretch of one direction is returned as one
+// chunked run (Segment::chunks) that the plan expands lazily, bit for bit as
+// one Segment per chunk would move, so a plan's memory does not grow with
+// the move's duration.
 class DfmocoPlanner final : public Planner {
  public:
   std::vector<Segment> Plan(const PlanRequest& req) override;

@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <memory>
 #include <vector>
 
@@ -28,6 +31,185 @@ struct Bench {
   StepperMotor m{s, 1, std::make_unique<DfmocoPlanner>()};
   StepTrace trace{m, 1 << 18};
 };
+
+// The chunk-per-segment planner as it was before chunk runs: one Segment per
+// 50 ms chunk. Kept verbatim as the reference the run form must reproduce.
+class ChunkPerSegmentPlanner final : public Planner {
+ public:
+  std::vector<Segment> Plan(const PlanRequest& req) override {
+    constexpr double kChunkS = static_cast<double>(kDfmocoChunkNs) / 1e9;
+    auto position_at = [](const std::vector<Segment>& segs, double x_start, double t) {
+      double x = x_start;
+      double t0 = 0;
+      for (const Segment& s : segs) {
+        if (t <= t0 + s.duration_s) {
+          return x + (t - t0) * (s.v0_steps_per_s + 0.5 * s.a_steps_per_s2 * (t - t0));
+        }
+        x += s.duration_s * (s.v0_steps_per_s + 0.5 * s.a_steps_per_s2 * s.duration_s);
+        t0 += s.duration_s;
+      }
+      return x;
+    };
+    std::vector<Segment> out;
+    if (req.kind == PlanRequest::Kind::kMoveTo && req.start.v_steps_per_s == 0 &&
+        static_cast<double>(req.target_steps) == req.start.x_steps) {
+      return out;
+    }
+    const TimeNs next_boundary =
+        (req.now_ns + kDfmocoChunkNs - 1) / kDfmocoChunkNs * kDfmocoChunkNs;
+    const double wait_s = static_cast<double>(next_boundary - req.now_ns) / 1e9;
+    const double v_now = req.start.v_steps_per_s;
+    if (wait_s > 0) {
+      Segment s;
+      s.v0_steps_per_s = v_now;
+      s.duration_s = wait_s;
+      out.push_back(s);
+    }
+    const KinematicState at_boundary{req.start.x_steps + v_now * wait_s, v_now};
+    const double vmax = std::min(req.max_velocity_steps_per_s, kDfmocoMaxStepsPerS);
+    const double accel = req.max_accel_steps_per_s2;
+    std::vector<Segment> profile;
+    double target = at_boundary.x_steps;
+    if (req.kind == PlanRequest::Kind::kStop) {
+      profile = PlanDecelerateToRest(at_boundary, req.decel_steps_per_s2);
+      target = position_at(profile, at_boundary.x_steps, 1e300);
+      target = std::round(target);
+    } else {
+      target = static_cast<double>(req.target_steps);
+      profile = PlanTrapezoid(at_boundary, target, vmax, accel,
+                              req.decel_steps_per_s2 > 0 ? req.decel_steps_per_s2 : accel);
+    }
+    double total_s = 0;
+    for (const Segment& s : profile) total_s += s.duration_s;
+    const auto chunks = static_cast<int64_t>(std::ceil(total_s / kChunkS));
+    double x = at_boundary.x_steps;
+    double prev_v = v_now;
+    for (int64_t j = 0; j < chunks; ++j) {
+      const double t_end = static_cast<double>(j + 1) * kChunkS;
+      const double x_end =
+          j + 1 == chunks ? target : position_at(profile, at_boundary.x_steps, t_end);
+      double v = (x_end - x) / kChunkS;
+      v = std::clamp(v, -kDfmocoMaxStepsPerS, kDfmocoMaxStepsPerS);
+      if (v != 0 && prev_v != 0 && (v > 0) != (prev_v > 0)) {
+        Segment idle;
+        idle.duration_s = kChunkS;
+        out.push_back(idle);
+      }
+      Segment s;
+      s.v0_steps_per_s = v;
+      s.duration_s = kChunkS;
+      out.push_back(s);
+      x += v * kChunkS;
+      prev_v = v;
+    }
+    return out;
+  }
+  TimeNs StepQuantumNs() const override { return kDfmocoTickNs; }
+};
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// One command of a random DFMoco script.
+struct DfCommand {
+  int kind;  // 0..3 move, 4 stop, 5 hard stop, 6 jog
+  int64_t target;
+  int speed;
+  TimeNs delay_ns;
+};
+
+void Apply(StepperMotor& m, const DfCommand& c) {
+  if (c.kind <= 3) {
+    m.MoveTo(c.target);
+  } else if (c.kind == 4) {
+    m.Stop();
+  } else if (c.kind == 5) {
+    m.HardStop();
+  } else {
+    m.Jog(c.target, c.speed);
+  }
+}
+
+// Law: the chunk-run plans move the motor exactly as one Segment per chunk
+// did: the same edges (time, step, direction) bit for bit, and the same
+// position and velocity (bit for bit) at every query, through random moves,
+// re-targets mid-chunk, reversals, stops and jogs.
+RC_GTEST_PROP(DfmocoPlannerProp, ChunkRunsReproduceOneSegmentPerChunkBitForBit, ()) {
+  const double pr = *rc::gen::inRange(100, 20001);
+  const int n = *rc::gen::inRange(1, 7);
+  std::vector<DfCommand> script;
+  for (int i = 0; i < n; ++i) {
+    DfCommand c;
+    c.kind = *rc::gen::inRange(0, 7);
+    c.target = *rc::gen::inRange<int64_t>(-30000, 30000);
+    c.speed = *rc::gen::inRange(1, 10001);
+    c.delay_ns = *rc::gen::inRange<TimeNs>(0, 3'000'000'000);
+    script.push_back(c);
+  }
+  Scheduler s;
+  StepperMotor runs(s, 1, std::make_unique<DfmocoPlanner>());
+  StepperMotor chunks(s, 2, std::make_unique<ChunkPerSegmentPlanner>());
+  StepTrace runs_trace(runs, 1 << 20);
+  StepTrace chunks_trace(chunks, 1 << 20);
+  runs.SetProfile(PulseRate(pr));
+  chunks.SetProfile(PulseRate(pr));
+  for (const DfCommand& c : script) {
+    // Queries at random instants inside the delay, then the command.
+    const TimeNs until = s.Now() + c.delay_ns;
+    for (int q = 0; q < 4; ++q) {
+      s.RunUntil(std::min(until, s.Now() + *rc::gen::inRange<TimeNs>(1, 800'000'000)));
+      RC_ASSERT(runs.Position() == chunks.Position());
+      RC_ASSERT(SameBits(runs.Velocity(), chunks.Velocity()));
+    }
+    s.RunUntil(until);
+    Apply(runs, c);
+    Apply(chunks, c);
+    RC_ASSERT(runs.CurrentPlan().EndNs() == chunks.CurrentPlan().EndNs());
+    RC_ASSERT(runs.CurrentPlan().EdgeCount() == chunks.CurrentPlan().EdgeCount());
+    RC_ASSERT(runs.CurrentPlan().EndSteps() == chunks.CurrentPlan().EndSteps());
+    // Random-access queries on the plans themselves.
+    const Plan& a = runs.CurrentPlan();
+    const Plan& b = chunks.CurrentPlan();
+    for (int q = 0; q < 8; ++q) {
+      const TimeNs t = a.origin_ns() +
+                       *rc::gen::inRange<TimeNs>(0, std::max<TimeNs>(1, a.EndNs() - a.origin_ns()));
+      RC_ASSERT(a.StepsAt(t) == b.StepsAt(t));
+      const KinematicState sa = a.StateAt(t);
+      const KinematicState sb = b.StateAt(t);
+      RC_ASSERT(SameBits(sa.x_steps, sb.x_steps));
+      RC_ASSERT(SameBits(sa.v_steps_per_s, sb.v_steps_per_s));
+      const int64_t step = a.origin_steps() + *rc::gen::inRange<int64_t>(-40000, 40000);
+      for (int dir : {-1, 1}) RC_ASSERT(a.TimeOfStep(step, dir, t) == b.TimeOfStep(step, dir, t));
+    }
+  }
+  s.RunUntilIdle();
+  RC_ASSERT(runs_trace.dropped() == 0u);
+  RC_ASSERT(runs_trace.total() == chunks_trace.total());
+  RC_ASSERT(runs_trace.Edges() == chunks_trace.Edges());
+  RC_ASSERT(runs.Position() == chunks.Position());
+}
+
+// A ten-minute move holds a few runs, not one Segment per chunk: the plan's
+// heap stays under 16 KiB where the chunk-per-segment plan needs ~12000 of
+// them, and both give the same edge count and end.
+TEST(DfmocoPlannerTest, TenMinuteMovePlanIsSmall) {
+  Scheduler s;
+  StepperMotor m(s, 1, std::make_unique<DfmocoPlanner>());
+  StepperMotor ref(s, 2, std::make_unique<ChunkPerSegmentPlanner>());
+  m.SetProfile(PulseRate(20000));
+  ref.SetProfile(PulseRate(20000));
+  ASSERT_EQ(m.MoveTo(20000LL * 600), MoveStatus::kOk);
+  ASSERT_EQ(ref.MoveTo(20000LL * 600), MoveStatus::kOk);
+  EXPECT_GT(m.CurrentPlan().EndNs(), 600 * kNsPerSecond);
+  EXPECT_LT(m.CurrentPlan().HeapBytes(), 16u * 1024);
+  EXPECT_GT(ref.CurrentPlan().segments().size(), 12000u);
+  EXPECT_LE(m.CurrentPlan().segments().size(), 4u);
+  EXPECT_EQ(m.CurrentPlan().EdgeCount(), ref.CurrentPlan().EdgeCount());
+  EXPECT_EQ(m.CurrentPlan().EndNs(), ref.CurrentPlan().EndNs());
+  s.RunUntil(300 * kNsPerSecond);
+  EXPECT_EQ(m.Position(), ref.Position());
+  s.RunUntilIdle();
+  EXPECT_EQ(m.Position(), 20000LL * 600);
+}
 
 TEST(DfmocoPlannerTest, MoveStartsOnTheNextChunkEdgesOnTicksEndsOnTarget) {
   Bench b;

@@ -1,5 +1,6 @@
 // Benchmarks of the simulation core: scheduler events per second, analytic
-// step edges per second with 32 motors moving, memory of a long move.
+// step edges per second with 32 motors moving, memory of a long move, DFMoco
+// chunked-run queries, StackShot Bezier fitting.
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "sim/planner_dfmoco.h"
+#include "sim/planner_stackshot.h"
 #include "sim/rig.h"
 #include "sim/scheduler.h"
 #include "sim/step_trace.h"
@@ -131,9 +133,12 @@ void BM_MotorMemoryTenMinuteMove(benchmark::State& state) {
 }
 BENCHMARK(BM_MotorMemoryTenMinuteMove);
 
-// The same with DFMoco's 50 ms chunks: O(segments) = 12000 chunks.
+// The same with DFMoco's 50 ms chunks: 12000 chunks held as a few chunked
+// runs (Segment::chunks), so the plan's heap stays a few KiB (target: under
+// 16 KiB; one Segment per chunk held ~945 KB). plan_bytes is the plan alone.
 void BM_MotorMemoryTenMinuteMoveDfmoco(benchmark::State& state) {
   size_t bytes = 0;
+  size_t plan_bytes = 0;
   size_t segments = 0;
   for (auto _ : state) {
     Scheduler s;
@@ -145,13 +150,91 @@ void BM_MotorMemoryTenMinuteMoveDfmoco(benchmark::State& state) {
     m.MoveTo(20000LL * 600);
     s.RunUntil(300 * kNsPerSecond);
     bytes = sizeof(StepperMotor) + m.HeapBytes();
+    plan_bytes = m.CurrentPlan().HeapBytes();
     segments = m.CurrentPlan().segments().size();
     benchmark::DoNotOptimize(m.Position());
   }
   state.counters["bytes"] = static_cast<double>(bytes);
+  state.counters["plan_bytes"] = static_cast<double>(plan_bytes);
   state.counters["segments"] = static_cast<double>(segments);
 }
 BENCHMARK(BM_MotorMemoryTenMinuteMoveDfmoco)->Unit(benchmark::kMillisecond);
+
+// Random-access queries on a ten-minute DFMoco plan (a run walks at most
+// one mark stride of chunks): StepsAt per second.
+void BM_DfmocoStepsAtTenMinuteMove(benchmark::State& state) {
+  Scheduler s;
+  StepperMotor m(s, 1, std::make_unique<DfmocoPlanner>());
+  MotionProfile p;
+  p.max_velocity_steps_per_s = 20000;
+  p.max_accel_steps_per_s2 = 10000;
+  m.SetProfile(p);
+  m.MoveTo(20000LL * 600);
+  const Plan plan = m.CurrentPlan();
+  uint64_t rng = 0x9e3779b97f4a7c15ull;
+  const auto span = static_cast<uint64_t>(plan.EndNs() - plan.origin_ns());
+  for (auto _ : state) {
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    benchmark::DoNotOptimize(plan.StepsAt(plan.origin_ns() + static_cast<TimeNs>(rng % span)));
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()));
+}
+BENCHMARK(BM_DfmocoStepsAtTenMinuteMove);
+
+// Edge enumeration of a DFMoco plan (chunked runs walked piece by piece).
+void BM_DfmocoForEachEdge(benchmark::State& state) {
+  Scheduler s;
+  StepperMotor m(s, 1, std::make_unique<DfmocoPlanner>());
+  MotionProfile p;
+  p.max_velocity_steps_per_s = 20000;
+  p.max_accel_steps_per_s2 = 10000;
+  m.SetProfile(p);
+  m.MoveTo(1'000'000);
+  const Plan plan = m.CurrentPlan();
+  uint64_t edges = 0;
+  for (auto _ : state) {
+    int64_t sum = 0;
+    edges += static_cast<uint64_t>(
+        plan.ForEachEdge(0, kTimeNever, [&sum](const StepEdge& e) { sum += e.time_ns; }));
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["steps_per_s"] =
+      benchmark::Counter(static_cast<double>(edges), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_DfmocoForEachEdge)->Unit(benchmark::kMillisecond);
+
+// Fitting a four-curve CC_MOTION_CONFIG spline (a 60 s keyframed move over
+// 400 mm at 80 steps/mm) into constant-acceleration segments within
+// kSplineToleranceSteps; reports the segment count and plan bytes.
+void BM_StackshotSplineFit(benchmark::State& state) {
+  MotionCurves m{};
+  auto curve = [](double t0, double y0, double t3, double y3) {
+    BezierCurve c;
+    const double d = (t3 - t0) / 3;
+    c.p = {BezierPoint{t0, y0}, BezierPoint{t0 + d, y0}, BezierPoint{t3 - d, y3},
+           BezierPoint{t3, y3}};
+    return c;
+  };
+  m[0] = curve(0, 0, 15, 120);
+  m[1] = curve(15, 120, 30, 400);
+  m[2] = curve(30, 400, 45, 250);
+  m[3] = curve(45, 250, 60, 0);
+  const SplineOrFault r = MakeSpline(m, 80, 20000);
+  size_t segments = 0;
+  size_t plan_bytes = 0;
+  for (auto _ : state) {
+    const std::vector<Segment> segs = SplineSegments(*r.spline);
+    segments = segs.size();
+    const Plan plan = Plan::Build(0, 0, 0, segs);
+    plan_bytes = plan.HeapBytes();
+    benchmark::DoNotOptimize(plan.EndSteps());
+  }
+  state.counters["segments"] = static_cast<double>(segments);
+  state.counters["plan_bytes"] = static_cast<double>(plan_bytes);
+}
+BENCHMARK(BM_StackshotSplineFit)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace moco::sim
