@@ -69,9 +69,10 @@ const std::vector<CommandSpec>& Specs() {
        R"({"cmd":"cut_link","ms":2000})"},
       {"faults",
        "replace the link's fault injection (\"off\" for none); keys seed, drop, corrupt, dup, "
-       "delay, delay_ms, dir=to-device|to-host|both",
-       {{"config", "fault list such as \"seed=42,drop=0.01,dir=to-host\", or \"off\" (required)"}},
-       R"({"cmd":"faults","config":"seed=42,drop=0.01,dir=to-host"})"},
+       "delay (rates 0..1), delay_ms, and dir=to-device|to-host|both, which applies to the "
+       "rates after it (default both)",
+       {{"config", "fault list such as \"seed=42,dir=to-host,drop=0.01\", or \"off\" (required)"}},
+       R"({"cmd":"faults","config":"seed=42,dir=to-host,drop=0.01"})"},
       {"state",
        "the device's state with its rig, GIO, link statistics and the scheduler time",
        {},
@@ -327,6 +328,23 @@ std::optional<FaultsCommand> ParseFaults(Fields& f) {
   if (c.spec == "off" || c.spec.empty()) {
     c.spec = "off";
     return c;
+  }
+  // "dir=" applies to the rates after it, so a trailing one is a rate given
+  // on the wrong side, not a no-op the user meant.
+  std::string_view last_item;
+  for (size_t pos = 0; pos <= c.spec.size();) {
+    size_t comma = c.spec.find(',', pos);
+    if (comma == std::string::npos) comma = c.spec.size();
+    std::string_view item = std::string_view(c.spec).substr(pos, comma - pos);
+    while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
+    if (!item.empty()) last_item = item;
+    pos = comma + 1;
+  }
+  if (last_item.rfind("dir=", 0) == 0) {
+    f.Fail("config",
+           "ends with a \"dir=\" that applies to no rate (dir= applies to the rates "
+           "after it): move it before them, e.g. \"seed=42,dir=to-host,drop=0.01\"");
+    return std::nullopt;
   }
   auto parsed = transport::ParseFaultConfig(c.spec);
   if (auto* err = std::get_if<std::string>(&parsed)) {

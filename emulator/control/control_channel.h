@@ -60,7 +60,7 @@ struct PowerCycleCommand {
 struct CutLinkCommand {
   int64_t ms = 0;
 };
-// {"cmd":"faults","config":"seed=42,drop=0.01,dir=to-host"} or {"config":"off"}
+// {"cmd":"faults","config":"seed=42,dir=to-host,drop=0.01"} or {"config":"off"}
 struct FaultsCommand {
   std::string spec;  // as given ("off" for none)
   transport::FaultConfig config;
