@@ -375,7 +375,23 @@ json ErrorReply(std::string message, const json& id = nullptr) {
   return r;
 }
 
-std::string Dump(const json& j) { return j.dump(-1, ' ', false, json::error_handler_t::replace); }
+// A reply as one line with "ok" first, so a reader sees the outcome at once
+// (the other keys follow in name order).
+std::string Dump(const json& reply) {
+  const auto dump = [](const json& j) {
+    return j.dump(-1, ' ', false, json::error_handler_t::replace);
+  };
+  if (!reply.is_object() || !reply.contains("ok")) return dump(reply);
+  json rest = reply;
+  rest.erase("ok");
+  std::string out = "{\"ok\":" + dump(reply["ok"]);
+  const std::string tail = dump(rest);  // "{}" or "{...}"
+  if (tail.size() > 2)
+    out += "," + tail.substr(1);
+  else
+    out += "}";
+  return out;
+}
 
 json CountsJson(const transport::FaultCounts& c) {
   return {{"bytes_in", c.bytes_in},
@@ -884,6 +900,11 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
     } catch (const json::parse_error& e) {
       return Dump(ErrorReply("malformed JSON at byte " + std::to_string(e.byte) +
                              ": send one JSON object per line, e.g. {\"cmd\":\"state\"}"));
+    } catch (const json::exception&) {
+      // A number beyond the range of a double (1e400).
+      return Dump(ErrorReply(
+          "malformed JSON: a number is out of range; send one JSON object per line, e.g. "
+          "{\"cmd\":\"state\"}"));
     }
     json id = nullptr;
     if (request.is_object()) {

@@ -324,6 +324,7 @@ TEST_F(ControlChannelTest, BadRequestsGetErrorsNamingTheProblemAndTheFix) {
       {"   ", {"empty request"}},
       {"{", {"malformed JSON at byte"}},
       {"estop", {"malformed JSON"}},
+      {R"({"cmd":"power_cycle","off_ms":1e400})", {"malformed JSON", "out of range"}},
       {"[1,2]", {"must be a JSON object", "an array"}},
       {"{}", {"missing field \"cmd\"", "estop, limit"}},
       {R"({"cmd":5})", {"\"cmd\" must be a command name string", "an integer"}},

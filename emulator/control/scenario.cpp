@@ -95,6 +95,8 @@ Scenario Scenario::Parse(std::string_view text, std::string where) {
     throw ScenarioError(where + ": malformed JSON at " +
                         LineColumn(text, e.byte > 0 ? e.byte - 1 : 0) +
                         ": write a JSON object such as " + kFormatExample);
+  } catch (const json::exception&) {
+    throw ScenarioError(where + ": malformed JSON: a number is out of range (beyond a double)");
   }
   if (!doc.is_object()) {
     throw ScenarioError(where + ": the scenario must be a JSON object, found " + TypeNameOf(doc) +
