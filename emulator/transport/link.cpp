@@ -331,6 +331,13 @@ void Link::PowerCycle(sim::TimeNs off_ns) {
   driver_.Kick();
 }
 
+void Link::SetFaults(const FaultConfig& config) {
+  if (stopped_) return;
+  faults_ = FaultInjector(config);
+  Event("link_fault", config.Any() ? "faults on" : "faults off");
+  Log(config.Any() ? "fault injection on" : "fault injection off");
+}
+
 void Link::Stop() {
   if (stopped_) return;
   stopped_ = true;

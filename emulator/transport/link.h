@@ -154,6 +154,10 @@ class Link final : public devices::ByteSink {
   bool cut_active() { return driver_.NowNs() < cut_until_ns_; }
   // Power-cycles the device: PowerOff() now, PowerOn() after off_ns.
   void PowerCycle(sim::TimeNs off_ns);
+  // Replaces the fault injection from now on (a config with no fault turns it
+  // off). Counts and generators restart from the new config's seed; bytes
+  // already delayed keep their release times. REQUIRES: !config.Validate().
+  void SetFaults(const FaultConfig& config);
 
   // Closes the stream, cancels the link's timers and stops serving, without
   // calling the device or the observer. Idempotent.

@@ -233,6 +233,29 @@ TEST_F(LinkTest, FaultsOnTheLinkAreAppliedPerDirection) {
   EXPECT_EQ(link_->faults().counts(Direction::kToHost).duplicated, 2u);
 }
 
+TEST_F(LinkTest, SetFaultsChangesTheFaultsFromNowOnAndOffAgain) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  device_->Send("a");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "a"; }));
+  FaultConfig dup;
+  dup.to_host.duplicate_rate = 1.0;
+  link_->SetFaults(dup);
+  EXPECT_TRUE(link_->faults().enabled());
+  device_->Send("b");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "abb"; }));
+  link_->SetFaults(FaultConfig{});
+  EXPECT_FALSE(link_->faults().enabled());
+  device_->Send("c");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "abbc"; }));
+  std::vector<std::string> events;
+  for (const auto& r : recorder_.log) {
+    if (r.what.rfind("E:link_fault", 0) == 0) events.push_back(r.what);
+  }
+  EXPECT_EQ(events,
+            (std::vector<std::string>{"E:link_fault faults on", "E:link_fault faults off"}));
+}
+
 TEST_F(LinkTest, HangUpDetachesAndReportsTheReason) {
   Build(Unpaced());
   auto end = std::make_shared<FakeEnd>();
