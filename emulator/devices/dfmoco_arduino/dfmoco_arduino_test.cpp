@@ -292,9 +292,9 @@ TEST(DfmocoArduino, StopMotorDeceleratesAndReportsChunkEnd) {
   Bench b;
   Settled(b);
   // pr 5000: accel 2500 steps/s^2. From t = 1 s (a chunk boundary), the motor
-  // reaches 5000 steps/s at t = 3 s, 5000 steps out.
-  Ask(b, "mm 1 100000");
-  b.RunUntil(3 * kSec);
+  // reaches 5000 steps/s at t = 3 s, 5000 steps out, and cruises.
+  b.Line("mm 1 100000");
+  b.RunUntil(3010 * kMs);
   b.TakeLines();
   b.Line("sm 1");
   b.RunFor(5 * kMs);
@@ -304,15 +304,15 @@ TEST(DfmocoArduino, StopMotorDeceleratesAndReportsChunkEnd) {
   EXPECT_EQ(replies[0], "sm 1");
   ASSERT_EQ(replies[1].rfind("mp 1 ", 0), 0u) << replies[1];
   EXPECT_NEAR(std::stod(replies[1].substr(5)), 5250, 1.0);
-  // Decelerates over 2 s and 5000 more steps, not at once.
+  // Then it decelerates over 2 s and 5000 more steps, not at once.
   const int64_t at_stop = b.dev.rig()->motor(1).Position();
   b.RunUntil(3500 * kMs);
   EXPECT_GT(b.dev.rig()->motor(1).Position(), at_stop + 2000);
-  b.RunUntil(4900 * kMs);
+  b.RunUntil(4950 * kMs);
   EXPECT_TRUE(b.dev.MotorMoving(1));
-  b.RunUntil(5200 * kMs);
+  b.RunUntil(5250 * kMs);  // at rest within a chunk or two of 5.05 s
   EXPECT_FALSE(b.dev.MotorMoving(1));
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10000, 2.0);
+  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10250, 2.0);
 }
 
 TEST(DfmocoArduino, StopOnAMotorAtRest) {
@@ -324,17 +324,19 @@ TEST(DfmocoArduino, StopOnAMotorAtRest) {
 TEST(DfmocoArduino, StopAllDeceleratesEveryMotor) {
   Bench b;
   Settled(b);
-  Ask(b, "mm 1 100000");
-  Ask(b, "mm 3 -100000");
-  b.RunUntil(3 * kSec);
+  b.Line("mm 1 100000");
+  b.Line("mm 3 -100000");
+  b.RunUntil(3010 * kMs);  // both cruise at 5000 steps/s, 5000 steps out
   b.TakeLines();
-  EXPECT_EQ(Ask(b, "sa"), Texts{"sa"});
+  EXPECT_EQ(Ask(b, "sa", 0), Texts{"sa"});
   EXPECT_TRUE(b.dev.MotorMoving(1));
   EXPECT_TRUE(b.dev.MotorMoving(3));
   b.RunUntil(6 * kSec);
+  b.TakeLines();
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"});
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10000, 2.0);
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(3).Position()), -10000, 2.0);
+  // The chunk in progress runs out (250 steps), then 5000 steps of braking.
+  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10250, 2.0);
+  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(3).Position()), -10250, 2.0);
 }
 
 TEST(DfmocoArduino, PulseRateIsClampedTo100Through20000) {
@@ -353,8 +355,8 @@ TEST(DfmocoArduino, PulseRateSetsSpeedAndHalfAsMuchAcceleration) {
   Settled(b);
   // pr 1000: 1000 steps/s, 500 steps/s^2. 4000 steps: 2 s up (1000 steps),
   // 2 s cruise (2000 steps), 2 s down: 6 s from the chunk boundary at 1 s.
-  Ask(b, "pr 1 1000");
-  Ask(b, "mm 1 4000");
+  b.Line("pr 1 1000");
+  b.Line("mm 1 4000");
   b.RunUntil(2 * kSec);
   EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 250, 2.0);  // 500/2 * 1^2
   b.RunUntil(5 * kSec);
@@ -558,7 +560,7 @@ TEST(DfmocoArduino, ShortMoveGetsOneReportAfterItStops) {
   Bench b;
   Settled(b);
   b.RunUntil(1600 * kMs);  // just after a report tick
-  Ask(b, "mm 2 100", 0);
+  b.Line("mm 2 100");  // 100 steps take 2 * sqrt(100 / 2500) = 0.4 s
   b.RunUntil(5 * kSec);
   const std::vector<TimedLine> lines = b.TakeLines();
   ASSERT_EQ(lines.size(), 2u);
@@ -570,8 +572,8 @@ TEST(DfmocoArduino, ShortMoveGetsOneReportAfterItStops) {
 TEST(DfmocoArduino, EveryMovingMotorIsReported) {
   Bench b(Profile(DfmocoBoard::kMega, DfmocoFirmware::k2_0_0));
   Settled(b);
-  Ask(b, "mm 2 5000", 0);
-  Ask(b, "mm 8 -5000", 0);
+  b.Line("mm 2 5000");
+  b.Line("mm 8 -5000");
   b.RunUntil(1600 * kMs);
   const std::vector<TimedLine> lines = b.TakeLines();
   ASSERT_EQ(lines.size(), 4u);
@@ -658,7 +660,7 @@ TEST(DfmocoArduino, MpTextIsTakenWhenTransmitted) {
   for (int i = 0; i < 14; ++i) burst += "ms\r\n";
   burst += "mm 1 1000\r\nmp 1\r\n";
   b.Host(burst);
-  b.RunFor(kSec);
+  b.RunFor(100 * kMs);  // before the first periodic report
   const std::vector<TimedLine> lines = b.TakeLines();
   ASSERT_EQ(lines.size(), 16u);
   EXPECT_EQ(lines[14].text, "mm 1 1000");
@@ -681,7 +683,7 @@ TEST(DfmocoArduino, GoMotionPrepositionsThenRunsWithOneSecondRamps) {
   EXPECT_EQ(b.dev.go_motion_state(), DfmocoArduino::GoMotionState::kArmed);
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 1000"}) << "pre-positioning";
   EXPECT_EQ(Ask(b, "go"), Texts{"parse error"}) << "refused while moving";
-  b.RunUntil(3 * kSec);
+  b.RunUntil(2900 * kMs);
   b.TakeLines();
   EXPECT_EQ(Ask(b, "ms", 0), Texts{"ms 0000"});
   EXPECT_EQ(b.dev.rig()->motor(1).Position(), 1000);
@@ -690,7 +692,8 @@ TEST(DfmocoArduino, GoMotionPrepositionsThenRunsWithOneSecondRamps) {
   const TimeNs t0 = 3 * kSec + 25'000;
   EXPECT_EQ(b.dev.go_motion_state(), DfmocoArduino::GoMotionState::kRunning);
   const sim::StepperMotor& m = b.dev.rig()->motor(1);
-  EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 500 * kMs)), 1000 + 250, 1.0);
+  // Half-way up the ramp: 1000 + (1000 steps/s / 1 s) / 2 * (0.5 s)^2 = 1125.
+  EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 500 * kMs)), 1125, 1.0);
   EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + kSec)), 1500, 1.0) << "exposure opens";
   EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 1500 * kMs)), 2000, 1.0) << "p1 mid-way";
   EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 2 * kSec)), 2500, 1.0) << "exposure ends";
@@ -711,9 +714,10 @@ TEST(DfmocoArduino, GoMotionPrepositionsThenRunsWithOneSecondRamps) {
 TEST(DfmocoArduino, GoMotionReportsPositionsOnItsOwnChunkClock) {
   Bench b;
   Settled(b);
-  Ask(b, "bf 1000 500 1 1000 2000 3000", 3 * kSec);
+  Ask(b, "bf 1000 500 1 1000 2000 3000", 0);
   b.RunUntil(3 * kSec + 10'000);
-  Ask(b, "go", 0);
+  b.TakeLines();
+  EXPECT_EQ(Ask(b, "go", 0), Texts{"go"});
   const TimeNs t0 = 3 * kSec + 25'000;
   b.RunUntil(3700 * kMs);
   const std::vector<TimedLine> lines = b.TakeLines();
@@ -765,6 +769,7 @@ TEST_P(DfmocoDialects, TooFastBlurIsRefusedFrom131) {
   }
   // A feasible move is accepted after a refusal.
   b.RunFor(30 * kSec);
+  b.TakeLines();
   EXPECT_EQ(Ask(b, "bf 1000 500 2 0 10 20"), Texts{"bf 1000"});
 }
 
