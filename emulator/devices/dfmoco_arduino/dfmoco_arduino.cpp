@@ -243,47 +243,46 @@ void DfmocoArduino::Handle(const dfmoco::HostCommand& command) {
   }
   const int m = addressed.value_or(1);
   const auto idx = static_cast<int>(m - 1);
-  std::visit(
-      wire::Overloaded{
-          [&](const dfmoco::Hello&) { Send(Msg::kHi); },
-          [&](const dfmoco::MotorStatusQuery&) { Send(Msg::kMs); },
-          [&](const dfmoco::MoveMotor& c) { HandleMove(m, c.position_steps); },
-          [&](const dfmoco::PositionQuery&) { Send(Msg::kMp, idx); },
-          [&](const dfmoco::PositionQueryAll&) { SendDirect(dfmoco::ParseErrorReply{}); },
-          [&](const dfmoco::StopMotor&) {
-            LeaveGoMotion(m);
-            Motor(m).Stop();
-            Send(Msg::kSm, idx);
-            Send(Msg::kMp, idx);
-          },
-          [&](const dfmoco::StopAll&) {
-            for (int i = 1; i <= rig_.motor_count(); ++i) {
-              LeaveGoMotion(i);
-              Motor(i).Stop();
-            }
-            Send(Msg::kSa);
-          },
-          [&](const dfmoco::JogMotor& c) { HandleJog(c); },
-          [&](const dfmoco::InchMotor& c) { HandleInch(m, c.destination_steps); },
-          [&](const dfmoco::SetPulseRate& c) {
-            SetPulseRate(m, c.rate_steps_per_s);
-            Send(Msg::kPr, idx);
-          },
-          [&](const dfmoco::ZeroMotor&) {
-            SetPosition(m, 0);
-            Send(Msg::kMp, idx);
-            // The second `mp m 0` comes with the next periodic report (FACTS: sent twice).
-            motors_[Index(m)].report_pending = true;
-          },
-          [&](const dfmoco::NewPosition& c) {
-            SetPosition(m, c.position_steps);
-            Send(Msg::kMp, idx);  // FACTS: `mp`, not the protocol text's `np`
-          },
-          [&](const dfmoco::BlurFrame& c) { HandleBlur(c); },
-          [&](const dfmoco::Go&) { HandleGo(); },
-          [&](const dfmoco::UnknownCommand&) {},  // no reply at all (FACTS)
-      },
-      command);
+  std::visit(wire::Overloaded{
+                 [&](const dfmoco::Hello&) { Send(Msg::kHi); },
+                 [&](const dfmoco::MotorStatusQuery&) { Send(Msg::kMs); },
+                 [&](const dfmoco::MoveMotor& c) { HandleMove(m, c.position_steps); },
+                 [&](const dfmoco::PositionQuery&) { Send(Msg::kMp, idx); },
+                 [&](const dfmoco::PositionQueryAll&) { SendDirect(dfmoco::ParseErrorReply{}); },
+                 [&](const dfmoco::StopMotor&) {
+                   LeaveGoMotion(m);
+                   Motor(m).Stop();
+                   Send(Msg::kSm, idx);
+                   Send(Msg::kMp, idx);
+                 },
+                 [&](const dfmoco::StopAll&) {
+                   for (int i = 1; i <= rig_.motor_count(); ++i) {
+                     LeaveGoMotion(i);
+                     Motor(i).Stop();
+                   }
+                   Send(Msg::kSa);
+                 },
+                 [&](const dfmoco::JogMotor& c) { HandleJog(c); },
+                 [&](const dfmoco::InchMotor& c) { HandleInch(m, c.destination_steps); },
+                 [&](const dfmoco::SetPulseRate& c) {
+                   SetPulseRate(m, c.rate_steps_per_s);
+                   Send(Msg::kPr, idx);
+                 },
+                 [&](const dfmoco::ZeroMotor&) {
+                   SetPosition(m, 0);
+                   Send(Msg::kMp, idx);
+                   // The second `mp m 0` comes with the next periodic report (FACTS: sent twice).
+                   motors_[Index(m)].report_pending = true;
+                 },
+                 [&](const dfmoco::NewPosition& c) {
+                   SetPosition(m, c.position_steps);
+                   Send(Msg::kMp, idx);  // FACTS: `mp`, not the protocol text's `np`
+                 },
+                 [&](const dfmoco::BlurFrame& c) { HandleBlur(c); },
+                 [&](const dfmoco::Go&) { HandleGo(); },
+                 [&](const dfmoco::UnknownCommand&) {},  // no reply at all (FACTS)
+             },
+             command);
 }
 
 void DfmocoArduino::SetPulseRate(int motor, int32_t rate_steps_per_s) {
@@ -359,8 +358,8 @@ void DfmocoArduino::HandleJog(const dfmoco::JogMotor& jog) {
       cruise_s = horizon_s - accel_s;
     }
     const double v_reached = v0 + accel * accel_s;
-    const double distance = v0 * accel_s + 0.5 * accel * accel_s * accel_s +
-                            v_reached * cruise_s + v_reached * v_reached / (2 * brake);
+    const double distance = v0 * accel_s + 0.5 * accel * accel_s * accel_s + v_reached * cruise_s +
+                            v_reached * v_reached / (2 * brake);
     int64_t target = pos + dir * static_cast<int64_t>(std::min(distance, 4.3e9));
     if ((dir > 0 && target > jog.destination_steps) ||
         (dir < 0 && target < jog.destination_steps)) {
@@ -490,7 +489,8 @@ void DfmocoArduino::Transmit(const std::string& bytes) {
   }
   burst_bytes_ += bytes.size();
   const auto bps = static_cast<uint64_t>(Line().BytesPerSecond());
-  const uint64_t burst_ns = (burst_bytes_ * static_cast<uint64_t>(sim::kNsPerSecond) + bps - 1) / bps;
+  const uint64_t burst_ns =
+      (burst_bytes_ * static_cast<uint64_t>(sim::kNsPerSecond) + bps - 1) / bps;
   uart_free_ns_ = burst_anchor_ns_ + static_cast<TimeNs>(burst_ns);
   sink_.Write(wire::ByteView(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()));
 }

@@ -111,11 +111,11 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   };
   struct MotorState {
     int32_t pulse_rate_steps_per_s = dfmoco::kDefaultPulseRate;
-    bool report_pending = false;                // stopped or zeroed since the last tick
-    sim::TimeNs last_report_ns = -1;            // time of the last periodic report
-    sim::TimeNs chunk_phase_ns = 0;             // chunk clock of the motion in progress
-    std::optional<BlurMove> blur;               // set by the last accepted `bf`
-    bool in_go_motion = false;                  // running the blur move
+    bool report_pending = false;      // stopped or zeroed since the last tick
+    sim::TimeNs last_report_ns = -1;  // time of the last periodic report
+    sim::TimeNs chunk_phase_ns = 0;   // chunk clock of the motion in progress
+    std::optional<BlurMove> blur;     // set by the last accepted `bf`
+    bool in_go_motion = false;        // running the blur move
   };
 
   static size_t Index(int motor) { return static_cast<size_t>(motor - 1); }
@@ -178,8 +178,8 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   size_t ring_head_ = 0;  // next to transmit
   size_t ring_count_ = 0;
   uint64_t dropped_ = 0;
-  sim::TimeNs uart_free_ns_ = 0;      // when the bytes handed to the UART are all out
-  sim::TimeNs burst_anchor_ns_ = 0;   // start of the current back-to-back burst
+  sim::TimeNs uart_free_ns_ = 0;     // when the bytes handed to the UART are all out
+  sim::TimeNs burst_anchor_ns_ = 0;  // start of the current back-to-back burst
   uint64_t burst_bytes_ = 0;
 
   sim::Scheduler::TimerId boot_timer_ = sim::Scheduler::kNoTimer;

@@ -51,7 +51,9 @@ Texts Ask(Bench& b, std::string_view line, TimeNs window = 20 * kMs) {
 }
 
 // Byte-time arithmetic of a 57600 8N1 line: 5760 bytes per second.
-TimeNs BytesTime(uint64_t bytes) { return static_cast<TimeNs>((bytes * 1'000'000'000 + 5759) / 5760); }
+TimeNs BytesTime(uint64_t bytes) {
+  return static_cast<TimeNs>((bytes * 1'000'000'000 + 5759) / 5760);
+}
 
 // ---------------------------------------------------------------------------------------
 // Boot and identity
@@ -210,8 +212,8 @@ TEST(DfmocoArduino, EveryLineOutEndsInCrLf) {
 TEST(DfmocoArduino, UnknownCommandsGetNoReply) {
   Bench b;
   Settled(b);
-  for (const char* line : {"xx", "xx 1 2", "", "m", "MS", "MM 1 2", " mm 1 2", "hello",
-                           "mz 1", "ms\t", "\x01\x02"}) {
+  for (const char* line :
+       {"xx", "xx 1 2", "", "m", "MS", "MM 1 2", " mm 1 2", "hello", "mz 1", "ms\t", "\x01\x02"}) {
     EXPECT_EQ(Ask(b, line), Texts{}) << "line \"" << line << "\"";
   }
 }
@@ -500,12 +502,39 @@ TEST(DfmocoArduino, InchWhileMovingStops) {
 TEST(DfmocoArduino, ParseErrors) {
   Bench b;
   Settled(b);
-  for (const char* line :
-       {"mm 1", "mm 1 2 3", "mm 5 10", "mm 0 10", "mm -1 10", "mp", "mp 1 2", "mp 5", "ms 1",
-        "hi 1", "sa 1", "sm", "sm 0", "pr 1", "pr 9 100", "zm", "zm 5", "np 1", "np 1 x",
-        "mm 1 99999999999", "mm 1 1.5", "im 1", "im 5 1", "jm 1", "jm 1 5 10001", "jm 1 5 -1",
-        "go", "go 1", "bf 1000 500", "bf 1000 500 1 0 0", "bf 1000 500 5 0 0 0",
-        "bf 0 500 1 0 0 0", "bf -5 500 1 0 0 0"}) {
+  for (const char* line : {"mm 1",
+                           "mm 1 2 3",
+                           "mm 5 10",
+                           "mm 0 10",
+                           "mm -1 10",
+                           "mp",
+                           "mp 1 2",
+                           "mp 5",
+                           "ms 1",
+                           "hi 1",
+                           "sa 1",
+                           "sm",
+                           "sm 0",
+                           "pr 1",
+                           "pr 9 100",
+                           "zm",
+                           "zm 5",
+                           "np 1",
+                           "np 1 x",
+                           "mm 1 99999999999",
+                           "mm 1 1.5",
+                           "im 1",
+                           "im 5 1",
+                           "jm 1",
+                           "jm 1 5 10001",
+                           "jm 1 5 -1",
+                           "go",
+                           "go 1",
+                           "bf 1000 500",
+                           "bf 1000 500 1 0 0",
+                           "bf 1000 500 5 0 0 0",
+                           "bf 0 500 1 0 0 0",
+                           "bf -5 500 1 0 0 0"}) {
     EXPECT_EQ(Ask(b, line), Texts{"parse error"}) << "line \"" << line << "\"";
   }
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"}) << "nothing moved";
@@ -544,7 +573,7 @@ TEST(DfmocoArduino, MpEverySecondWhileMovingAndOnceAfterTheStop) {
   //   tau 4.55: 15000 + 5000 (tau - 4) - 1250 (tau - 4)^2 = 17371.9
   //   tau 5.55: 19746.9, and after the stop at 7 s: 20000 at 7.5 s.
   const std::vector<std::pair<TimeNs, double>> want = {
-      {1500 * kMs, 378.1},   {2500 * kMs, 3003.1},  {3500 * kMs, 7750},   {4500 * kMs, 12750},
+      {1500 * kMs, 378.1},   {2500 * kMs, 3003.1},  {3500 * kMs, 7750}, {4500 * kMs, 12750},
       {5500 * kMs, 17371.9}, {6500 * kMs, 19746.9}, {7500 * kMs, 20000}};
   ASSERT_EQ(lines.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) {
@@ -560,7 +589,7 @@ TEST(DfmocoArduino, ShortMoveGetsOneReportAfterItStops) {
   Bench b;
   Settled(b);
   b.RunUntil(1600 * kMs);  // just after a report tick
-  b.Line("mm 2 100");  // 100 steps take 2 * sqrt(100 / 2500) = 0.4 s
+  b.Line("mm 2 100");      // 100 steps take 2 * sqrt(100 / 2500) = 0.4 s
   b.RunUntil(5 * kSec);
   const std::vector<TimedLine> lines = b.TakeLines();
   ASSERT_EQ(lines.size(), 2u);
@@ -698,8 +727,8 @@ TEST(DfmocoArduino, GoMotionPrepositionsThenRunsWithOneSecondRamps) {
   EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 1500 * kMs)), 2000, 1.0) << "p1 mid-way";
   EXPECT_NEAR(static_cast<double>(m.PositionAt(t0 + 2 * kSec)), 2500, 1.0) << "exposure ends";
   // Constant speed through the exposure.
-  const double v = static_cast<double>(m.PositionAt(t0 + 1900 * kMs) -
-                                       m.PositionAt(t0 + 1100 * kMs)) / 0.8;
+  const double v =
+      static_cast<double>(m.PositionAt(t0 + 1900 * kMs) - m.PositionAt(t0 + 1100 * kMs)) / 0.8;
   EXPECT_NEAR(v, 1000, 3);
   EXPECT_EQ(m.CurrentPlan().EndNs(), t0 + 3 * kSec);
   b.RunUntil(t0 + 2950 * kMs);
@@ -755,8 +784,7 @@ TEST_P(DfmocoDialects, TooFastBlurIsRefusedFrom131) {
   Bench b(Profile(DfmocoBoard::kUno, GetParam()));
   Settled(b);
   // 2000 steps in 50 ms = 40000 steps/s, over the 20000 limit.
-  const bool refuses =
-      GetParam() == DfmocoFirmware::k1_3_1 || GetParam() == DfmocoFirmware::k2_0_0;
+  const bool refuses = GetParam() == DfmocoFirmware::k1_3_1 || GetParam() == DfmocoFirmware::k2_0_0;
   EXPECT_EQ(Ask(b, "bf 100 1000 1 0 2000 4000"), Texts{refuses ? "bf -1" : "bf 1000"});
   if (refuses) {
     EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"}) << "nothing moves";
@@ -815,10 +843,9 @@ rc::Gen<std::string> HostLine(int motors) {
                      return std::get<0>(t) + " " + std::to_string(std::get<1>(t)) + " " +
                             std::to_string(std::get<2>(t));
                    }),
-      rc::gen::map(rc::gen::tuple(element<std::string>("mp", "sm", "zm"), motor),
-                   [](const auto& t) {
-                     return std::get<0>(t) + " " + std::to_string(std::get<1>(t));
-                   }),
+      rc::gen::map(
+          rc::gen::tuple(element<std::string>("mp", "sm", "zm"), motor),
+          [](const auto& t) { return std::get<0>(t) + " " + std::to_string(std::get<1>(t)); }),
       rc::gen::map(rc::gen::tuple(inRange(1, 3000), inRange(0, 1001), motor, pos, pos, pos),
                    [](const auto& t) {
                      const auto& [e, bl, m, p0, p1, p2] = t;
@@ -862,8 +889,8 @@ RC_GTEST_PROP(DfmocoArduinoProps, AnyChunkingGivesTheSameReplies, ()) {
   const auto lines = *rc::gen::container<std::vector<std::string>>(HostLine(4));
   std::string bytes;
   for (const std::string& l : lines) bytes += l + "\r\n";
-  const auto cuts = *rc::gen::container<std::vector<size_t>>(
-      rc::gen::inRange<size_t>(0, bytes.size() + 1));
+  const auto cuts =
+      *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(0, bytes.size() + 1));
 
   Bench whole;
   Settled(whole);
@@ -951,8 +978,8 @@ RC_GTEST_PROP(DfmocoArduinoProps, EveryAnswerableRequestIsAnswered, ()) {
         break;
       default: {
         // bf at rest: prepared or (from 1.3.1) refused; while moving: parse error.
-        const bool moving = b.dev.State()["motors"].dump().find("\"moving\":true") !=
-                            std::string::npos;
+        const bool moving =
+            b.dev.State()["motors"].dump().find("\"moving\":true") != std::string::npos;
         line = "bf 500 500 " + ms + " 0 " + ps + " 0";
         accept = moving ? std::vector<std::string>{"parse error"}
                         : std::vector<std::string>{"bf 1000", "bf -1"};
@@ -982,8 +1009,8 @@ RC_GTEST_PROP(DfmocoArduinoProps, GarbageGetsOnlyLegalLines, ()) {
   Settled(b);
   const auto token = rc::gen::oneOf(
       rc::gen::element<std::string>("\r", "\n", "\r\n", " ", "-", "mm", "mp", "ms", "np", "zm",
-                                    "sm", "sa", "jm", "im", "pr", "bf", "go", "hi", "1", "2",
-                                    "9", "0", "45", "500", "1000", "*"),
+                                    "sm", "sa", "jm", "im", "pr", "bf", "go", "hi", "1", "2", "9",
+                                    "0", "45", "500", "1000", "*"),
       rc::gen::map(rc::gen::arbitrary<char>(), [](char c) { return std::string(1, c); }));
   const auto chunks = *rc::gen::container<std::vector<std::vector<std::string>>>(
       rc::gen::container<std::vector<std::string>>(token));

@@ -65,9 +65,9 @@ DfmocoProfile DfmocoProfile::FromJson(const nlohmann::json& object, const std::s
     r.Fail("firmware", "is \"" + firmware + "\", not a modelled sketch version",
            "write one of \"1.2.7\", \"1.3.0\", \"1.3.1\", \"2.0.0\"");
   }
-  p.pulse_rate_steps_per_s = static_cast<int32_t>(r.GetInt(
-      "pulse_rate_steps_per_s", dfmoco::kDefaultPulseRate, dfmoco::kMinPulseRate,
-      dfmoco::kMaxPulseRate));
+  p.pulse_rate_steps_per_s =
+      static_cast<int32_t>(r.GetInt("pulse_rate_steps_per_s", dfmoco::kDefaultPulseRate,
+                                    dfmoco::kMinPulseRate, dfmoco::kMaxPulseRate));
   p.boot_delay_ms = r.GetInt("boot_delay_ms", 0, 0, 60'000);
   p.reset_on_open = r.GetBool("reset_on_open", false);
   p.name = r.GetString("name", "", 200);

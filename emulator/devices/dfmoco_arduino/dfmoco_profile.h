@@ -24,7 +24,7 @@ enum class DfmocoBoard : uint8_t {
 // reply, the `jm` velocity argument and the `bf -1` refusal).
 enum class DfmocoFirmware : uint8_t { k1_2_7, k1_3_0, k1_3_1, k2_0_0 };
 
-std::string_view BoardName(DfmocoBoard board);            // "uno", "mega"
+std::string_view BoardName(DfmocoBoard board);              // "uno", "mega"
 std::string_view FirmwareVersion(DfmocoFirmware firmware);  // "1.2.7", ...
 
 struct DfmocoProfile {

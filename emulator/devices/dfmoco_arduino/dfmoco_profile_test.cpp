@@ -42,8 +42,7 @@ TEST(DfmocoProfile, DefaultsAreAnUnoWithSketch200) {
 
 TEST(DfmocoProfile, BoardsAndFirmwares) {
   const DfmocoProfile mega = DfmocoProfile::FromJson(
-      json::parse(R"({"board": "mega", "firmware": "1.2.7", "pulse_rate_steps_per_s": 800})"),
-      "p");
+      json::parse(R"({"board": "mega", "firmware": "1.2.7", "pulse_rate_steps_per_s": 800})"), "p");
   EXPECT_EQ(mega.MotorCount(), 8);
   EXPECT_EQ(mega.Dialect(), dfmoco::Dfmoco1("1.2.7", 8));
   EXPECT_EQ(mega.pulse_rate_steps_per_s, 800);
@@ -68,8 +67,9 @@ TEST(DfmocoProfile, ToJsonReadsBack) {
 }
 
 TEST(DfmocoProfile, ErrorsNameTheFieldAndTheFix) {
-  const std::string board =
-      ErrorOf([] { DfmocoProfile::FromJson(json{{"board", "nano"}}, "profile x.json"); });
+  const std::string board = ErrorOf([] {
+    DfmocoProfile::FromJson(json{{"board", "nano"}}, "profile x.json");
+  });
   EXPECT_NE(board.find("profile x.json"), std::string::npos) << board;
   EXPECT_NE(board.find("\"board\""), std::string::npos) << board;
   EXPECT_NE(board.find("\"uno\""), std::string::npos) << board;
@@ -78,8 +78,9 @@ TEST(DfmocoProfile, ErrorsNameTheFieldAndTheFix) {
   EXPECT_NE(fw.find("\"firmware\""), std::string::npos) << fw;
   EXPECT_NE(fw.find("\"1.3.1\""), std::string::npos) << fw;
 
-  const std::string rate =
-      ErrorOf([] { DfmocoProfile::FromJson(json{{"pulse_rate_steps_per_s", 30000}}, "p"); });
+  const std::string rate = ErrorOf([] {
+    DfmocoProfile::FromJson(json{{"pulse_rate_steps_per_s", 30000}}, "p");
+  });
   EXPECT_NE(rate.find("pulse_rate_steps_per_s"), std::string::npos) << rate;
   EXPECT_NE(rate.find("100..20000"), std::string::npos) << rate;
 
@@ -87,12 +88,14 @@ TEST(DfmocoProfile, ErrorsNameTheFieldAndTheFix) {
   EXPECT_NE(typo.find("\"borad\""), std::string::npos) << typo;
   EXPECT_NE(typo.find("spelling"), std::string::npos) << typo;
 
-  const std::string device =
-      ErrorOf([] { DfmocoProfile::FromJson(json{{"device", "dmc16"}}, "p"); });
+  const std::string device = ErrorOf([] {
+    DfmocoProfile::FromJson(json{{"device", "dmc16"}}, "p");
+  });
   EXPECT_NE(device.find("\"device\""), std::string::npos) << device;
 
-  const std::string wrong_type =
-      ErrorOf([] { DfmocoProfile::FromJson(json{{"reset_on_open", "yes"}}, "p"); });
+  const std::string wrong_type = ErrorOf([] {
+    DfmocoProfile::FromJson(json{{"reset_on_open", "yes"}}, "p");
+  });
   EXPECT_NE(wrong_type.find("true or false"), std::string::npos) << wrong_type;
 }
 
@@ -100,8 +103,7 @@ TEST(DfmocoProfile, LoadsTheFixtures) {
   const DfmocoProfile uno = LoadDfmocoProfile(SourceDir() / "fixtures/profiles/dfmoco-uno.json");
   EXPECT_EQ(uno.MotorCount(), 4);
   EXPECT_EQ(uno.Dialect(), dfmoco::Dfmoco2(4));
-  const DfmocoProfile mega =
-      LoadDfmocoProfile(SourceDir() / "fixtures/profiles/dfmoco-mega.json");
+  const DfmocoProfile mega = LoadDfmocoProfile(SourceDir() / "fixtures/profiles/dfmoco-mega.json");
   EXPECT_EQ(mega.MotorCount(), 8);
   EXPECT_EQ(mega.Dialect(), dfmoco::Dfmoco2(8));
 }

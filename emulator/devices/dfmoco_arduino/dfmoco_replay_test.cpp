@@ -24,7 +24,8 @@ std::filesystem::path SourceDir() {
 std::string Text(const wire::Bytes& b) { return std::string(b.begin(), b.end()); }
 
 TEST(DfmocoReplay, UnoWorkflowMatchesByteForByte) {
-  const auto loaded = control::LoadSession(SourceDir() / "fixtures/sessions/dfmoco-uno-workflow.jsonl");
+  const auto loaded =
+      control::LoadSession(SourceDir() / "fixtures/sessions/dfmoco-uno-workflow.jsonl");
   ASSERT_TRUE(std::holds_alternative<control::Session>(loaded))
       << std::get<control::SessionError>(loaded).message;
   const control::Session& session = std::get<control::Session>(loaded);
@@ -48,8 +49,7 @@ TEST(DfmocoReplay, UnoWorkflowMatchesByteForByte) {
   ASSERT_EQ(b.sink.chunks.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) {
     EXPECT_EQ(b.sink.chunks[i].bytes, want[i].bytes) << "device chunk " << i;
-    EXPECT_EQ(b.sink.chunks[i].t_ns, want[i].t_ns) << "device chunk " << i << ": "
-                                                   << want[i].bytes;
+    EXPECT_EQ(b.sink.chunks[i].t_ns, want[i].t_ns) << "device chunk " << i << ": " << want[i].bytes;
   }
 }
 

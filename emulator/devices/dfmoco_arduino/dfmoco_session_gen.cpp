@@ -68,7 +68,8 @@ int main(int argc, char** argv) {
   try {
     const std::filesystem::path src = argv[1];
     const std::filesystem::path out_path =
-        argc > 2 ? std::filesystem::path(argv[2]) : src / "fixtures/sessions/dfmoco-uno-workflow.jsonl";
+        argc > 2 ? std::filesystem::path(argv[2])
+                 : src / "fixtures/sessions/dfmoco-uno-workflow.jsonl";
     const moco::devices::DfmocoProfile profile =
         moco::devices::LoadDfmocoProfile(src / "fixtures/profiles/dfmoco-uno.json");
 

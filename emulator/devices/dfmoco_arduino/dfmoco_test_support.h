@@ -49,8 +49,7 @@ struct Bench {
     if (power_on) dev.PowerOn();
   }
   void Host(std::string_view bytes) {
-    dev.OnHostBytes(
-        wire::ByteView(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()));
+    dev.OnHostBytes(wire::ByteView(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()));
   }
   // Sends `line` + "\r\n".
   void Line(std::string_view line) { Host(std::string(line) + "\r\n"); }

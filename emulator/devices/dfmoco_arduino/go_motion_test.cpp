@@ -63,8 +63,8 @@ RC_GTEST_PROP(PlanBlur, PositionIsContinuous, ()) {
   const auto p2 = *rc::gen::inRange(-100000, 100000);
   const BlurMove m = PlanBlur(exposure, blur, p0, p1, p2);
   const double e = m.exposure_s;
-  for (const double t : {kGoMotionRampS, kGoMotionRampS + e / 2, kGoMotionRampS + e,
-                         2 * kGoMotionRampS + e}) {
+  for (const double t :
+       {kGoMotionRampS, kGoMotionRampS + e / 2, kGoMotionRampS + e, 2 * kGoMotionRampS + e}) {
     const double tol = 1e-6 * (1 + m.MaxSpeed());
     RC_ASSERT(std::fabs(m.PositionAt(t - 1e-9) - m.PositionAt(t + 1e-9)) < tol);
   }
