@@ -55,6 +55,8 @@ TimeNs BytesTime(uint64_t bytes) {
   return static_cast<TimeNs>((bytes * 1'000'000'000 + 5759) / 5760);
 }
 
+class DfmocoDialects : public ::testing::TestWithParam<DfmocoFirmware> {};
+
 // ---------------------------------------------------------------------------------------
 // Boot and identity
 
@@ -442,8 +444,6 @@ TEST(DfmocoArduino, JogAgainstTheMotionStops) {
   EXPECT_GT(b.dev.rig()->motor(1).Position(), 0) << "stopped, did not reverse";
 }
 
-class DfmocoDialects : public ::testing::TestWithParam<DfmocoFirmware> {};
-
 TEST_P(DfmocoDialects, JogVelocityArgumentOnlyFromProtocol2) {
   Bench b(Profile(DfmocoBoard::kUno, GetParam()));
   Settled(b);
@@ -499,8 +499,8 @@ TEST(DfmocoArduino, InchWhileMovingStops) {
 // ---------------------------------------------------------------------------------------
 // Error replies
 
-TEST(DfmocoArduino, ParseErrors) {
-  Bench b;
+TEST_P(DfmocoDialects, ParseErrors) {
+  Bench b(Profile(DfmocoBoard::kUno, GetParam()));
   Settled(b);
   for (const char* line : {"mm 1",
                            "mm 1 2 3",
@@ -540,8 +540,8 @@ TEST(DfmocoArduino, ParseErrors) {
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"}) << "nothing moved";
 }
 
-TEST(DfmocoArduino, FortyArgumentsAreTooMany) {
-  Bench b;
+TEST_P(DfmocoDialects, FortyArgumentsAreTooMany) {
+  Bench b(Profile(DfmocoBoard::kUno, GetParam()));
   Settled(b);
   std::string forty = "bf";
   for (int i = 0; i < 40; ++i) forty += " 1";
