@@ -4,12 +4,17 @@
 
 #include <cinttypes>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <variant>
+#include <vector>
 
+#include "control/control_channel.h"
+#include "control/scenario.h"
 #include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
+#include "transport/control_socket.h"
 #include "transport/serve.h"
 #include "wire/transcript.h"
 
@@ -72,17 +77,61 @@ int Decode(const std::string& path, bool show_time, bool strict) {
   return strict && problems > 0 ? 1 : 0;
 }
 
-// Runs the emulator until Ctrl-C. Exit 0 on a clean stop, 1 when a recording
-// could not be completed, 2 when the devices cannot be set up (the message
-// names the device, the field and the fix).
+// Runs the emulator until Ctrl-C, with the control socket and the scenario
+// when asked for. Exit 0 on a clean stop, 1 when a recording could not be
+// completed, 2 when the devices cannot be set up (the message names the
+// device, the field and the fix).
 int Serve(moco::transport::EmulatorConfig config) {
+  using moco::control::ControlChannel;
+  using moco::control::ControlEvent;
   try {
     moco::transport::Emulator emulator(std::move(config));
-    emulator.Start();
-    if (!emulator.config().control_path.empty() || !emulator.config().scenario_path.empty()) {
-      // Wired in by the control channel (see docs/control.md).
+    ControlChannel channel(emulator.scheduler());
+    for (size_t i = 0; i < emulator.size(); ++i) {
+      channel.AddDevice(emulator.name(i), emulator.device(i), &emulator.server(i));
     }
-    std::fprintf(stderr, "mocosim: serving %zu device(s); Ctrl-C stops\n", emulator.size());
+    channel.SetActionListener([&](const ControlEvent& e) {
+      emulator.Log(moco::transport::LogLevel::kInfo, "control: " + e.SessionLine().dump());
+      // Link cuts and power cycles are recorded by the link itself.
+      const std::string cmd = e.request.value("cmd", "");
+      if (cmd == "power_cycle" || cmd == "cut_link") return;
+      std::string device = e.request.value("device", "");
+      if (device.empty() && emulator.size() == 1) device = emulator.name(0);
+      emulator.RecordEvent(device, e.ToSessionEntry());
+    });
+    const auto& cfg = emulator.config();
+    std::unique_ptr<moco::control::ScenarioRun> scenario_run;
+    if (!cfg.scenario_path.empty()) {
+      const auto scenario = moco::control::Scenario::Load(cfg.scenario_path);
+      // Times are from power-on (scheduler time 0, when the clock starts).
+      scenario_run = scenario.Schedule(channel, emulator.scheduler(), emulator.scheduler().Now());
+      emulator.Log(moco::transport::LogLevel::kInfo, "scenario " + cfg.scenario_path + ": " +
+                                                         std::to_string(scenario_run->remaining()) +
+                                                         " event(s)");
+    }
+    std::unique_ptr<moco::transport::ControlSocket> socket;
+    if (!cfg.control_path.empty()) {
+      moco::transport::ControlSocketOptions opts;
+      opts.log = [&emulator](std::string_view l) {
+        emulator.Log(moco::transport::LogLevel::kWarn, "control socket: " + std::string(l));
+      };
+      socket = std::make_unique<moco::transport::ControlSocket>(
+          emulator.driver(), cfg.control_path,
+          [&channel](std::string_view line) { return channel.Handle(line); }, opts);
+    }
+    moco::transport::EmulatorHooks hooks;
+    hooks.on_stopping = [&] {
+      if (scenario_run) scenario_run->Cancel();
+      if (socket) socket->Stop();
+    };
+    emulator.SetHooks(hooks);
+    emulator.Start();
+    if (socket) {
+      emulator.Log(moco::transport::LogLevel::kError,
+                   "control socket " + socket->path() + " (JSON lines; send {\"cmd\":\"help\"})");
+    }
+    emulator.Log(moco::transport::LogLevel::kWarn,
+                 "serving " + std::to_string(emulator.size()) + " device(s); Ctrl-C stops");
     return emulator.Run();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mocosim: %s\n", e.what());
@@ -112,39 +161,55 @@ int main(int argc, char** argv) {
                    "Exit with status 1 when the traffic has problems (bad checksums, "
                    "unparsable lines, skipped bytes)");
 
-  // --- one device: mocosim dmc16 --pty PATH | --tcp [HOST:]PORT ---
-  moco::transport::DeviceConfig one;
-  std::string pty_path, tcp_spec, log_level = "info", control_path, scenario_path, bind;
-  auto* dmc16 = app.add_subcommand(
-      "dmc16",
-      "Emulate a DMC-16 (DMC v2 binary protocol) on a PTY or a TCP port until Ctrl-C. "
-      "Example: mocosim dmc16 --pty /tmp/dmc16  (then point the host at /tmp/dmc16)");
-  auto* pty_opt = dmc16->add_option("--pty", pty_path,
-                                    "Create a PTY with a stable symlink at this path (mode 0600)");
-  auto* tcp_opt =
-      dmc16->add_option("--tcp", tcp_spec,
-                        "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any)");
-  pty_opt->excludes(tcp_opt);
-  dmc16
-      ->add_option("--profile", one.profile_path,
-                   "Device profile (JSON; default: built-in, same as fixtures/profiles/dmc16.json)")
-      ->check(CLI::ExistingFile);
-  dmc16->add_option("--record", one.record_path,
-                    "Record every byte in and out with its time and decoded message to this "
-                    "session file (.jsonl; written atomically on exit)");
-  dmc16->add_option("--control", control_path,
-                    "Serve the JSON-lines control socket at this path (e-stop, limits, inputs, "
-                    "power, faults, state; see docs/control.md)");
-  dmc16->add_option("--scenario", scenario_path, "Play this scenario file of timed events")
-      ->check(CLI::ExistingFile);
-  dmc16->add_option("--faults", one.faults,
-                    "Inject link faults, e.g. seed=42,drop=0.01,corrupt=0.001,dir=to-host");
-  dmc16->add_flag("--no-pacing", one.no_pacing,
-                  "Deliver bytes at once instead of at the profile's baud rate");
-  dmc16->add_option("--name", one.name, "Name in log lines and on the control socket");
-  dmc16
-      ->add_option("--log-level", log_level, "error, warn, info (default) or debug (every message)")
-      ->check(CLI::IsMember({"error", "warn", "info", "debug"}));
+  // --- one device: mocosim <model> --pty PATH | --tcp [HOST:]PORT ---
+  struct OneDevice {
+    CLI::App* cmd = nullptr;
+    moco::transport::DeviceConfig config;
+    std::string pty_path, tcp_spec, log_level = "info", control_path, scenario_path;
+  };
+  std::vector<std::unique_ptr<OneDevice>> one_device;
+  for (const auto& model : moco::devices::DeviceModels()) {
+    auto o = std::make_unique<OneDevice>();
+    const std::string name(model.name);
+    o->config.model = name;
+    o->cmd = app.add_subcommand(
+        name, "Emulate a " + std::string(model.description) +
+                  " on a PTY or a TCP port until Ctrl-C. Example: mocosim " + name +
+                  " --pty /tmp/" + name + "  (then point the host at /tmp/" + name + ")");
+    auto* pty_opt = o->cmd->add_option(
+        "--pty", o->pty_path, "Create a PTY with a stable symlink at this path (mode 0600)");
+    auto* tcp_opt = o->cmd->add_option(
+        "--tcp", o->tcp_spec,
+        "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
+    pty_opt->excludes(tcp_opt);
+    o->cmd
+        ->add_option("--profile", o->config.profile_path,
+                     "Device profile (JSON; default: built-in, as " +
+                         std::string(model.default_profile) + "; fields in docs/profiles.md)")
+        ->check(CLI::ExistingFile);
+    o->cmd->add_option("--record", o->config.record_path,
+                       "Record every byte in and out with its time and decoded message to this "
+                       "session file (.jsonl, docs/sessions.md; completed on exit)");
+    o->cmd->add_option("--control", o->control_path,
+                       "Serve the JSON-lines control socket at this path (e-stop, limits, "
+                       "inputs, power, faults, state; docs/control.md)");
+    o->cmd
+        ->add_option("--scenario", o->scenario_path,
+                     "Play this scenario file of timed control events (docs/control.md)")
+        ->check(CLI::ExistingFile);
+    o->cmd->add_option("--faults", o->config.faults,
+                       "Inject link faults, e.g. seed=42,dir=to-host,drop=0.01 (dir= applies "
+                       "to the rates after it)");
+    o->cmd->add_flag("--no-pacing", o->config.no_pacing,
+                     "Deliver bytes at once instead of at the profile's baud rate");
+    o->cmd->add_option("--name", o->config.name,
+                       "Name in log lines and on the control socket (default: " + name + ")");
+    o->cmd
+        ->add_option("--log-level", o->log_level,
+                     "error, warn, info (default) or debug (every message decoded)")
+        ->check(CLI::IsMember({"error", "warn", "info", "debug"}));
+    one_device.push_back(std::move(o));
+  }
 
   // --- several devices from a run file ---
   std::string run_path;
@@ -166,20 +231,22 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  if (dmc16->parsed()) {
-    if (pty_path.empty() && tcp_spec.empty()) {
+  for (auto& o : one_device) {
+    if (!o->cmd->parsed()) continue;
+    const std::string cmd = o->config.model;
+    if (o->pty_path.empty() && o->tcp_spec.empty()) {
       std::fprintf(stderr,
-                   "mocosim dmc16: say where to serve the device: --pty /tmp/dmc16 or "
-                   "--tcp 127.0.0.1:5000\n");
+                   "mocosim %s: say where to serve the device: --pty /tmp/%s or "
+                   "--tcp 127.0.0.1:5000\n",
+                   cmd.c_str(), cmd.c_str());
       return 2;
     }
-    one.model = "dmc16";
-    one.endpoint = pty_path.empty() ? "tcp:" + tcp_spec : "pty:" + pty_path;
+    o->config.endpoint = o->pty_path.empty() ? "tcp:" + o->tcp_spec : "pty:" + o->pty_path;
     moco::transport::EmulatorConfig config;
-    config.devices.push_back(one);
-    config.control_path = control_path;
-    config.scenario_path = scenario_path;
-    config.log_level = moco::transport::ParseLogLevel(log_level);
+    config.devices.push_back(o->config);
+    config.control_path = o->control_path;
+    config.scenario_path = o->scenario_path;
+    config.log_level = moco::transport::ParseLogLevel(o->log_level);
     return Serve(std::move(config));
   }
   if (run->parsed()) {

@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 
+#include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/dmc16/dmc16.h"
 
 namespace moco::devices {
@@ -11,6 +12,8 @@ const std::vector<DeviceModel>& DeviceModels() {
   static const std::vector<DeviceModel> kModels = {
       {"dmc16", "DMC-16 motion controller, DMC v2 binary protocol", wire::Protocol::kDmc,
        "fixtures/profiles/dmc16.json"},
+      {"dfmoco", "DFMoco Arduino (Uno or Mega), Dragonframe's ASCII sketch protocol",
+       wire::Protocol::kDfmoco, "fixtures/profiles/dfmoco-uno.json"},
   };
   return kModels;
 }
@@ -27,6 +30,11 @@ std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& 
   if (model == "dmc16") {
     Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
     return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
+  }
+  if (model == "dfmoco") {
+    DfmocoProfile profile =
+        profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
+    return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {

@@ -164,6 +164,12 @@ const std::string& Emulator::name(size_t i) const { return served_[i]->config.na
 devices::Device& Emulator::device(size_t i) { return *served_[i]->device; }
 DeviceServer& Emulator::server(size_t i) { return *served_[i]->server; }
 
+void Emulator::RecordEvent(const std::string& name, const control::SessionEntry& entry) {
+  for (auto& s : served_) {
+    if (s->config.name == name && s->writer && !stopped_) s->writer->Append(entry);
+  }
+}
+
 void Emulator::Log(LogLevel level, std::string_view line) const {
   if (level <= config_.log_level) log_(line);
 }

@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "control/session.h"
 #include "devices/device.h"
 #include "sim/scheduler.h"
 #include "transport/asio.h"
@@ -103,6 +104,8 @@ class Emulator {
   const EmulatorConfig& config() const { return config_; }
   void Log(LogLevel level, std::string_view line) const;
   void SetHooks(EmulatorHooks hooks) { hooks_ = std::move(hooks); }
+  // Appends an event line to the recording of device `name` (if it records).
+  void RecordEvent(const std::string& name, const control::SessionEntry& entry);
 
  private:
   struct Served;
