@@ -95,6 +95,51 @@ TEST(Serve, Dmc16EndToEndOverPtyAndTcpWithRecording) {
   fs::remove_all(dir);
 }
 
+// Reads lines ("\r\n"-terminated) from fd until one starts with `prefix`.
+std::string ReadLineStartingWith(int fd, const std::string& prefix, std::string& buffer) {
+  for (int guard = 0; guard < 1000; ++guard) {
+    size_t eol;
+    while ((eol = buffer.find("\r\n")) != std::string::npos) {
+      std::string line = buffer.substr(0, eol);
+      buffer.erase(0, eol + 2);
+      if (line.rfind(prefix, 0) == 0) return line;
+    }
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 5000) <= 0) return "";
+    char tmp[256];
+    const ssize_t r = read(fd, tmp, sizeof tmp);
+    if (r <= 0) return "";
+    buffer.append(tmp, static_cast<size_t>(r));
+  }
+  return "";
+}
+
+TEST(Serve, DfmocoEndToEndOverPtyAtTheSketchLineRate) {
+  const fs::path dir = TempDir();
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig d;
+  d.model = "dfmoco";
+  d.endpoint = "pty:" + (dir / "dfmoco").string();
+  config.devices = {d};
+  Emulator e(config, [](std::string_view) {});
+  e.Start();
+  std::thread io([&] { e.Run(); });
+  const int fd = testing::OpenPtyHost(e.server(0).pty_path());
+  ASSERT_GE(fd, 0);
+  std::string buf;
+  EXPECT_EQ(ReadLineStartingWith(fd, "hi", buf), "hi 2 4 2.0.0") << "boot hello, held for the host";
+  const std::string cmds = "ms\r\nmm 1 100\r\n";
+  ASSERT_TRUE(testing::WriteAll(fd, reinterpret_cast<const uint8_t*>(cmds.data()), cmds.size()));
+  EXPECT_EQ(ReadLineStartingWith(fd, "ms", buf), "ms 0000");
+  EXPECT_EQ(ReadLineStartingWith(fd, "mm", buf), "mm 1 100");
+  EXPECT_EQ(ReadLineStartingWith(fd, "mp 1 100", buf), "mp 1 100") << "the report after the stop";
+  close(fd);
+  asio::post(e.io(), [&] { e.Stop(); });
+  io.join();
+  fs::remove_all(dir);
+}
+
 TEST(Serve, TakenTcpPortIsAClearErrorAndLeavesNothingOpen) {
   const fs::path dir = TempDir();
   EmulatorConfig first;
