@@ -1,19 +1,25 @@
 // Request->response latency of a served DMC-16 over a real PTY and TCP
 // (MSG_HI, MSG_MOTOR_STATUS), next to the raw echo round trip of the same
 // transport measured in the same run; and the memory of a DMC-16 holding a
-// full upload buffer. Pacing off: the transport and device cost alone.
+// full upload buffer; the DFMoco Arduino's reply latency, `mp` timing and
+// memory per device. Pacing off unless noted: the transport and device cost.
 //   device_bench [iterations]
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "devices/dmc16/dmc16.h"
+#include "devices/registry.h"
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
 #include "transport/serve.h"
@@ -128,6 +134,7 @@ class NullSink final : public moco::devices::ByteSink {
 // frame of every motor and channel uploaded.
 void Memory() {
   const long before = RssKiB();
+  const size_t heap_before = mallinfo2().uordblks;
   moco::sim::Scheduler scheduler;
   NullSink sink;
   moco::devices::Dmc16 device(scheduler, sink);
@@ -155,9 +162,119 @@ void Memory() {
   const long after = RssKiB();
   std::printf(
       "memory: DMC-16 with a full upload (%u frames x %u motors + %u DMX channels, "
-      "complete=%d): store %zu KiB; process RSS %ld KiB (before the device %ld KiB)\n",
+      "complete=%d): store %zu KiB, device heap %zu KiB; process RSS %ld KiB (before the "
+      "device %ld KiB)\n",
       frames, device.profile().motor_count, device.profile().dmx_channels,
-      device.upload().complete() ? 1 : 0, device.upload().HeapBytes() / 1024, after, before);
+      device.upload().complete() ? 1 : 0, device.upload().HeapBytes() / 1024,
+      (mallinfo2().uordblks - heap_before) / 1024, after, before);
+}
+
+// Reads "\r\n" lines from fd; each with its arrival time.
+class LineReader {
+ public:
+  explicit LineReader(int fd) : fd_(fd) {}
+  // The next line within timeout_ms, or nullopt.
+  std::optional<std::pair<Clock::time_point, std::string>> Next(int timeout_ms) {
+    const auto deadline = Clock::now() + std::chrono::milliseconds(timeout_ms);
+    for (;;) {
+      const size_t eol = buf_.find("\r\n");
+      if (eol != std::string::npos) {
+        std::string line = buf_.substr(0, eol);
+        buf_.erase(0, eol + 2);
+        return std::make_pair(arrived_, line);
+      }
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+      if (left <= 0) return std::nullopt;
+      pollfd p{fd_, POLLIN, 0};
+      if (poll(&p, 1, static_cast<int>(left)) <= 0) continue;
+      char tmp[512];
+      const ssize_t r = read(fd_, tmp, sizeof tmp);
+      if (r <= 0) return std::nullopt;
+      arrived_ = Clock::now();
+      buf_.append(tmp, static_cast<size_t>(r));
+    }
+  }
+
+ private:
+  int fd_;
+  std::string buf_;
+  Clock::time_point arrived_;
+};
+
+// The DFMoco Arduino over a PTY: `ms` reply latency (paced at 57600 baud and
+// unpaced) and the timing of the once-a-second `mp` reports of a move.
+void Dfmoco(const std::string& pty, int n) {
+  for (bool paced : {false, true}) {
+    moco::transport::EmulatorConfig config;
+    config.log_level = moco::transport::LogLevel::kError;
+    moco::transport::DeviceConfig d;
+    d.model = "dfmoco";
+    d.endpoint = pty;
+    d.no_pacing = !paced;
+    config.devices.push_back(d);
+    moco::transport::Emulator emulator(config, [](std::string_view) {});
+    emulator.Start();
+    std::thread t([&] { emulator.Run(); });
+    const int fd = Open(emulator.server(0));
+    LineReader lines(fd);
+    if (!lines.Next(3000)) std::exit(1);  // the boot hi
+    const std::string ms = "ms\r\n";
+    std::vector<double> us;
+    const int count = paced ? std::max(50, n / 10) : n;
+    for (int i = -50; i < count; ++i) {
+      const auto t0 = Clock::now();
+      moco::transport::testing::WriteAll(fd, reinterpret_cast<const uint8_t*>(ms.data()),
+                                         ms.size());
+      auto l = lines.Next(3000);
+      if (!l || l->second.rfind("ms ", 0) != 0) std::exit(1);
+      if (i >= 0) us.push_back(std::chrono::duration<double, std::micro>(l->first - t0).count());
+    }
+    std::printf("dfmoco pty %-8s ms -> reply     median %7.1f  p99 %7.1f us\n",
+                paced ? "57600" : "unpaced", Median(us), P99(us));
+    if (paced) {
+      // A 6-second move: reports are due every second of the sketch's report
+      // clock (0.5 s after its start, then every 1 s); compare their arrival
+      // spacing with 1 s.
+      const std::string mm = "pr 1 2000\r\nmm 1 10000\r\n";
+      moco::transport::testing::WriteAll(fd, reinterpret_cast<const uint8_t*>(mm.data()),
+                                         mm.size());
+      std::vector<Clock::time_point> mp;
+      while (auto l = lines.Next(3000)) {
+        if (l->second.rfind("mp 1 ", 0) == 0) mp.push_back(l->first);
+        if (l->second == "mp 1 10000") break;
+      }
+      std::vector<double> err_us;
+      for (size_t i = 2; i + 1 < mp.size(); ++i) {
+        const double spacing = std::chrono::duration<double, std::micro>(mp[i] - mp[i - 1]).count();
+        err_us.push_back(std::abs(spacing - 1e6));
+      }
+      if (!err_us.empty()) {
+        std::printf(
+            "dfmoco pty 57600    mp spacing error vs 1 s: median %7.1f  max %7.1f us (%zu "
+            "reports)\n",
+            Median(err_us), *std::max_element(err_us.begin(), err_us.end()), mp.size());
+      }
+    }
+    close(fd);
+    asio::post(emulator.io(), [&] { emulator.Stop(); });
+    t.join();
+  }
+  // Memory per device: 64 DFMoco Unos in one process, in virtual time
+  // (heap in use by the allocator, which RSS rounds to pages).
+  const size_t before = mallinfo2().uordblks;
+  {
+    moco::sim::Scheduler scheduler;
+    NullSink sink;
+    std::vector<std::unique_ptr<moco::devices::Device>> devices;
+    for (int i = 0; i < 64; ++i) {
+      devices.push_back(moco::devices::CreateDevice("dfmoco", "", scheduler, sink));
+      devices.back()->PowerOn();
+    }
+    const size_t after = mallinfo2().uordblks;
+    std::printf("dfmoco memory: %.1f KiB heap per device (64 devices)\n",
+                static_cast<double>(after - before) / 64.0 / 1024.0);
+  }
 }
 
 }  // namespace
@@ -185,5 +302,6 @@ int main(int argc, char** argv) {
                 Median(status), P99(status), Median(status) / e);
   }
   Memory();
+  Dfmoco(pty, n);
   return 0;
 }
