@@ -14,7 +14,6 @@ namespace {
 
 using stackshot::Action;
 using stackshot::Command;
-using stackshot::F32;
 using stackshot::Units;
 
 constexpr uint16_t Cmd(Command c) { return static_cast<uint16_t>(c); }
@@ -22,21 +21,6 @@ constexpr uint16_t Cmd(Command c) { return static_cast<uint16_t>(c); }
 sim::TimeNs SecondsToNs(double s) {
   if (!(s > 0)) return 0;
   return static_cast<sim::TimeNs>(std::llround(s * 1e9));
-}
-
-bool Finite(F32 v) { return std::isfinite(v.value()); }
-
-// A float in [lo, hi] (NaN fails).
-bool InRange(float v, float lo, float hi) { return v >= lo && v <= hi; }
-
-int32_t ClampI32(int64_t v) {
-  return static_cast<int32_t>(std::clamp<int64_t>(v, std::numeric_limits<int32_t>::min(),
-                                                  std::numeric_limits<int32_t>::max()));
-}
-
-float Bounded(float v, float lo, float hi) {
-  if (std::isnan(v)) return lo;
-  return std::clamp(v, lo, hi);
 }
 
 std::unique_ptr<sim::Planner> MakeStackshotPlanner() {

@@ -76,9 +76,9 @@ Stackshot3xProfile Stackshot3xProfile::FromJson(const nlohmann::json& object,
 }
 
 nlohmann::json Stackshot3xProfile::ToJson() const {
-  nlohmann::json axes = nlohmann::json::array();
+  nlohmann::json axes_j = nlohmann::json::array();
   for (const Stackshot3xAxisProfile& a : this->axes) {
-    axes.push_back({{"steps_per_rev", a.steps_per_rev},
+    axes_j.push_back({{"steps_per_rev", a.steps_per_rev},
                     {"distance_per_rev_mm", a.distance_per_rev_mm},
                     {"max_speed_steps_per_s", a.max_speed_steps_per_s}});
   }
@@ -96,7 +96,7 @@ nlohmann::json Stackshot3xProfile::ToJson() const {
                       {"dfmoco_version", dfmoco_version},
                       {"dfmoco_report_ms", dfmoco_report_ms},
                       {"boot_delay_ms", boot_delay_ms},
-                      {"axes", axes}};
+                      {"axes", axes_j}};
   if (!name.empty()) j["name"] = name;
   return j;
 }
