@@ -20,7 +20,8 @@ constexpr uint16_t Cmd(Command c) { return static_cast<uint16_t>(c); }
 
 sim::TimeNs SecondsToNs(double s) {
   if (!(s > 0)) return 0;
-  return static_cast<sim::TimeNs>(std::llround(s * 1e9));
+  // Timers run on whole microseconds (0.1f s is 100000 us, not 100000001 ns).
+  return static_cast<sim::TimeNs>(std::llround(s * 1e6)) * sim::kNsPerUs;
 }
 
 std::unique_ptr<sim::Planner> MakeStackshotPlanner() {
@@ -223,7 +224,7 @@ void Stackshot3x::AddLog(std::string text) {
                 static_cast<double>(scheduler_.Now()) / static_cast<double>(sim::kNsPerSecond));
   std::string entry = stamp + std::move(text);
   // A log entry travels in one CC_LOG reply: keep it within a packet.
-  if (entry.size() > 200) entry.resize(200);
+  if (entry.size() > kMaxLogEntryBytes) entry.resize(kMaxLogEntryBytes);
   std::replace(entry.begin(), entry.end(), '\0', ' ');
   if (log_.size() >= kMaxLogEntries) log_.erase(log_.begin());
   log_.push_back(std::move(entry));

@@ -108,7 +108,9 @@ class Stackshot3x final : public Device, private sim::RigObserver {
   static constexpr int kAxes = 3;
   static constexpr int kShutters = 2;
   static constexpr size_t kMaxLogEntries = 64;
-  static constexpr size_t kMaxNameBytes = 32;  // fits COMM_BUFFER_SIZE (40) with header
+  static constexpr size_t kMaxNameBytes = 32;
+  // One CC_LOG entry and its NUL fit one packet's 255 data bytes.
+  static constexpr size_t kMaxLogEntryBytes = 254;  // fits COMM_BUFFER_SIZE (40) with header
   // SHUTTER_FIRE bounds ("bounded to the minimum/maximum allowed").
   static constexpr float kShutterMinS = 0.001f;
   static constexpr float kShutterMaxS = 3600.0f;

@@ -546,7 +546,7 @@ TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
   Text(b);
   Line(b, "hi");
   EXPECT_EQ(Text(b), "hi 1 3 1.2.6\r\n");
-  Line(b, "mm 2 500");
+  Line(b, "mm 2 5000");
   EXPECT_EQ(Text(b), "mm 2 0\r\n");
   Line(b, "ms");
   EXPECT_EQ(Text(b), "ms 010\r\n");
@@ -554,8 +554,9 @@ TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
   const std::string periodic = Text(b);
   EXPECT_EQ(periodic.rfind("mm 2 ", 0), 0u) << periodic;
   b.RunFor(5 * kSec);
+  EXPECT_EQ(Text(b), "mm 2 4375\r\n");  // reported while moving, not after
   Line(b, "mp *");
-  EXPECT_EQ(Text(b), "mp 1 0\r\nmp 2 500\r\nmp 3 0\r\n");
+  EXPECT_EQ(Text(b), "mp 1 0\r\nmp 2 5000\r\nmp 3 0\r\n");
   Line(b, "zm 2");
   EXPECT_EQ(Text(b), "mp 2 0\r\n");
   Line(b, "np 3 42");
