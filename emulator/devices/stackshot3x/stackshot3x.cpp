@@ -236,10 +236,10 @@ void Stackshot3x::AddLog(std::string text) {
 
 void Stackshot3x::OnHostBytes(wire::ByteView bytes) {
   if (!powered_ || !ready_) return;
-  const uint64_t gen = generation_;
   for (const uint8_t b : bytes) {
-    // A reset inside the chunk: the rebooting controller loses the rest.
-    if (generation_ != gen || !ready_) return;
+    // After CC_RESET the rest of the chunk reaches the restarted controller
+    // once it is ready; bytes arriving while it boots are lost.
+    if (!ready_) return;
     OnByte(b);
   }
   ArmGapTimer();
