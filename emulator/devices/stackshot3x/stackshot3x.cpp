@@ -119,8 +119,8 @@ void Stackshot3x::ResetVolatile() {
   framer_.Reset();
   pulses_.clear();
   for (int a = 0; a < kAxes; ++a) {
-    dfmoco_rate_[Index(a)] = static_cast<int32_t>(std::min<double>(
-        profile_.axes[Index(a)].max_speed_steps_per_s, dfmoco::kDefaultPulseRate));
+    dfmoco_rate_[Index(a)] = static_cast<int32_t>(
+        std::min<double>(profile_.axes[Index(a)].max_speed_steps_per_s, dfmoco::kDefaultPulseRate));
   }
 }
 
@@ -295,8 +295,8 @@ void Stackshot3x::DrainQueue() {
   }
 }
 
-void Stackshot3x::Reply(const stackshot::Packet& packet, Action status,
-                        stackshot::Payload payload, bool read_response) {
+void Stackshot3x::Reply(const stackshot::Packet& packet, Action status, stackshot::Payload payload,
+                        bool read_response) {
   stackshot::DeviceReply r;
   r.command = packet.command;
   r.status = status;
@@ -332,8 +332,8 @@ void Stackshot3x::Handle(const stackshot::Packet& p, const stackshot::HostComman
   }
   if (std::holds_alternative<stackshot::PingRequest>(c.payload)) {
     // CC_PING, also at its table id 0x110A (see stackshot_constants.h).
-    Reply(p, Action::kRspOk, stackshot::PingAnswer(std::get<stackshot::PingRequest>(c.payload).value),
-          true);
+    Reply(p, Action::kRspOk,
+          stackshot::PingAnswer(std::get<stackshot::PingRequest>(c.payload).value), true);
     return;
   }
   const uint16_t id = c.command;
@@ -393,8 +393,8 @@ int64_t Stackshot3x::RailPosition(int axis) const {
   const int64_t pos = Motor(axis).Position();
   int64_t done = 0;
   if (s.takeup.dir != 0) {
-    done = std::clamp<int64_t>(s.takeup.dir * (pos - s.takeup.start_motor_steps), 0,
-                               s.takeup.steps);
+    done =
+        std::clamp<int64_t>(s.takeup.dir * (pos - s.takeup.start_motor_steps), 0, s.takeup.steps);
   }
   return pos - s.offset_steps - s.takeup.dir * done;
 }
@@ -543,11 +543,10 @@ void Stackshot3x::StackMoveTo(uint32_t frame) {
   for (int a = 0; a < kAxes; ++a) {
     if (!stack_.used[Index(a)]) continue;
     const int64_t span = stack_.end[Index(a)] - stack_.start[Index(a)];
-    const int64_t target =
-        stack_.frames <= 1
-            ? stack_.start[Index(a)]
-            : stack_.start[Index(a)] +
-                  std::llround(static_cast<double>(span) * frame / (stack_.frames - 1));
+    const int64_t target = stack_.frames <= 1
+                               ? stack_.start[Index(a)]
+                               : stack_.start[Index(a)] + std::llround(static_cast<double>(span) *
+                                                                       frame / (stack_.frames - 1));
     const double v = stack_.phase == StackPhase::kMoving
                          ? SpeedStepsPerS(a, config_.axes[Index(a)].speed_mm_per_s)
                          : SpeedStepsPerS(a, config_.axes[Index(a)].move_speed_mm_per_s);
@@ -658,8 +657,8 @@ void Stackshot3x::MotionAdvance() {
     if (st == sim::MoveStatus::kOk) {
       s.target_rail_steps = s.spline->FinalStep();
     } else {
-      AddLog("motion start refused on axis " + stackshot::AxisName(static_cast<uint8_t>(a)) +
-             ": " + std::string(sim::MoveStatusName(st)));
+      AddLog("motion start refused on axis " + stackshot::AxisName(static_cast<uint8_t>(a)) + ": " +
+             std::string(sim::MoveStatusName(st)));
     }
   }
 }

@@ -61,8 +61,8 @@ struct Stackshot3xConfig {
   };
   // Per axis (bits 4-5 of the action byte: 0 = X, 1 = Y, 2 = Z).
   struct Axis {
-    uint8_t torque = 10;         // 1-10
-    uint8_t holding_torque = 5;  // 0-10
+    uint8_t torque = 10;               // 1-10
+    uint8_t holding_torque = 5;        // 0-10
     double speed_mm_per_s = 2.0;       // CC_RAIL_CONFIG_SPEED (stacking speed)
     double move_speed_mm_per_s = 4.0;  // CC_RAIL_CONFIG_SPEED_MOVE
     float ramp_time_s = 0.25f;
@@ -79,7 +79,7 @@ struct Stackshot3xConfig {
     bool operator==(const Axis&) const = default;
   };
 
-  std::string name;  // "" reads as the single byte 0xFF (power-on / saved)
+  std::string name;       // "" reads as the single byte 0xFF (power-on / saved)
   uint8_t backlight = 5;  // 1-10
   stackshot::RailMode mode = stackshot::RailMode::kAutoStep;
   stackshot::Units units = stackshot::Units::kMm;

@@ -216,8 +216,7 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
       const Units u = As<stackshot::UnitsQuery>(c)->units.value_or(cfg.units);
       if (!stackshot::IsValid(u) || (no_steps && u == Units::kSteps)) return bad();
       return Reply(p, Action::kRspOk,
-                   stackshot::UnitsF32{u, ToUnits(p.axis, field_mm * StepsPerMm(p.axis), u)},
-                   true);
+                   stackshot::UnitsF32{u, ToUnits(p.axis, field_mm * StepsPerMm(p.axis), u)}, true);
     }
     const auto* w = As<stackshot::UnitsF32>(c);
     if (!stackshot::IsValid(w->units) || (no_steps && w->units == Units::kSteps)) return bad();
@@ -273,9 +272,11 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
     case C::kRailConfigBacklight:
       return u8(cfg.backlight, 1, 10);
     case C::kRailConfigMode: {
-      if (read) return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::RailMode>{cfg.mode}, true);
+      if (read)
+        return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::RailMode>{cfg.mode}, true);
       const auto v = As<stackshot::EnumValue<stackshot::RailMode>>(c)->value;
-      if (static_cast<uint8_t>(v) > static_cast<uint8_t>(stackshot::RailMode::kRotary)) return bad();
+      if (static_cast<uint8_t>(v) > static_cast<uint8_t>(stackshot::RailMode::kRotary))
+        return bad();
       cfg.mode = v;
       return ok();
     }
@@ -369,7 +370,8 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
       Stackshot3xConfig loaded = *slots_[slot];
       loaded.global_mode = cfg.global_mode;
       cfg = loaded;
-      for (int i = 0; i < kAxes; ++i) planners_[Index(i)]->SetRampTime(cfg.axes[Index(i)].ramp_time_s);
+      for (int i = 0; i < kAxes; ++i)
+        planners_[Index(i)]->SetRampTime(cfg.axes[Index(i)].ramp_time_s);
       AddLog("config loaded from slot " + std::to_string(slot));
       ok();
       EnterMode(mode);
@@ -389,14 +391,17 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
       return ok();
     }
     case C::kRailConfigIoMode: {
-      if (read) return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::IoMode>{cfg.io_mode}, true);
+      if (read)
+        return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::IoMode>{cfg.io_mode}, true);
       const auto v = As<stackshot::EnumValue<stackshot::IoMode>>(c)->value;
       if (!stackshot::IsValid(v)) return bad();
       cfg.io_mode = v;
       return ok();
     }
     case C::kRailConfigIoDir: {
-      if (read) return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::Direction>{cfg.io_dir}, true);
+      if (read)
+        return Reply(p, Action::kRspOk, stackshot::EnumValue<stackshot::Direction>{cfg.io_dir},
+                     true);
       const auto v = As<stackshot::EnumValue<stackshot::Direction>>(c)->value;
       if (!stackshot::IsValid(v)) return bad();
       cfg.io_dir = v;
@@ -713,18 +718,17 @@ nlohmann::json Stackshot3x::State() const {
                     {"user_aborted", s.user_aborted},
                     {"spline", s.spline.has_value()}});
   }
-  nlohmann::json j = {{"model", "stackshot3x"},
-                      {"powered", powered_},
-                      {"ready", ready_},
-                      {"mode", InDfmocoMode() ? "dfmoco" : "binary"},
-                      {"serial_number", serial_number_},
-                      {"axes", axes},
-                      {"shutter_firing", ShutterFiring()},
-                      {"stack",
-                       {{"active", stack_.active},
-                        {"frames", stack_.frames},
-                        {"frames_shot", stack_.frames_shot}}},
-                      {"config", config_.ToJson()}};
+  nlohmann::json j = {
+      {"model", "stackshot3x"},
+      {"powered", powered_},
+      {"ready", ready_},
+      {"mode", InDfmocoMode() ? "dfmoco" : "binary"},
+      {"serial_number", serial_number_},
+      {"axes", axes},
+      {"shutter_firing", ShutterFiring()},
+      {"stack",
+       {{"active", stack_.active}, {"frames", stack_.frames}, {"frames_shot", stack_.frames_shot}}},
+      {"config", config_.ToJson()}};
   if (!store_error_.empty()) j["store_error"] = store_error_;
   return j;
 }

@@ -131,14 +131,12 @@ std::optional<Stackshot3xConfig> Stackshot3xConfig::FromJson(const json& j) {
          Take(a, "distance_per_rev_mm", o.distance_per_rev_mm) &&
          Take(a, "backlash_mm", o.backlash_mm) && Take(a, "reverse", o.reverse) &&
          Take(a, "rotary_backlash_deg", o.rotary_backlash_deg) &&
-         Take(a, "rotary_ratio", o.rotary_ratio) &&
-         Take(a, "rotary_degrees", o.rotary_degrees) &&
+         Take(a, "rotary_ratio", o.rotary_ratio) && Take(a, "rotary_degrees", o.rotary_degrees) &&
          TakeEnum(a, "shutter", o.shutter, stackshot::kShutterSettingMax) &&
-         Take(a, "num_steps", o.num_steps) &&
-         Take(a, "total_distance_mm", o.total_distance_mm) &&
+         Take(a, "num_steps", o.num_steps) && Take(a, "total_distance_mm", o.total_distance_mm) &&
          Take(a, "distance_per_step_mm", o.distance_per_step_mm);
-    if (!ok || o.distance_per_rev_mm <= 0 || o.speed_mm_per_s <= 0 ||
-        o.move_speed_mm_per_s <= 0 || o.ramp_time_s < 0) {
+    if (!ok || o.distance_per_rev_mm <= 0 || o.speed_mm_per_s <= 0 || o.move_speed_mm_per_s <= 0 ||
+        o.ramp_time_s < 0) {
       return std::nullopt;
     }
   }

@@ -26,7 +26,8 @@ Stackshot3xProfile Stackshot3xProfile::FromJson(const nlohmann::json& object,
   p.software_id = r.GetFlags("software_id", p.software_id);
   p.software_string = r.GetString("software_string", p.software_string, 200);
   if (p.software_string.find('\0') != std::string::npos) {
-    r.Fail("software_string", "contains a NUL byte", "remove it: the string is sent NUL-terminated");
+    r.Fail("software_string", "contains a NUL byte",
+           "remove it: the string is sent NUL-terminated");
   }
   p.hardware_id = r.GetFlags("hardware_id", p.hardware_id);
   p.bootloader_id = r.GetFlags("bootloader_id", p.bootloader_id);
@@ -44,8 +45,7 @@ Stackshot3xProfile Stackshot3xProfile::FromJson(const nlohmann::json& object,
   }
   p.checksum = *algorithm;
   p.dfmoco_version = r.GetString("dfmoco_version", p.dfmoco_version, 32);
-  if (p.dfmoco_version.empty() ||
-      p.dfmoco_version.find_first_of(" \t\r\n") != std::string::npos) {
+  if (p.dfmoco_version.empty() || p.dfmoco_version.find_first_of(" \t\r\n") != std::string::npos) {
     r.Fail("dfmoco_version", "must be one token without spaces", "write e.g. \"1.2.6\"");
   }
   p.dfmoco_report_ms = r.GetInt("dfmoco_report_ms", p.dfmoco_report_ms, 10, 60'000);
@@ -79,8 +79,8 @@ nlohmann::json Stackshot3xProfile::ToJson() const {
   nlohmann::json axes_j = nlohmann::json::array();
   for (const Stackshot3xAxisProfile& a : this->axes) {
     axes_j.push_back({{"steps_per_rev", a.steps_per_rev},
-                    {"distance_per_rev_mm", a.distance_per_rev_mm},
-                    {"max_speed_steps_per_s", a.max_speed_steps_per_s}});
+                      {"distance_per_rev_mm", a.distance_per_rev_mm},
+                      {"max_speed_steps_per_s", a.max_speed_steps_per_s}});
   }
   nlohmann::json j = {{"device", "stackshot3x"},
                       {"axis_count", kAxisCount},

@@ -39,7 +39,8 @@ uint32_t StatusBits(SsBench& b, uint8_t axis = 0, Command c = Command::kRailStat
   const auto* v = std::get_if<stackshot::RailStatus>(&r.payload);
   return v ? v->bits : 0xDEAD;
 }
-stackshot::HostCommand Move(uint8_t axis, stackshot::Direction d, Units u, bool backlash, float dist) {
+stackshot::HostCommand Move(uint8_t axis, stackshot::Direction d, Units u, bool backlash,
+                            float dist) {
   return Write(Command::kRailMove, axis, stackshot::RailMove{d, u, backlash, dist});
 }
 constexpr auto kFwd = stackshot::Direction::kForward;
@@ -58,7 +59,8 @@ TEST(Stackshot3xTest, IdentityComesFromTheProfile) {
             "SS3X test 9.9");
   EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSoftwareId)).payload).value,
             0x01020304u);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kHardwareId)).payload).value, 0x0Au);
+  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kHardwareId)).payload).value,
+            0x0Au);
   EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kBootloaderId)).payload).value,
             0x0Bu);
 }
@@ -267,14 +269,20 @@ TEST(Stackshot3xTest, ShutterFirePulsesAndStatusBit) {
 
 TEST(Stackshot3xTest, StackRunSettlesShootsAndReturns) {
   SsBench b;
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{0.5f})), Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigNumPulses, 0, stackshot::U16Value{2})), Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 0, stackshot::F32Value{0.1f})), Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{0.5f})),
+            Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigNumPulses, 0, stackshot::U16Value{2})),
+            Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 0, stackshot::F32Value{0.1f})),
+            Action::kRspOk);
   ASSERT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 0, stackshot::F32Value{0.2f}, true)),
             Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigOffTime, 0, stackshot::F32Value{0.3f})), Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigToffFinal, 0, stackshot::BoolValue{false})), Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigAutoReturn, 0, stackshot::BoolValue{true})), Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigOffTime, 0, stackshot::F32Value{0.3f})),
+            Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigToffFinal, 0, stackshot::BoolValue{false})),
+            Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigAutoReturn, 0, stackshot::BoolValue{true})),
+            Action::kRspOk);
   stackshot::RailStack s;
   s.num_steps = 3;
   s.x_start = 0;
@@ -295,7 +303,9 @@ TEST(Stackshot3xTest, StackRunSettlesShootsAndReturns) {
   EXPECT_GE(p[2].on_ns - p[1].off_ns, 1000 * kMs);
   EXPECT_EQ(b.dev->StackFramesShot(), 3u);
   EXPECT_FALSE(b.dev->StackRunning());
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kRailStackPosition)).payload).value, 3u);
+  EXPECT_EQ(
+      std::get<stackshot::U32Value>(b.AskRead(Read(Command::kRailStackPosition)).payload).value,
+      3u);
   EXPECT_FLOAT_EQ(Current(b), 0.0f);  // auto-return
   EXPECT_EQ(StatusBits(b, 0, Command::kRailStackStatus), 0u);
   s.num_steps = 0;
@@ -306,15 +316,21 @@ TEST(Stackshot3xTest, StackRunSettlesShootsAndReturns) {
 
 TEST(Stackshot3xTest, U8AndBoolConfigRangesAndRoundTrips) {
   SsBench b;
-  struct Case { Command c; uint8_t lo, hi; };
-  for (const Case k : {Case{Command::kRailConfigBacklight, 1, 10}, Case{Command::kRailConfigTorque, 1, 10},
-                       Case{Command::kRailConfigHoldingTorque, 0, 10}}) {
+  struct Case {
+    Command c;
+    uint8_t lo, hi;
+  };
+  for (const Case k :
+       {Case{Command::kRailConfigBacklight, 1, 10}, Case{Command::kRailConfigTorque, 1, 10},
+        Case{Command::kRailConfigHoldingTorque, 0, 10}}) {
     SCOPED_TRACE(stackshot::CommandName(stackshot::Id(k.c)));
     EXPECT_EQ(b.Status(Write(k.c, 0, stackshot::U8Value{k.hi})), Action::kRspOk);
     EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(k.c)).payload).value, k.hi);
-    EXPECT_EQ(b.Status(Write(k.c, 0, stackshot::U8Value{static_cast<uint8_t>(k.hi + 1)})), Action::kBadParam);
+    EXPECT_EQ(b.Status(Write(k.c, 0, stackshot::U8Value{static_cast<uint8_t>(k.hi + 1)})),
+              Action::kBadParam);
     if (k.lo > 0) {
-      EXPECT_EQ(b.Status(Write(k.c, 0, stackshot::U8Value{static_cast<uint8_t>(k.lo - 1)})), Action::kBadParam);
+      EXPECT_EQ(b.Status(Write(k.c, 0, stackshot::U8Value{static_cast<uint8_t>(k.lo - 1)})),
+                Action::kBadParam);
     }
   }
   for (Command c : {Command::kRailConfigShutterDisable, Command::kRailConfigAutoReturn,
@@ -322,80 +338,146 @@ TEST(Stackshot3xTest, U8AndBoolConfigRangesAndRoundTrips) {
     EXPECT_EQ(b.Status(Write(c, 1, stackshot::BoolValue{true})), Action::kRspOk);
     EXPECT_TRUE(std::get<stackshot::BoolValue>(b.AskRead(Read(c, 1)).payload).value);
   }
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigTorque, 3, stackshot::U8Value{5})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumSteps, 0, stackshot::U16Value{0})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumSteps, 2, stackshot::U16Value{300})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::U16Value>(b.AskRead(Read(Command::kRailConfigNumSteps, 2)).payload).value, 300);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumPulses, 2, stackshot::U16Value{2})), Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigTorque, 3, stackshot::U8Value{5})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumSteps, 0, stackshot::U16Value{0})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumSteps, 2, stackshot::U16Value{300})),
+            Action::kRspOk);
+  EXPECT_EQ(
+      std::get<stackshot::U16Value>(b.AskRead(Read(Command::kRailConfigNumSteps, 2)).payload).value,
+      300);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigNumPulses, 2, stackshot::U16Value{2})),
+            Action::kBadParam);
 }
 
 TEST(Stackshot3xTest, EnumConfigRanges) {
   SsBench b;
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigUnits, 0, stackshot::EnumValue<Units>{Units::kDegrees})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigUnits, 0, stackshot::EnumValue<Units>{Units::kSteps})), Action::kRspOk);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigMode, 0, stackshot::EnumValue<stackshot::RailMode>{static_cast<stackshot::RailMode>(8)})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigGlobalMode, 0, stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionReserved})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigGlobalMode, 0, stackshot::EnumValue<stackshot::GlobalMode>{static_cast<stackshot::GlobalMode>(13)})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigShutter, 0, stackshot::EnumValue<stackshot::ShutterSetting>{static_cast<stackshot::ShutterSetting>(4)})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigIoMode, 0, stackshot::EnumValue<stackshot::IoMode>{static_cast<stackshot::IoMode>(3)})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigIoDir, 0, stackshot::EnumValue<stackshot::Direction>{kBack})), Action::kRspOk);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigUnits, 0, stackshot::EnumValue<Units>{Units::kDegrees})),
+      Action::kBadParam);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigUnits, 0, stackshot::EnumValue<Units>{Units::kSteps})),
+      Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(
+                Command::kRailConfigMode, 0,
+                stackshot::EnumValue<stackshot::RailMode>{static_cast<stackshot::RailMode>(8)})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigGlobalMode, 0,
+                           stackshot::EnumValue<stackshot::GlobalMode>{
+                               stackshot::GlobalMode::kMotionReserved})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigGlobalMode, 0,
+                           stackshot::EnumValue<stackshot::GlobalMode>{
+                               static_cast<stackshot::GlobalMode>(13)})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigShutter, 0,
+                           stackshot::EnumValue<stackshot::ShutterSetting>{
+                               static_cast<stackshot::ShutterSetting>(4)})),
+            Action::kBadParam);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigIoMode, 0,
+                     stackshot::EnumValue<stackshot::IoMode>{static_cast<stackshot::IoMode>(3)})),
+      Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigIoDir, 0,
+                           stackshot::EnumValue<stackshot::Direction>{kBack})),
+            Action::kRspOk);
   EXPECT_EQ(b.Status(Write(Command::kRailConfigAxis, 0, stackshot::U8Value{5})), Action::kBadParam);
 }
 
 TEST(Stackshot3xTest, FloatAndUnitsConfigRoundTripsAndRanges) {
   SsBench b;
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{-1.0f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{NAN})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 1, stackshot::F32Value{0.0f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 2, stackshot::F32Value{0.5f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigRampTime, 0, stackshot::F32Value{11.0f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigRotaryRatio, 0, stackshot::F32Value{0.0f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigTimelapse, 0, stackshot::F32Value{12.5f})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::F32Value>(b.AskRead(Read(Command::kRailConfigTimelapse)).payload).value, stackshot::F32(12.5f));
-  // Speed written in mm/s reads back in mils/s; above the axis maximum (8000 steps/s = 5 mm/s) is refused.
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSpeed, 1, stackshot::UnitsF32{Units::kMm, 2.54f})), Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{-1.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{NAN})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 1, stackshot::F32Value{0.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigPulseTime, 2, stackshot::F32Value{0.5f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigRampTime, 0, stackshot::F32Value{11.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigRotaryRatio, 0, stackshot::F32Value{0.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigTimelapse, 0, stackshot::F32Value{12.5f})),
+            Action::kRspOk);
+  EXPECT_EQ(
+      std::get<stackshot::F32Value>(b.AskRead(Read(Command::kRailConfigTimelapse)).payload).value,
+      stackshot::F32(12.5f));
+  // Speed written in mm/s reads back in mils/s; above the axis maximum (8000 steps/s = 5 mm/s) is
+  // refused.
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigSpeed, 1, stackshot::UnitsF32{Units::kMm, 2.54f})),
+            Action::kRspOk);
   const auto r = b.AskRead(Read(Command::kRailConfigSpeed, 1, stackshot::UnitsQuery{Units::kMils}));
   EXPECT_NEAR(std::get<stackshot::UnitsF32>(r.payload).value.value(), 100.0f, 1e-3);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSpeed, 1, stackshot::UnitsF32{Units::kMm, 5.01f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSpeedMove, 1, stackshot::UnitsF32{Units::kSteps, 8000})), Action::kRspOk);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklash, 0, stackshot::UnitsF32{Units::kMm, -0.1f})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigDistancePerRev, 0, stackshot::UnitsF32{Units::kSteps, 2})), Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigSpeed, 1, stackshot::UnitsF32{Units::kMm, 5.01f})),
+            Action::kBadParam);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigSpeedMove, 1, stackshot::UnitsF32{Units::kSteps, 8000})),
+      Action::kRspOk);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigBacklash, 0, stackshot::UnitsF32{Units::kMm, -0.1f})),
+      Action::kBadParam);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigDistancePerRev, 0, stackshot::UnitsF32{Units::kSteps, 2})),
+      Action::kBadParam);
   // Distance per revolution changes the steps per mm: 4 mm/rev -> 800 steps/mm.
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigDistancePerRev, 0, stackshot::UnitsF32{Units::kMm, 4})), Action::kRspOk);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigDistancePerRev, 0, stackshot::UnitsF32{Units::kMm, 4})),
+      Action::kRspOk);
   ASSERT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, 1)), Action::kRspOk);
   b.RunFor(3 * kSec);
   EXPECT_FLOAT_EQ(Current(b), 800.0f);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigName, 0, stackshot::Text{std::string(33, 'a')})), Action::kBadParam);
-  EXPECT_EQ(std::get<stackshot::Text>(b.AskRead(Read(Command::kRailConfigName)).payload).text, "\xFF");
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigName, 0, stackshot::Text{std::string(33, 'a')})),
+            Action::kBadParam);
+  EXPECT_EQ(std::get<stackshot::Text>(b.AskRead(Read(Command::kRailConfigName)).payload).text,
+            "\xFF");
   EXPECT_EQ(b.Status(Write(Command::kRailConfigName, 0, stackshot::Text{"bugs"})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::Text>(b.AskRead(Read(Command::kRailConfigName)).payload).text, "bugs");
+  EXPECT_EQ(std::get<stackshot::Text>(b.AskRead(Read(Command::kRailConfigName)).payload).text,
+            "bugs");
 }
 
 TEST(Stackshot3xTest, SaveAndLoadSlots) {
   SsBench b;
   EXPECT_EQ(b.Status(Write(Command::kRailConfigLoad, 0, stackshot::U8Value{4})), Action::kFailed);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{11})), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{9})), Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{11})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{9})),
+            Action::kRspOk);
   EXPECT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{4})), Action::kRspOk);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{2})), Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{2})),
+            Action::kRspOk);
   EXPECT_EQ(b.Status(Write(Command::kRailConfigLoad, 0, stackshot::U8Value{4})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigBacklight)).payload).value, 9);
+  EXPECT_EQ(
+      std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigBacklight)).payload).value,
+      9);
 }
 
 TEST(Stackshot3xTest, SerialNumberIsWriteOnceAndNvmPersistsThroughPowerCycleAndReset) {
   SsBench b;
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value, 0xFFFFFFFFu);
+  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value,
+            0xFFFFFFFFu);
   EXPECT_EQ(b.Status(Write(Command::kSerialNumber, 0, stackshot::U32Value{1234})), Action::kRspOk);
   EXPECT_EQ(b.Status(Write(Command::kSerialNumber, 0, stackshot::U32Value{99})), Action::kFailed);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{7})).payload).value, 0xFFFFFFFFu);
-  EXPECT_EQ(b.Status(Write(Command::kNvmAccess, 0, stackshot::NvmWrite{7, 0xCAFE})), Action::kRspOk);
-  EXPECT_EQ(b.Status(Write(Command::kNvmAccess, 0, stackshot::NvmWrite{128, 1})), Action::kBadParam);
+  EXPECT_EQ(std::get<stackshot::U32Value>(
+                b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{7})).payload)
+                .value,
+            0xFFFFFFFFu);
+  EXPECT_EQ(b.Status(Write(Command::kNvmAccess, 0, stackshot::NvmWrite{7, 0xCAFE})),
+            Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kNvmAccess, 0, stackshot::NvmWrite{128, 1})),
+            Action::kBadParam);
   EXPECT_EQ(b.Status(Read(Command::kNvmAccess, 0, stackshot::NvmRead{128})), Action::kBadParam);
   EXPECT_EQ(b.Status(Write(Command::kRailConfigAxis, 0, stackshot::U8Value{2})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{0})).payload).value, 2u);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{8})), Action::kRspOk);
+  EXPECT_EQ(std::get<stackshot::U32Value>(
+                b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{0})).payload)
+                .value,
+            2u);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{8})),
+            Action::kRspOk);
   EXPECT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{0})), Action::kRspOk);
-  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{3})), Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{3})),
+            Action::kRspOk);
   ASSERT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, 1)), Action::kRspOk);
   b.RunFor(2 * kSec);
   for (int cycle = 0; cycle < 2; ++cycle) {
@@ -406,12 +488,19 @@ TEST(Stackshot3xTest, SerialNumberIsWriteOnceAndNvmPersistsThroughPowerCycleAndR
       EXPECT_EQ(b.Status(Write(Command::kReset)), Action::kRspOk);
     }
     SCOPED_TRACE(cycle);
-    EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value, 1234u);
+    EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value,
+              1234u);
     EXPECT_EQ(b.Status(Write(Command::kSerialNumber, 0, stackshot::U32Value{5})), Action::kFailed);
-    EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{7})).payload).value, 0xCAFEu);
-    EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigAxis)).payload).value, 2);
+    EXPECT_EQ(std::get<stackshot::U32Value>(
+                  b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{7})).payload)
+                  .value,
+              0xCAFEu);
+    EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigAxis)).payload).value,
+              2);
     // The power-on configuration (slot 0), not the unsaved change.
-    EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigBacklight)).payload).value, 8);
+    EXPECT_EQ(
+        std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigBacklight)).payload).value,
+        8);
     EXPECT_FLOAT_EQ(Current(b), 0.0f);  // position is volatile
   }
 }
@@ -438,8 +527,8 @@ class TempDir {
  public:
   TempDir() {
     path_ = std::filesystem::temp_directory_path() /
-            ("ss3x_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+            ("ss3x_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
@@ -458,19 +547,28 @@ TEST(Stackshot3xTest, NewDeviceOnTheSameFileStoreKeepsNvm) {
     SsBench b({}, &store);
     ASSERT_EQ(b.Status(Write(Command::kSerialNumber, 0, stackshot::U32Value{777})), Action::kRspOk);
     ASSERT_EQ(b.Status(Write(Command::kNvmAccess, 0, stackshot::NvmWrite{31, 5})), Action::kRspOk);
-    ASSERT_EQ(b.Status(Write(Command::kRailConfigTorque, 1, stackshot::U8Value{3})), Action::kRspOk);
+    ASSERT_EQ(b.Status(Write(Command::kRailConfigTorque, 1, stackshot::U8Value{3})),
+              Action::kRspOk);
     ASSERT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{7})), Action::kRspOk);
   }
   EXPECT_TRUE(std::filesystem::exists(file));
   EXPECT_FALSE(std::filesystem::exists(file.string() + ".partial"));
   FileStateStore store(file);
   SsBench b({}, &store);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value, 777u);
+  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value,
+            777u);
   EXPECT_EQ(b.Status(Write(Command::kSerialNumber, 0, stackshot::U32Value{1})), Action::kFailed);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{31})).payload).value, 5u);
-  EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigTorque, 1)).payload).value, 10);
+  EXPECT_EQ(std::get<stackshot::U32Value>(
+                b.AskRead(Read(Command::kNvmAccess, 0, stackshot::NvmRead{31})).payload)
+                .value,
+            5u);
+  EXPECT_EQ(
+      std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigTorque, 1)).payload).value,
+      10);
   ASSERT_EQ(b.Status(Write(Command::kRailConfigLoad, 0, stackshot::U8Value{7})), Action::kRspOk);
-  EXPECT_EQ(std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigTorque, 1)).payload).value, 3);
+  EXPECT_EQ(
+      std::get<stackshot::U8Value>(b.AskRead(Read(Command::kRailConfigTorque, 1)).payload).value,
+      3);
 }
 
 TEST(Stackshot3xTest, CorruptStateFileIsKeptAsideAndDefaultsUsed) {
@@ -481,7 +579,8 @@ TEST(Stackshot3xTest, CorruptStateFileIsKeptAsideAndDefaultsUsed) {
   SsBench b({}, &store);
   EXPECT_TRUE(std::filesystem::exists(file.string() + ".corrupt"));
   EXPECT_NE(b.dev->StoreError().find(file.string()), std::string::npos);
-  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value, 0xFFFFFFFFu);
+  EXPECT_EQ(std::get<stackshot::U32Value>(b.AskRead(Read(Command::kSerialNumber)).payload).value,
+            0xFFFFFFFFu);
   ASSERT_FALSE(b.dev->Log().empty());
   EXPECT_NE(b.dev->Log()[0].find("corrupt"), std::string::npos);
   // The device goes on with a fresh, readable file.
@@ -494,29 +593,34 @@ stackshot::MotionConfig Ramp(float t_end, float y_end) {
   stackshot::MotionConfig m;
   m.axis_type = stackshot::AxisType::kRail;
   m.curves[0].p = {stackshot::BezierPoint{0.0f, 0.0f}, stackshot::BezierPoint{t_end / 3, 0.0f},
-                   stackshot::BezierPoint{2 * t_end / 3, y_end}, stackshot::BezierPoint{t_end, y_end}};
+                   stackshot::BezierPoint{2 * t_end / 3, y_end},
+                   stackshot::BezierPoint{t_end, y_end}};
   return m;
 }
 
 TEST(Stackshot3xTest, MotionConfigRefusesInvalidCurvesAndStartNeedsACurve) {
   SsBench b;
-  EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})), Action::kFailed);
+  EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})),
+            Action::kFailed);
   auto m = Ramp(2, 1);
   m.curves[0].p[0].x = 0.5f;  // curve 0 must start at time 0
   EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, m)), Action::kBadParam);
   m = Ramp(2, 1);
   m.curves[0].p[1].x = 3.0f;  // P1.x beyond P3.x
   EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, m)), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, Ramp(0.01f, 100))), Action::kBadParam);  // too fast
+  EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, Ramp(0.01f, 100))),
+            Action::kBadParam);  // too fast
   EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 3, Ramp(2, 1))), Action::kBadParam);
-  EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})), Action::kFailed);
+  EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})),
+            Action::kFailed);
   EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{})), Action::kBadParam);
 }
 
 TEST(Stackshot3xTest, MotionStartPlaysTheCurve) {
   SsBench b;
   ASSERT_EQ(b.Status(Write(Command::kMotionConfig, 1, Ramp(2, 1))), Action::kRspOk);
-  ASSERT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{false, true, false})), Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{false, true, false})),
+            Action::kRspOk);
   b.RunFor(999 * kMs);
   EXPECT_NEAR(Current(b, 1), 0.5 * kStepsPerMm, 2);  // symmetric ease: half way at half time
   EXPECT_EQ(StatusBits(b, 1) & 1, 1u);
@@ -539,8 +643,9 @@ void Line(SsBench& b, std::string_view l) {
 TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
   SsBench b;
   EXPECT_EQ(b.dev->Line().baud, 38400u);
-  ASSERT_EQ(b.Status(Write(Command::kRailConfigGlobalMode, 0,
-                           stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco})),
+  ASSERT_EQ(b.Status(Write(
+                Command::kRailConfigGlobalMode, 0,
+                stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco})),
             Action::kRspOk);
   EXPECT_EQ(b.dev->Line().baud, 57600u);
   Text(b);

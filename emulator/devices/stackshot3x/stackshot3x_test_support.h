@@ -15,7 +15,9 @@ namespace moco::devices::testing {
 
 class ByteRecorder final : public ByteSink {
  public:
-  void Write(wire::ByteView bytes) override { bytes_.insert(bytes_.end(), bytes.begin(), bytes.end()); }
+  void Write(wire::ByteView bytes) override {
+    bytes_.insert(bytes_.end(), bytes.begin(), bytes.end());
+  }
   wire::Bytes Take() {
     wire::Bytes out;
     out.swap(bytes_);
@@ -77,14 +79,14 @@ struct SsBench {
 inline stackshot::HostCommand Read(stackshot::Command c, uint8_t axis = 0,
                                    stackshot::Payload payload = stackshot::Empty{},
                                    bool sub_item = false) {
-  return stackshot::HostCommand{stackshot::Id(c), stackshot::Action::kRead, axis, sub_item, false,
+  return stackshot::HostCommand{stackshot::Id(c),  stackshot::Action::kRead, axis, sub_item, false,
                                 std::move(payload)};
 }
 inline stackshot::HostCommand Write(stackshot::Command c, uint8_t axis = 0,
                                     stackshot::Payload payload = stackshot::Empty{},
                                     bool sub_item = false) {
-  return stackshot::HostCommand{stackshot::Id(c), stackshot::Action::kWrite, axis, sub_item,
-                                false, std::move(payload)};
+  return stackshot::HostCommand{stackshot::Id(c),  stackshot::Action::kWrite, axis, sub_item, false,
+                                std::move(payload)};
 }
 
 }  // namespace moco::devices::testing

@@ -79,7 +79,8 @@ StateLoad FileStateStore::Load() {
   if (ec) {
     out.message += "; it could not be moved aside (" + ec.message() + ")";
   } else {
-    out.message += "; kept aside as " + CorruptPath().filename().string() + ", starting from defaults";
+    out.message +=
+        "; kept aside as " + CorruptPath().filename().string() + ", starting from defaults";
   }
   return out;
 }
