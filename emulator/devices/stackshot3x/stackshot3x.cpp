@@ -52,6 +52,7 @@ Stackshot3x::Stackshot3x(sim::Scheduler& scheduler, ByteSink& sink, Stackshot3xP
 
 Stackshot3x::~Stackshot3x() {
   powered_ = false;
+  CancelTimers();
   rig_.SetObserver(nullptr);
 }
 
@@ -94,13 +95,17 @@ void Stackshot3x::PowerOff() {
   ready_ = false;
 }
 
-void Stackshot3x::ResetVolatile() {
+void Stackshot3x::CancelTimers() {
   for (sim::Scheduler::TimerId* t : {&busy_timer_, &gap_timer_, &boot_timer_, &stack_.timer}) {
     scheduler_.Cancel(*t);
     *t = sim::Scheduler::kNoTimer;
   }
   for (ShutterRun& r : shutter_runs_) scheduler_.Cancel(r.timer);
   for (AxisState& s : axes_) scheduler_.Cancel(s.dfmoco_timer);
+}
+
+void Stackshot3x::ResetVolatile() {
+  CancelTimers();
   shutter_runs_ = {};
   stack_ = StackRun{};
   motion_ = MotionRun{};
@@ -460,10 +465,11 @@ void Stackshot3x::OnMotionFinished(int motor_id, sim::TimeNs /*time_ns*/, int64_
 void Stackshot3x::UserAbort() {
   if (!powered_) return;
   const bool stack = stack_.active;
+  const std::array<bool, 3> in_stack = stack_.used;
   if (stack) AbortStack("stack aborted by the user");
   motion_ = MotionRun{};
   for (int a = 0; a < kAxes; ++a) {
-    if (Motor(a).IsMoving() || stack) {
+    if (Motor(a).IsMoving() || (stack && in_stack[Index(a)])) {
       axes_[Index(a)].user_aborted = true;
       Motor(a).EmergencyHalt();
     }

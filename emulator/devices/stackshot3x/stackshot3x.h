@@ -235,6 +235,7 @@ class Stackshot3x final : public Device, private sim::RigObserver {
   // Lifecycle.
   void Boot();
   void ResetVolatile();
+  void CancelTimers();
   void LoadNvm();
   void SaveNvm();
   nlohmann::json NvmJson() const;

@@ -39,7 +39,6 @@ int32_t ClampI32(int64_t v) {
 void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCommand& c) {
   const int axis = p.axis;
   const bool axis_ok = axis < kAxes;
-  const bool read = c.action == Action::kRead;
   switch (static_cast<Command>(c.command)) {
     case Command::kRailMove: {
       const auto* m = As<stackshot::RailMove>(c);
@@ -174,7 +173,6 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
     default:
       break;
   }
-  (void)read;
   Reply(p, Action::kUnsupportedCmd);
 }
 
