@@ -153,8 +153,9 @@ class Stackshot3x final : public Device, private sim::RigObserver {
   // A button pressed: every moving axis stops dead and gets the sticky
   // RAIL_STATUS_USER_ABORTED bit; a stack run is abandoned.
   void UserAbort();
-  // Settings->Mode on the panel (the way out of DfMoco mode besides a power
-  // cycle of an unsaved mode).
+  // Settings->Mode on the panel: switches at once and, as the menu's settings
+  // are the power-on settings, stores the mode in slot 0 (created from the
+  // factory defaults when empty). The way out of DfMoco mode.
   void SetGlobalModeFromPanel(stackshot::GlobalMode mode);
 
   // --- observation ---

@@ -584,6 +584,11 @@ void Stackshot3x::SetGlobalModeFromPanel(stackshot::GlobalMode mode) {
     return;
   }
   EnterMode(mode);
+  // The menu's settings are the power-on settings: the mode goes into slot 0.
+  Stackshot3xConfig power_on = slots_[0].value_or(Stackshot3xConfig::Defaults(profile_));
+  power_on.global_mode = mode;
+  slots_[0] = power_on;
+  SaveNvm();
 }
 
 void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {

@@ -629,6 +629,101 @@ TEST(Stackshot3xTest, MotionStartPlaysTheCurve) {
   EXPECT_EQ(StatusBits(b, 1) & 1, 0u);
 }
 
+TEST(Stackshot3xTest, RemainingConfigValuesAndBusyReplies) {
+  SsBench b;
+  // Total distance written in mils reads back in mm; per axis.
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigTotalDistance, 2,
+                           stackshot::UnitsF32{Units::kMils, 1000.0f})),
+            Action::kRspOk);
+  const auto td =
+      b.AskRead(Read(Command::kRailConfigTotalDistance, 2, stackshot::UnitsQuery{Units::kMm}));
+  EXPECT_NEAR(std::get<stackshot::UnitsF32>(td.payload).value.value(), 25.4f, 1e-4);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigDistancePerStep, 0,
+                           stackshot::UnitsF32{Units::kSteps, 0.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigDistancePerStep, 0,
+                           stackshot::UnitsF32{Units::kSteps, 16.0f})),
+            Action::kRspOk);
+  const auto dps =
+      b.AskRead(Read(Command::kRailConfigDistancePerStep, 0, stackshot::UnitsQuery{Units::kMm}));
+  EXPECT_FLOAT_EQ(std::get<stackshot::UnitsF32>(dps.payload).value.value(), 0.01f);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigRotaryDegrees, 1, stackshot::F32Value{361.0f})),
+            Action::kBadParam);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigRotaryBacklash, 1, stackshot::F32Value{2.5f})),
+            Action::kRspOk);
+  EXPECT_EQ(
+      std::get<stackshot::F32Value>(b.AskRead(Read(Command::kRailConfigRotaryBacklash, 1)).payload)
+          .value,
+      stackshot::F32(2.5f));
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigMode, 0,
+                     stackshot::EnumValue<stackshot::RailMode>{stackshot::RailMode::kRotary})),
+      Action::kRspOk);
+  EXPECT_EQ(b.Status(Write(Command::kClose)), Action::kRspOk);
+  // While an axis moves: stack, motion start and load are BUSY.
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{1})), Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kMotionConfig, 0, Ramp(2, 1))), Action::kRspOk);
+  ASSERT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, 2)), Action::kRspOk);
+  stackshot::RailStack st;
+  st.num_steps = 2;
+  st.y_end = 100;
+  EXPECT_EQ(b.Status(Write(Command::kRailStack, 0, st)), Action::kBusy);
+  EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})),
+            Action::kBusy);
+  EXPECT_EQ(b.Status(Write(Command::kRailConfigLoad, 0, stackshot::U8Value{1})), Action::kBusy);
+  b.RunFor(3 * kSec);
+  // STOP on an axis of a running stack abandons the stack.
+  ASSERT_EQ(b.Status(Write(Command::kRailStack, 0, st)), Action::kRspOk);
+  EXPECT_TRUE(b.dev->StackRunning());
+  EXPECT_EQ(b.Status(Write(Command::kRailStop, 1)), Action::kRspOk);
+  EXPECT_FALSE(b.dev->StackRunning());
+  EXPECT_EQ(StatusBits(b, 0, Command::kRailStackStatus), 0u);
+}
+
+TEST(Stackshot3xTest, BytesAfterResetReachTheRestartedControllerUnlessItBoots) {
+  for (const int64_t boot_ms : {0, 100}) {
+    SCOPED_TRACE(boot_ms);
+    Stackshot3xProfile prof;
+    prof.boot_delay_ms = boot_ms;
+    SsBench b(prof);
+    b.RunFor(200 * kMs);
+    wire::Bytes stream;
+    stackshot::EncodeHostCommand(Write(Command::kReset), stream);
+    stackshot::EncodeHostCommand(Read(Command::kPing, 0, stackshot::PingRequest{3}), stream);
+    b.Feed(stream);
+    b.RunFor(200 * kMs);
+    const auto r = b.Replies();
+    ASSERT_EQ(r.size(), boot_ms == 0 ? 2u : 1u);
+    EXPECT_EQ(r[0].command, stackshot::Id(Command::kReset));
+    EXPECT_TRUE(b.dev->Ready());
+  }
+}
+
+TEST(Stackshot3xTest, PanelModeIsThePowerOnModeSerialModeIsNot) {
+  SsBench b;
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigBacklight, 0, stackshot::U8Value{7})),
+            Action::kRspOk);
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigSave, 0, stackshot::U8Value{0})), Action::kRspOk);
+  b.dev->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
+  b.dev->PowerOff();
+  b.dev->PowerOn();
+  ASSERT_TRUE(b.dev->InDfmocoMode());
+  EXPECT_EQ(b.dev->config().backlight, 7);  // the rest of slot 0 is kept
+  b.dev->SetGlobalModeFromPanel(stackshot::GlobalMode::kAdvanced);
+  b.dev->PowerOff();
+  b.dev->PowerOn();
+  EXPECT_FALSE(b.dev->InDfmocoMode());
+  // Over serial: until the power goes.
+  ASSERT_EQ(b.Status(Write(
+                Command::kRailConfigGlobalMode, 0,
+                stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco})),
+            Action::kRspOk);
+  EXPECT_TRUE(b.dev->InDfmocoMode());
+  b.dev->PowerOff();
+  b.dev->PowerOn();
+  EXPECT_FALSE(b.dev->InDfmocoMode());
+}
+
 // --- DfMoco mode ----------------------------------------------------------------------
 
 std::string Text(SsBench& b) {
