@@ -119,6 +119,9 @@ class Stackshot3x final : public Device, private sim::RigObserver {
   static constexpr float kMaxConfigTimeS = 3600.0f;
   static constexpr float kMaxRampTimeS = 10.0f;
   static constexpr double kMmPerMil = 0.0254;
+  // Longest travel a distance, position or move may ask for, in steps (far
+  // beyond any rail; keeps step arithmetic in range). Beyond it: BAD_PARAM.
+  static constexpr double kMaxTravelSteps = 1e9;
   // `im` crawls at this fraction of the axis's maximum speed.
   static constexpr double kInchFraction = 0.02;
 

@@ -48,7 +48,9 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
       }
       // "COMM_STATUS_BUSY StackShot is currently moving. The move request was rejected."
       if (AxisMoving(axis)) return Reply(p, Action::kBusy);
-      const int64_t steps = std::llround(m->distance.value() * StepsPerUnit(axis, m->units));
+      const double steps_d = m->distance.value() * StepsPerUnit(axis, m->units);
+      if (!(steps_d <= kMaxTravelSteps)) return Reply(p, Action::kBadParam);
+      const int64_t steps = std::llround(steps_d);
       const int sign = m->direction == stackshot::Direction::kBack ? -1 : 1;
       // Relative to the target position: two 10 mm moves make 20 mm.
       const int64_t target = axes_[Index(axis)].target_rail_steps + sign * steps;
@@ -70,7 +72,9 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
           (motion_.pending && motion_.axes[Index(axis)])) {
         return Reply(p, Action::kBusy);
       }
-      const int64_t steps = std::llround(m->distance.value() * StepsPerUnit(axis, m->units));
+      const double steps_d = m->distance.value() * StepsPerUnit(axis, m->units);
+      if (!(steps_d <= kMaxTravelSteps)) return Reply(p, Action::kBadParam);
+      const int64_t steps = std::llround(steps_d);
       const int sign = m->direction == stackshot::Direction::kBack ? -1 : 1;
       // Relative to the rail's immediate position.
       const int64_t target = RailPosition(axis) + sign * steps;
@@ -219,7 +223,9 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
     const auto* w = As<stackshot::UnitsF32>(c);
     if (!stackshot::IsValid(w->units) || (no_steps && w->units == Units::kSteps)) return bad();
     const std::optional<double> mm = ToMm(p.axis, w->value.value(), w->units);
-    if (!mm || *mm < 0 || (positive && *mm == 0)) return bad();
+    if (!mm || *mm < 0 || (positive && *mm == 0) || *mm * StepsPerMm(p.axis) > kMaxTravelSteps) {
+      return bad();
+    }
     if (speed && *mm * StepsPerMm(p.axis) > profile_.axes[ax].max_speed_steps_per_s) return bad();
     field_mm = *mm;
     ok();
@@ -544,6 +550,13 @@ void Stackshot3x::HandleMotion(const stackshot::Packet& p, const stackshot::Host
         m->axis_type == stackshot::AxisType::kRotary
             ? profile_.axes[Index(axis)].steps_per_rev * static_cast<double>(a.rotary_ratio) / 360.0
             : StepsPerMm(axis);
+    for (const stackshot::BezierCurve& curve : m->curves) {
+      for (const stackshot::BezierPoint& pt : curve.p) {
+        if (!(std::fabs(pt.y.value()) * steps_per_unit <= kMaxTravelSteps)) {
+          return Reply(p, Action::kBadParam);
+        }
+      }
+    }
     sim::SplineOrFault s =
         sim::MakeSpline(curves, steps_per_unit, profile_.axes[Index(axis)].max_speed_steps_per_s);
     if (!s.ok()) return Reply(p, Action::kBadParam);

@@ -161,6 +161,10 @@ TEST(Stackshot3xTest, MoveRejectsBadParameters) {
   EXPECT_EQ(b.Status(Move(0, kFwd, Units::kDegrees, false, 1)), Action::kBadParam);
   EXPECT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, NAN)), Action::kBadParam);
   EXPECT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, -1)), Action::kBadParam);
+  EXPECT_EQ(b.Status(Move(0, kFwd, Units::kMm, false, 1e30f)), Action::kBadParam);
+  EXPECT_EQ(
+      b.Status(Write(Command::kRailConfigBacklash, 0, stackshot::UnitsF32{Units::kMm, 1e30f})),
+      Action::kBadParam);
   auto at = [](float d, float f) {
     return Write(Command::kRailMoveAtSpeed, 0, stackshot::RailMoveAtSpeed{kFwd, Units::kMm, d, f});
   };
@@ -611,6 +615,9 @@ TEST(Stackshot3xTest, MotionConfigRefusesInvalidCurvesAndStartNeedsACurve) {
   EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, Ramp(0.01f, 100))),
             Action::kBadParam);  // too fast
   EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 3, Ramp(2, 1))), Action::kBadParam);
+  m = Ramp(2, 0);
+  for (auto& pt : m.curves[0].p) pt.y = 1e30f;  // standing still, far off
+  EXPECT_EQ(b.Status(Write(Command::kMotionConfig, 0, m)), Action::kBadParam);
   EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{true, false, false})),
             Action::kFailed);
   EXPECT_EQ(b.Status(Write(Command::kMotionStart, 0, stackshot::MotionStart{})), Action::kBadParam);
