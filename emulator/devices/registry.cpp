@@ -5,6 +5,7 @@
 
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/dmc16/dmc16.h"
+#include "devices/stackshot3x/stackshot3x.h"
 
 namespace moco::devices {
 
@@ -14,6 +15,8 @@ const std::vector<DeviceModel>& DeviceModels() {
        "fixtures/profiles/dmc16.json"},
       {"dfmoco", "DFMoco Arduino (Uno or Mega), Dragonframe's ASCII sketch protocol",
        wire::Protocol::kDfmoco, "fixtures/profiles/dfmoco-uno.json"},
+      {"stackshot3x", "Cognisys StackShot 3X three-axis controller, StackShot binary protocol",
+       wire::Protocol::kStackshot, "fixtures/profiles/stackshot3x.json"},
   };
   return kModels;
 }
@@ -35,6 +38,11 @@ std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& 
     DfmocoProfile profile =
         profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
     return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
+  }
+  if (model == "stackshot3x") {
+    Stackshot3xProfile profile =
+        profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
+    return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile));
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {
