@@ -19,6 +19,7 @@ struct DeviceModel {
   std::string_view description;      // one line for --help
   wire::Protocol protocol;           // what its serial line speaks
   std::string_view default_profile;  // e.g. "fixtures/profiles/dmc16.json" (informational)
+  bool keeps_state = false;          // has NVM kept in a state file (--state)
 };
 
 // Every model, in a stable order.
@@ -30,8 +31,11 @@ const DeviceModel* FindDeviceModel(std::string_view name);
 // file at `profile_path` (empty: the model's built-in defaults). Throws
 // ProfileError for a bad profile and std::invalid_argument (listing the
 // models) for an unknown model. `scheduler` and `out` must outlive the device.
+// `state_path`: where a model that keeps_state keeps its NVM (written
+// atomically; empty: in memory only, lost at exit). Ignored by other models.
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
-                                     sim::Scheduler& scheduler, ByteSink& out);
+                                     sim::Scheduler& scheduler, ByteSink& out,
+                                     const std::string& state_path = "");
 
 }  // namespace moco::devices
 

@@ -56,17 +56,29 @@ void Link::SetDevice(devices::Device* device) {
     CancelTimer(in_wake_);
     return;
   }
-  const uint32_t rate = options_.pacing ? device_->Line().BytesPerSecond() : 0;
-  in_pacer_ = LinePacer(rate);
-  out_pacer_ = LinePacer(rate);
+  line_rate_ = options_.pacing ? device_->Line().BytesPerSecond() : 0;
+  in_pacer_ = LinePacer(line_rate_);
+  out_pacer_ = LinePacer(line_rate_);
   if (host_open_ && options_.report_host_link) device_->OnHostLink(true);
   StartRead();
 }
 
 // ---- Device -> host ---------------------------------------------------------
 
+void Link::FollowLineRate() {
+  // A device may change its line (a StackShot switching to its DfMoco dialect
+  // at 57600): the pacers follow from the next byte on.
+  if (!options_.pacing || device_ == nullptr) return;
+  const uint32_t rate = device_->Line().BytesPerSecond();
+  if (rate == line_rate_) return;
+  line_rate_ = rate;
+  in_pacer_ = LinePacer(rate);
+  out_pacer_ = LinePacer(rate);
+}
+
 void Link::Write(wire::ByteView bytes) {
   if (stopped_ || bytes.empty()) return;
+  FollowLineRate();
   const sim::TimeNs now = scheduler_.Now();
   stats_.bytes_from_device += bytes.size();
   if (options_.observer != nullptr) options_.observer->OnTraffic(now, Direction::kToHost, bytes);
@@ -161,6 +173,7 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
   if (now < cut_until_ns_) {
     stats_.cut_dropped += n;
   } else {
+    FollowLineRate();
     for (const TimedBytes& chunk : faults_.Apply(Direction::kToDevice, bytes, now)) {
       for (uint8_t b : chunk.bytes) in_.push_back({in_pacer_.Take(chunk.at_ns), b});
     }

@@ -188,6 +188,7 @@ class Link final : public devices::ByteSink {
   // in the PTY's flip buffer during the first.
   static constexpr sim::TimeNs kReclaimRetryNs = 20 * sim::kNsPerMs;
 
+  void FollowLineRate();
   void StartRead();
   void OnRead(const ErrorCode& ec, size_t n);
   void DeliverInbound();
@@ -223,6 +224,7 @@ class Link final : public devices::ByteSink {
   std::array<uint8_t, kReadChunk> read_buf_{};
   bool reading_ = false;
   std::deque<InByte> in_;
+  uint32_t line_rate_ = 0;  // bytes/s the pacers run at (0: unpaced)
   LinePacer in_pacer_;
   sim::Scheduler::TimerId in_wake_ = sim::Scheduler::kNoTimer;
 

@@ -2,6 +2,7 @@
 #include "transport/serve.h"
 
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -66,6 +67,19 @@ class DebugTap final : public TrafficObserver {
 };
 
 }  // namespace
+
+// $XDG_STATE_HOME/mocosim/<name>.json, else ~/.local/state/mocosim/<name>.json,
+// else ./<name>.state.json.
+std::string DefaultStatePath(const std::string& name) {
+  namespace fs = std::filesystem;
+  if (const char* x = std::getenv("XDG_STATE_HOME"); x != nullptr && *x == '/') {
+    return (fs::path(x) / "mocosim" / (name + ".json")).string();
+  }
+  if (const char* h = std::getenv("HOME"); h != nullptr && *h == '/') {
+    return (fs::path(h) / ".local" / "state" / "mocosim" / (name + ".json")).string();
+  }
+  return name + ".state.json";
+}
 
 struct Emulator::Served {
   DeviceConfig config;
@@ -141,8 +155,17 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       } catch (const std::exception& e) {
         throw std::runtime_error(d.name + ": " + e.what());
       }
+      if (model->keeps_state) {
+        if (s->config.state_path.empty()) s->config.state_path = DefaultStatePath(d.name);
+        std::error_code ec;
+        std::filesystem::create_directories(
+            std::filesystem::path(s->config.state_path).parent_path(), ec);
+      } else {
+        s->config.state_path.clear();
+      }
       try {
-        s->device = devices::CreateDevice(d.model, d.profile_path, scheduler_, s->server->sink());
+        s->device = devices::CreateDevice(d.model, d.profile_path, scheduler_, s->server->sink(),
+                                          s->config.state_path);
       } catch (const devices::ProfileError&) {
         throw;
       } catch (const std::exception& e) {
@@ -163,6 +186,7 @@ Emulator::~Emulator() { Stop(); }
 const std::string& Emulator::name(size_t i) const { return served_[i]->config.name; }
 devices::Device& Emulator::device(size_t i) { return *served_[i]->device; }
 DeviceServer& Emulator::server(size_t i) { return *served_[i]->server; }
+const std::string& Emulator::state_path(size_t i) const { return served_[i]->config.state_path; }
 
 void Emulator::RecordEvent(const std::string& name, const control::SessionEntry& entry) {
   for (auto& s : served_) {
@@ -182,7 +206,9 @@ void Emulator::Start() {
   for (auto& s : served_) {
     driver_.Sync();
     s->device->PowerOn();
-    Log(LogLevel::kError, s->config.name + " (" + s->config.model + ") on " + s->server->Where());
+    Log(LogLevel::kError,
+        s->config.name + " (" + s->config.model + ") on " + s->server->Where() +
+            (s->config.state_path.empty() ? "" : ", state " + s->config.state_path));
   }
   driver_.Kick();
   signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM);
@@ -273,6 +299,7 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
       }
       dc.profile_path = path_of(d.GetString("profile", ""));
       dc.record_path = path_of(d.GetString("record", ""));
+      dc.state_path = path_of(d.GetString("state", ""));
       dc.no_pacing = d.GetBool("no_pacing", false);
       dc.faults = d.GetString("faults", "");
       d.Finish();

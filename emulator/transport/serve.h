@@ -34,6 +34,9 @@ struct DeviceConfig {
   std::string endpoint;      // "pty:/tmp/dmc16", "tcp:127.0.0.1:5000", "tcp:5000"
   std::string profile_path;  // empty: the model's built-in profile
   std::string record_path;   // empty: no recording
+  // Models with NVM (StackShot): the state file; empty: the default
+  // $XDG_STATE_HOME/mocosim/<name>.json (~/.local/state/mocosim/<name>.json).
+  std::string state_path;
   bool no_pacing = false;
   std::string faults;  // link fault config, e.g. "seed=1,drop=0.01"; empty: off
 };
@@ -55,7 +58,7 @@ class ConfigError : public std::runtime_error {
 
 // Parses a run file:
 //   {"devices": [{"model": "dmc16", "endpoint": "pty:/tmp/dmc16", "name": "a",
-//                 "profile": "...", "record": "...", "no_pacing": false,
+//                 "profile": "...", "record": "...", "state": "...", "no_pacing": false,
 //                 "faults": "..."}, ...],
 //    "control": "/tmp/mocosim.sock", "scenario": "...", "bind": "127.0.0.1",
 //    "log_level": "info"}
@@ -101,6 +104,8 @@ class Emulator {
   const std::string& name(size_t i) const;
   devices::Device& device(size_t i);
   DeviceServer& server(size_t i);
+  // The state file in use for device i ("" for models without NVM).
+  const std::string& state_path(size_t i) const;
   const EmulatorConfig& config() const { return config_; }
   void Log(LogLevel level, std::string_view line) const;
   void SetHooks(EmulatorHooks hooks) { hooks_ = std::move(hooks); }

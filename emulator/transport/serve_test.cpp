@@ -10,6 +10,7 @@
 
 #include "control/session.h"
 #include "transport/dmc_host_client.h"
+#include "wire/stackshot.h"
 
 namespace moco::transport {
 namespace {
@@ -137,6 +138,67 @@ TEST(Serve, DfmocoEndToEndOverPtyAtTheSketchLineRate) {
   close(fd);
   asio::post(e.io(), [&] { e.Stop(); });
   io.join();
+  fs::remove_all(dir);
+}
+
+// Sends one StackShot command and returns the reply packet (nullopt on timeout).
+std::optional<stackshot::Packet> StackshotAsk(int fd, const stackshot::HostCommand& c) {
+  wire::Bytes out;
+  if (!stackshot::EncodeHostCommand(c, out, stackshot::ChecksumAlgorithm::kConstant69)) return {};
+  if (!testing::WriteAll(fd, out.data(), out.size())) return {};
+  stackshot::PacketDecoder decoder(/*from_device=*/true);
+  std::vector<stackshot::DecodedPacket> got;
+  for (int i = 0; i < 100 && got.empty(); ++i) {
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 5000) <= 0) return {};
+    uint8_t buf[256];
+    const ssize_t r = read(fd, buf, sizeof buf);
+    if (r <= 0) return {};
+    decoder.Feed(wire::ByteView(buf, static_cast<size_t>(r)), got);
+  }
+  if (got.empty()) return {};
+  return got.front().packet;
+}
+
+TEST(Serve, Stackshot3xEndToEndOverPtyKeepsItsSerialNumberInTheStateFile) {
+  const fs::path dir = TempDir();
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig d;
+  d.model = "stackshot3x";
+  d.endpoint = "pty:" + (dir / "ss").string();
+  d.state_path = (dir / "nvm.json").string();
+  config.devices = {d};
+  auto serial_write = stackshot::HostCommand{stackshot::Id(stackshot::Command::kSerialNumber),
+                                             stackshot::Action::kWrite,
+                                             0,
+                                             false,
+                                             false,
+                                             stackshot::U32Value{4242}};
+  for (int run = 0; run < 2; ++run) {
+    Emulator e(config, [](std::string_view) {});
+    EXPECT_EQ(e.state_path(0), d.state_path);
+    e.Start();
+    std::thread io([&] { e.Run(); });
+    const int fd = testing::OpenPtyHost(e.server(0).pty_path());
+    ASSERT_GE(fd, 0);
+    auto ping =
+        StackshotAsk(fd, {stackshot::Id(stackshot::Command::kPing), stackshot::Action::kRead, 0,
+                          false, false, stackshot::PingRequest{0x5A}});
+    ASSERT_TRUE(ping.has_value());
+    EXPECT_EQ(ping->data, (wire::Bytes{0xA5, 0x00})) << "PING answers the value xor 0xFF";
+    // Write-once serial number: the first run writes it, the second (a new
+    // process on the same state file) finds it taken.
+    auto w = StackshotAsk(fd, serial_write);
+    ASSERT_TRUE(w.has_value());
+    EXPECT_EQ(w->action, static_cast<uint8_t>(run == 0 ? stackshot::Action::kRspOk
+                                                       : stackshot::Action::kFailed))
+        << "run " << run;
+    close(fd);
+    asio::post(e.io(), [&] { e.Stop(); });
+    io.join();
+    EXPECT_TRUE(fs::exists(dir / "nvm.json"));
+  }
   fs::remove_all(dir);
 }
 

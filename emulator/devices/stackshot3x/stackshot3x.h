@@ -103,7 +103,7 @@ struct Stackshot3xConfig {
   static std::optional<Stackshot3xConfig> FromJson(const nlohmann::json& j);
 };
 
-class Stackshot3x final : public Device, private sim::RigObserver {
+class Stackshot3x : public Device, private sim::RigObserver {
  public:
   static constexpr int kAxes = 3;
   static constexpr int kShutters = 2;
