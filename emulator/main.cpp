@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
   struct OneDevice {
     CLI::App* cmd = nullptr;
     moco::transport::DeviceConfig config;
-    std::string pty_path, tcp_spec, log_level = "info", control_path, scenario_path;
+    std::string pty_path, tcp_spec, wifi_spec, log_level = "info", control_path, scenario_path;
   };
   std::vector<std::unique_ptr<OneDevice>> one_device;
   for (const auto& model : moco::devices::DeviceModels()) {
@@ -182,6 +182,14 @@ int main(int argc, char** argv) {
         "--tcp", o->tcp_spec,
         "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
     pty_opt->excludes(tcp_opt);
+    if (model.protocol == moco::wire::Protocol::kStackshot) {
+      auto* wifi_opt = o->cmd->add_option(
+          "--wifi", o->wifi_spec,
+          "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
+          "connect to its TCP port. ADDRESS[:UDP_PORT[:HOST_TCP_PORT]], default "
+          "0.0.0.0:24869:24870 (give \"\" for the defaults)");
+      wifi_opt->excludes(pty_opt)->excludes(tcp_opt);
+    }
     o->cmd
         ->add_option("--profile", o->config.profile_path,
                      "Device profile (JSON; default: built-in, as " +
@@ -193,6 +201,13 @@ int main(int argc, char** argv) {
     o->cmd->add_option("--control", o->control_path,
                        "Serve the JSON-lines control socket at this path (e-stop, limits, "
                        "inputs, power, faults, state; docs/control.md)");
+    if (model.keeps_state) {
+      o->cmd->add_option(
+          "--state", o->config.state_path,
+          "File keeping the device's NVM (settings, slots, serial number, log) "
+          "across runs, written atomically (default: "
+          "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)");
+    }
     o->cmd
         ->add_option("--scenario", o->scenario_path,
                      "Play this scenario file of timed control events (docs/control.md)")
@@ -234,14 +249,17 @@ int main(int argc, char** argv) {
   for (auto& o : one_device) {
     if (!o->cmd->parsed()) continue;
     const std::string cmd = o->config.model;
-    if (o->pty_path.empty() && o->tcp_spec.empty()) {
+    const bool wifi = o->cmd->count("--wifi") > 0;
+    if (o->pty_path.empty() && o->tcp_spec.empty() && !wifi) {
       std::fprintf(stderr,
                    "mocosim %s: say where to serve the device: --pty /tmp/%s or "
                    "--tcp 127.0.0.1:5000\n",
                    cmd.c_str(), cmd.c_str());
       return 2;
     }
-    o->config.endpoint = o->pty_path.empty() ? "tcp:" + o->tcp_spec : "pty:" + o->pty_path;
+    o->config.endpoint = wifi                  ? "wifi:" + o->wifi_spec
+                         : o->pty_path.empty() ? "tcp:" + o->tcp_spec
+                                               : "pty:" + o->pty_path;
     moco::transport::EmulatorConfig config;
     config.devices.push_back(o->config);
     config.control_path = o->control_path;

@@ -4,13 +4,15 @@
 #include <charconv>
 #include <initializer_list>
 #include <stdexcept>
+#include <vector>
 
 namespace moco::transport {
 namespace {
 
 constexpr std::string_view kForms =
     "use pty:<path> (e.g. pty:/tmp/dmc16), tcp:<port> or tcp:<address>:<port> "
-    "(e.g. tcp:127.0.0.1:5000, tcp:127.0.0.1:0 for a free port)";
+    "(e.g. tcp:127.0.0.1:5000, tcp:127.0.0.1:0 for a free port), or wifi: for a StackShot "
+    "on Wi-Fi (wifi:[address[:udp port[:host tcp port]]], default 0.0.0.0:24869:24870)";
 
 // Concatenates pieces (also avoids g++ 12's false -Wrestrict on
 // "literal" + std::string at -O2).
@@ -62,6 +64,34 @@ std::variant<EndpointSpec, std::string> ParseEndpointSpec(std::string_view spec)
     out.port = *port;
     return out;
   }
+  if (spec.starts_with("wifi:") || spec == "wifi") {
+    out.kind = EndpointSpec::Kind::kWifi;
+    out.port = kFindStackUdpPort;
+    out.host_tcp_port = kStackHostTcpPort;
+    std::string_view rest = spec.size() > 5 ? spec.substr(5) : std::string_view();
+    std::vector<std::string_view> parts;
+    while (!rest.empty()) {
+      const size_t colon = rest.find(':');
+      parts.push_back(rest.substr(0, colon));
+      if (colon == std::string_view::npos) break;
+      rest = rest.substr(colon + 1);
+    }
+    if (parts.size() > 3) return Cat({"\"", spec, "\" has too many parts: ", kForms});
+    if (!parts.empty() && !parts[0].empty()) out.address = std::string(parts[0]);
+    if (parts.size() > 1) {
+      const auto p = ParsePort(parts[1]);
+      if (!p) return Cat({"\"", parts[1], "\" in \"", spec, "\" is not a UDP port 0..65535"});
+      out.port = *p;
+    }
+    if (parts.size() > 2) {
+      const auto p = ParsePort(parts[2]);
+      if (!p || *p == 0) {
+        return Cat({"\"", parts[2], "\" in \"", spec, "\" is not a host TCP port 1..65535"});
+      }
+      out.host_tcp_port = *p;
+    }
+    return out;
+  }
   return Cat({"unknown endpoint \"", spec, "\": ", kForms});
 }
 
@@ -82,6 +112,14 @@ DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeO
     lo.name = "pty " + spec_.path;
     link_ = std::make_unique<Link>(driver, std::move(lo));
     pty_ = std::make_unique<PtyPort>(*link_, spec_.path);
+  } else if (spec_.kind == EndpointSpec::Kind::kWifi) {
+    // No serial line on Wi-Fi: bytes are not paced; output with no host is dropped.
+    lo.pacing = false;
+    lo.hold_while_closed = false;
+    const std::string address = spec_.address.value_or("0.0.0.0");
+    lo.name = "wifi " + address + ":" + std::to_string(spec_.port);
+    link_ = std::make_unique<Link>(driver, std::move(lo));
+    wifi_ = std::make_unique<WifiPort>(*link_, address, spec_.port, spec_.host_tcp_port);
   } else {
     lo.hold_while_closed = false;
     const std::string address = spec_.address.value_or(options.bind_address);
@@ -99,6 +137,7 @@ void DeviceServer::Serve(devices::Device& device) {
   link_->SetDevice(&device);
   if (pty_) pty_->Start();
   if (tcp_) tcp_->Start();
+  if (wifi_) wifi_->Start();
 }
 
 void DeviceServer::Stop() {
@@ -106,16 +145,18 @@ void DeviceServer::Stop() {
   if (link_) link_->Stop();
   if (pty_) pty_->Stop();
   if (tcp_) tcp_->Stop();
+  if (wifi_) wifi_->Stop();
 }
 
 std::string DeviceServer::Where() const {
   if (pty_) return "pty " + pty_->link_path() + " -> " + pty_->slave_name();
   if (tcp_) return "tcp " + tcp_->Where();
+  if (wifi_) return wifi_->Where();
   return {};
 }
 
 void DeviceServer::CutLink(sim::TimeNs duration_ns) {
-  link_->Cut(duration_ns, /*close_stream=*/tcp_ != nullptr);
+  link_->Cut(duration_ns, /*close_stream=*/tcp_ != nullptr || wifi_ != nullptr);
 }
 
 }  // namespace moco::transport

@@ -18,6 +18,7 @@
 #include "transport/realtime_driver.h"
 #include "transport/tcp_port.h"
 #include "transport/traffic.h"
+#include "transport/wifi_port.h"
 
 namespace moco::transport {
 
@@ -25,13 +26,18 @@ namespace moco::transport {
 //   pty:<path>              a PTY with a symlink at <path>
 //   tcp:<port>              TCP on the bind address (default 127.0.0.1)
 //   tcp:<address>:<port>    TCP on <address>; IPv6 as tcp:[::1]:5000
+//   wifi:[<address>[:<udp port>[:<host tcp port>]]]
+//                           a StackShot on Wi-Fi: hears FINDSTACK on UDP
+//                           (default 0.0.0.0:24869), connects to the host's
+//                           TCP port (default 24870)
 // Port 0 asks for an ephemeral port.
 struct EndpointSpec {
-  enum class Kind { kPty, kTcp };
+  enum class Kind { kPty, kTcp, kWifi };
   Kind kind = Kind::kPty;
   std::string path;                    // kPty
   std::optional<std::string> address;  // kTcp, when given in the spec
-  uint16_t port = 0;                   // kTcp
+  uint16_t port = 0;                   // kTcp; kWifi: the UDP port
+  uint16_t host_tcp_port = 0;          // kWifi
 };
 
 // Parses a spec; on failure returns a message naming the problem and the forms
@@ -84,6 +90,7 @@ class DeviceServer {
   Link& link() { return *link_; }
   PtyPort* pty() { return pty_.get(); }
   TcpPort* tcp() { return tcp_.get(); }
+  WifiPort* wifi() { return wifi_.get(); }
 
   // Faults on demand (e.g. from the control channel): cut the link for
   // duration_ns (TCP: the connection is closed too), power-cycle the device.
@@ -95,6 +102,7 @@ class DeviceServer {
   std::unique_ptr<Link> link_;
   std::unique_ptr<PtyPort> pty_;
   std::unique_ptr<TcpPort> tcp_;
+  std::unique_ptr<WifiPort> wifi_;
   bool serving_ = false;
 };
 

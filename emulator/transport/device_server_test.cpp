@@ -50,6 +50,21 @@ TEST(EndpointSpecTest, ParsesPtyAndTcpForms) {
   EXPECT_EQ(v6.port, 7);
 }
 
+TEST(EndpointSpecTest, ParsesWifiFormsWithTheSpecDefaults) {
+  const auto d = Parsed("wifi:");
+  EXPECT_EQ(d.kind, EndpointSpec::Kind::kWifi);
+  EXPECT_FALSE(d.address.has_value());
+  EXPECT_EQ(d.port, 24869);  // FINDSTACK on UDP 24869
+  EXPECT_EQ(d.host_tcp_port, 24870);
+  const auto full = Parsed("wifi:127.0.0.1:0:5555");
+  EXPECT_EQ(full.address, "127.0.0.1");
+  EXPECT_EQ(full.port, 0);
+  EXPECT_EQ(full.host_tcp_port, 5555);
+  EXPECT_NE(ParseError("wifi:1.2.3.4:x").find("not a UDP port"), std::string::npos);
+  EXPECT_NE(ParseError("wifi:1.2.3.4:1:0").find("not a host TCP port"), std::string::npos);
+  EXPECT_NE(ParseError("wifi:a:1:2:3").find("too many parts"), std::string::npos);
+}
+
 TEST(EndpointSpecTest, RejectsBadSpecsWithTheAcceptedForms) {
   EXPECT_NE(ParseError("serial:/dev/ttyUSB0").find("pty:<path>"), std::string::npos);
   EXPECT_NE(ParseError("pty:").find("names no path"), std::string::npos);

@@ -202,6 +202,66 @@ TEST(Serve, Stackshot3xEndToEndOverPtyKeepsItsSerialNumberInTheStateFile) {
   fs::remove_all(dir);
 }
 
+// The host side of StackShot Wi-Fi discovery: a TCP server, then FINDSTACK
+// datagrams to the controller until it connects (stackshot-protocol.txt 4.1).
+int AcceptAfterFindstack(int listener, uint16_t udp_port) {
+  const int udp = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(udp_port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  int fd = -1;
+  for (int attempt = 0; attempt < 50 && fd < 0; ++attempt) {
+    sendto(udp, "FINDSTACK", 9, 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    pollfd p{listener, POLLIN, 0};
+    if (poll(&p, 1, 100) > 0) fd = accept(listener, nullptr, nullptr);
+  }
+  close(udp);
+  return fd;
+}
+
+TEST(Serve, Stackshot3xWifiAnswersFindstackConnectsAndReconnects) {
+  const fs::path dir = TempDir();
+  const int listener = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(listen(listener, 4), 0);
+  socklen_t len = sizeof a;
+  getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
+  const uint16_t host_port = ntohs(a.sin_port);
+
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig d;
+  d.model = "stackshot3x";
+  d.endpoint = "wifi:127.0.0.1:0:" + std::to_string(host_port);
+  d.state_path = (dir / "nvm.json").string();
+  config.devices = {d};
+  Emulator e(config, [](std::string_view) {});
+  ASSERT_NE(e.server(0).wifi(), nullptr);
+  const uint16_t udp_port = e.server(0).wifi()->udp_port();
+  e.Start();
+  std::thread io([&] { e.Run(); });
+  for (int round = 0; round < 2; ++round) {
+    // The second round: the host went away; the controller waits for the
+    // broadcast again and reconnects.
+    const int fd = AcceptAfterFindstack(listener, udp_port);
+    ASSERT_GE(fd, 0) << "round " << round;
+    auto ping =
+        StackshotAsk(fd, {stackshot::Id(stackshot::Command::kPing), stackshot::Action::kRead, 0,
+                          false, false, stackshot::PingRequest{0x0F}});
+    ASSERT_TRUE(ping.has_value()) << "round " << round;
+    EXPECT_EQ(ping->data, (wire::Bytes{0xF0, 0x00}));
+    close(fd);
+  }
+  asio::post(e.io(), [&] { e.Stop(); });
+  io.join();
+  close(listener);
+  fs::remove_all(dir);
+}
+
 TEST(Serve, TakenTcpPortIsAClearErrorAndLeavesNothingOpen) {
   const fs::path dir = TempDir();
   EmulatorConfig first;
