@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 namespace moco::devices {
 namespace {
@@ -183,6 +185,20 @@ void ProfileReader::Finish() const {
            "check its spelling against docs/profiles.md, or remove it");
     }
   }
+}
+
+nlohmann::json ReadProfileFile(const std::string& path, std::string* where_out) {
+  const std::string where = "profile " + path;
+  if (where_out != nullptr) *where_out = where;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw ProfileError(where +
+                       ": cannot be opened; check the path and that the file is readable "
+                       "(the shipped profiles are in fixtures/profiles/)");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseProfileText(text.str(), where);
 }
 
 nlohmann::json ParseProfileText(std::string_view text, const std::string& where) {

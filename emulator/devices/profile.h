@@ -68,6 +68,11 @@ class ProfileReader {
 // byte offset. `where` as for ProfileReader.
 nlohmann::json ParseProfileText(std::string_view text, const std::string& where);
 
+// Reads and parses a profile file; `where` becomes "profile <path>" (returned
+// through where_out for the field errors that follow). Throws ProfileError
+// for an unreadable file or bad JSON.
+nlohmann::json ReadProfileFile(const std::string& path, std::string* where_out = nullptr);
+
 }  // namespace moco::devices
 
 #endif  // MOCO_DEVICES_PROFILE_H_

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "transport/device_server.h"
+#include "transport/dmc_host_client.h"
 #include "transport/test_support.h"
 
 namespace {
@@ -31,14 +32,11 @@ using moco::transport::ServeOptions;
 namespace asio = moco::transport::asio;
 using Clock = std::chrono::steady_clock;
 
+using moco::transport::testing::ConnectTcp;
+using moco::transport::testing::OpenPtyHost;
+
 bool WriteAll(int fd, const char* p, size_t n) {
-  while (n > 0) {
-    const ssize_t w = write(fd, p, n);
-    if (w <= 0) return false;
-    p += w;
-    n -= static_cast<size_t>(w);
-  }
-  return true;
+  return moco::transport::testing::WriteAll(fd, reinterpret_cast<const uint8_t*>(p), n);
 }
 
 bool ReadAll(int fd, char* p, size_t n) {
@@ -90,28 +88,6 @@ std::vector<double> RoundTrips(int fd, size_t frame_bytes, int iterations) {
     if (i >= 0) us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }
   return us;
-}
-
-int OpenPtyHost(const std::string& path) {
-  const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC);
-  if (fd < 0) return fd;
-  termios t{};
-  tcgetattr(fd, &t);
-  cfmakeraw(&t);
-  tcsetattr(fd, TCSANOW, &t);
-  return fd;
-}
-
-int ConnectTcp(uint16_t port) {
-  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(port);
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) return -1;
-  const int one = 1;
-  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
-  return fd;
 }
 
 // Serves an echo device on `spec` on an io thread and runs the round trips.

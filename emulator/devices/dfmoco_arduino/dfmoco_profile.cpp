@@ -88,14 +88,9 @@ nlohmann::json DfmocoProfile::ToJson() const {
 }
 
 DfmocoProfile LoadDfmocoProfile(const std::filesystem::path& path) {
-  const std::string where = "profile " + path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw ProfileError(where + ": cannot be opened; check the path and that the file is readable");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return DfmocoProfile::FromJson(ParseProfileText(text.str(), where), where);
+  std::string where;
+  const nlohmann::json j = ReadProfileFile(path.string(), &where);
+  return DfmocoProfile::FromJson(j, where);
 }
 
 }  // namespace moco::devices

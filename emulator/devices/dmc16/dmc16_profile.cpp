@@ -113,16 +113,9 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
 }
 
 Dmc16Profile LoadDmc16Profile(const std::string& path) {
-  const std::string where = "profile " + path;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw ProfileError(where +
-                       ": cannot be read; check the path (the default profile is "
-                       "fixtures/profiles/dmc16.json)");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return Dmc16ProfileFromJson(ParseProfileText(text.str(), where), where);
+  std::string where;
+  const nlohmann::json j = ReadProfileFile(path, &where);
+  return Dmc16ProfileFromJson(j, where);
 }
 
 nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {

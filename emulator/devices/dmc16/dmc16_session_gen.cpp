@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "control/device_recorder.h"
 #include "control/session.h"
 #include "devices/dmc16/dmc16.h"
 #include "sim/scheduler.h"
@@ -17,22 +18,6 @@
 namespace {
 
 using namespace moco;
-
-class Sink final : public devices::ByteSink {
- public:
-  Sink(sim::Scheduler& s, control::SessionWriter& w) : s_(s), w_(w) {}
-  void Write(wire::ByteView b) override {
-    control::SessionEntry e;
-    e.t_ns = s_.Now();
-    e.from = control::Origin::kDevice;
-    e.bytes.assign(b.begin(), b.end());
-    w_.Append(e);
-  }
-
- private:
-  sim::Scheduler& s_;
-  control::SessionWriter& w_;
-};
 
 }  // namespace
 
@@ -54,17 +39,13 @@ int main(int argc, char** argv) {
       "a report per frame, RT_END after the post-roll (2860 + 120 = 2980)";
   control::SessionWriter writer(argv[1], h);
   sim::Scheduler scheduler;
-  Sink sink(scheduler, writer);
+  control::DeviceRecorder sink(scheduler, writer);
   devices::Dmc16 device(scheduler, sink);
   device.PowerOn();
   uint32_t id = 1000;
   auto send_bytes = [&](sim::TimeNs t, const wire::Bytes& bytes) {
     scheduler.RunUntil(t);
-    control::SessionEntry e;
-    e.t_ns = t;
-    e.from = control::Origin::kHost;
-    e.bytes = bytes;
-    writer.Append(e);
+    sink.Host(bytes);
     device.OnHostBytes(bytes);
   };
   auto send = [&](double t_s, const dmc::HostMessage& m) {

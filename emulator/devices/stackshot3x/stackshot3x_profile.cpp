@@ -102,14 +102,9 @@ nlohmann::json Stackshot3xProfile::ToJson() const {
 }
 
 Stackshot3xProfile LoadStackshot3xProfile(const std::filesystem::path& path) {
-  const std::string where = "profile " + path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw ProfileError(where + ": cannot be opened; check the path and that the file is readable");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return Stackshot3xProfile::FromJson(ParseProfileText(text.str(), where), where);
+  std::string where;
+  const nlohmann::json j = ReadProfileFile(path.string(), &where);
+  return Stackshot3xProfile::FromJson(j, where);
 }
 
 }  // namespace moco::devices

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <string>
 
+#include "control/device_recorder.h"
 #include "control/session.h"
 #include "devices/stackshot3x/stackshot3x.h"
 #include "sim/scheduler.h"
@@ -20,22 +21,6 @@ namespace {
 using namespace moco;
 using stackshot::Action;
 using stackshot::Command;
-
-class Sink final : public devices::ByteSink {
- public:
-  Sink(sim::Scheduler& s, control::SessionWriter& w) : s_(s), w_(w) {}
-  void Write(wire::ByteView b) override {
-    control::SessionEntry e;
-    e.t_ns = s_.Now();
-    e.from = control::Origin::kDevice;
-    e.bytes.assign(b.begin(), b.end());
-    w_.Append(e);
-  }
-
- private:
-  sim::Scheduler& s_;
-  control::SessionWriter& w_;
-};
 
 stackshot::HostCommand Cmd(Command c, Action a, stackshot::Payload p = stackshot::Empty{}) {
   return stackshot::HostCommand{stackshot::Id(c), a, 0, false, false, std::move(p)};
@@ -59,18 +44,16 @@ int main(int argc, char** argv) {
       "shutter pulse of 0.2 s (SHUTTER status bit set while it lasts), CC_RAIL_STOP";
   control::SessionWriter writer(argv[1], h);
   sim::Scheduler scheduler;
-  Sink sink(scheduler, writer);
+  control::DeviceRecorder sink(scheduler, writer);
   devices::Stackshot3x device(scheduler, sink);
   device.PowerOn();
   auto send = [&](double t_s, const stackshot::HostCommand& c) {
     const auto t = static_cast<sim::TimeNs>(t_s * 1e9);
     scheduler.RunUntil(t);
-    control::SessionEntry e;
-    e.t_ns = t;
-    e.from = control::Origin::kHost;
-    stackshot::EncodeHostCommand(c, e.bytes, stackshot::ChecksumAlgorithm::kConstant69);
-    writer.Append(e);
-    device.OnHostBytes(e.bytes);
+    wire::Bytes bytes;
+    stackshot::EncodeHostCommand(c, bytes, stackshot::ChecksumAlgorithm::kConstant69);
+    sink.Host(bytes);
+    device.OnHostBytes(bytes);
   };
   send(0.5, Cmd(Command::kPing, Action::kRead, stackshot::PingRequest{0x5A}));
   send(0.6, Cmd(Command::kSoftwareId, Action::kRead));
