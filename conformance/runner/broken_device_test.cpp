@@ -2,6 +2,7 @@
 // are caught by the rule that names the fault; the random suite shrinks a
 // failing sequence and saves it as a session file.
 #include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
 
 #include <filesystem>
 
@@ -94,6 +95,30 @@ void PassThrough(const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&, devices
 TEST(BrokenDevice, UnbrokenWrapperPassesEverything) {
   const RunReport r = RunBroken(PassThrough);
   EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
+}
+
+// How the device's bytes are cut into writes never changes a verdict.
+RC_GTEST_PROP(BrokenDevice, AnyChunkingOfTheOutputKeepsEveryVerdict, ()) {
+  const auto cuts = *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 40));
+  RunOptions o;
+  o.cases = "connect/*,errors/*,motor/reset-position";
+  auto index = std::make_shared<size_t>(0);
+  const RunReport whole = RunBroken(PassThrough, o);
+  const RunReport cut = RunBroken(
+      [cuts, index](const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&,
+                    devices::ByteSink& out) {
+        size_t at = 0;
+        while (at < raw.size()) {
+          const size_t n = cuts.empty() ? 1 : cuts[(*index)++ % cuts.size()];
+          const size_t len = std::min(n, raw.size() - at);
+          out.Write(wire::ByteView(raw.data() + at, len));
+          at += len;
+        }
+      },
+      o);
+  RC_ASSERT(ExitCode(cut) == 0);
+  RC_ASSERT(whole.rules.size() == cut.rules.size());
+  for (const auto& [id, s] : whole.rules) RC_ASSERT(cut.rules.at(id).status == s.status);
 }
 
 TEST(BrokenDevice, CorruptedChecksumIsCaughtByCsum001) {

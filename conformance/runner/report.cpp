@@ -109,7 +109,13 @@ std::string ConsoleReport(const RunReport& report, bool verbose) {
       }
     }
     for (const std::string& line : c.log) {
-      if (verbose || c.MustFailed() || c.suite == "random") s += "        " + line + "\n";
+      if (!(verbose || c.MustFailed() || c.suite == "random")) continue;
+      std::string indented = line;
+      for (size_t pos = 0; (pos = indented.find('\n', pos)) != std::string::npos; pos += 9) {
+        if (pos + 1 == indented.size()) break;
+        indented.replace(pos, 1, "\n        ");
+      }
+      s += "        " + indented + (indented.empty() || indented.back() != '\n' ? "\n" : "");
     }
   }
   const auto counts = report.RuleCounts();

@@ -4,6 +4,7 @@
 #include "conformance/runner/runner.h"
 
 #include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
 
 #include <chrono>
 #include <filesystem>
@@ -97,6 +98,18 @@ TEST(Runner, RandomSequencesHoldForManySeeds) {
     EXPECT_FALSE(r.cases[0].MustFailed()) << "seed " << seed << "\n" << ConsoleReport(r, true);
     EXPECT_GT(r.cases[0].outcomes.at("DMC-ACK-011").checks, 0u);
   }
+}
+
+// The random suite's law: any seed and length of valid requests leaves the
+// DMC-16 answering OK and resting where the model says.
+RC_GTEST_PROP(RandomSuite, AnySeedAndLengthHoldsForTheDmc16, ()) {
+  RunOptions o;
+  o.cases = "random/*";
+  o.random.seed = *rc::gen::arbitrary<uint64_t>();
+  o.random.steps = *rc::gen::inRange(1, 80);
+  const RunReport r = RunInProcess(o);
+  RC_ASSERT(r.cases.size() == 1u);
+  RC_ASSERT(!r.cases[0].MustFailed());
 }
 
 TEST(Runner, InProcessCasesRunFast) {

@@ -38,12 +38,14 @@ std::vector<Step> Generate(uint64_t seed, int steps, uint8_t motor_count) {
       case Step::Op::kReset:
         s.a = static_cast<int32_t>(uniform(-3000, 3000));
         break;
+      // Speeds keep every move within seconds: a jog at 20% of a 2000 steps/s
+      // motor crosses the 6000-step range in 15 s.
       case Step::Op::kSetSpeed:
-        s.a = static_cast<int32_t>(uniform(500, 8000));
-        s.b = static_cast<int32_t>(uniform(500, 20000));
+        s.a = static_cast<int32_t>(uniform(2000, 8000));
+        s.b = static_cast<int32_t>(uniform(2000, 20000));
         break;
       case Step::Op::kJog:
-        s.a = static_cast<int32_t>(uniform(1, 10000));
+        s.a = static_cast<int32_t>(uniform(2000, 10000));
         s.b = static_cast<int32_t>(uniform(-3000, 3000));
         break;
       case Step::Op::kWait:
@@ -111,7 +113,7 @@ void Execute(DmcHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t mo
       });
     }
   }
-  WaitRest(h, 120'000 * kMs);
+  WaitRest(h, 600'000 * kMs);
   const auto final_pos = GetPositions(h);
   if (!final_pos) return;
   for (size_t m = 0; m < model.size(); ++m) {
