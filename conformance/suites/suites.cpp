@@ -354,6 +354,32 @@ void NoHostAck(CaseContext& c) {
   h.set_ack_unsolicited(true);
 }
 
+void EStop(CaseContext& c) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  h.Call(dmc::MotorMove{1, At(*p0, 0) + 50000});
+  h.Idle(300 * kMs);
+  const size_t mark = h.records().size();
+  if (!c.target.SetEStop(true)) {
+    c.log.push_back("the target has no e-stop the runner can press: MOTOR_HARD_STOP not exercised");
+    h.Call(dmc::MotorStopAll{});
+    WaitRest(h, kRestTimeout);
+    MoveAndRest(c, 1, At(*p0, 0));
+    return;
+  }
+  const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+    return IsUnsolicited(r, MsgType::kMotorHardStop);
+  });
+  const DeviceRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+  const auto* m = As<dmc::MotorHardStop>(hs);
+  Expect(c, "DMC-UNS-003", m != nullptr && m->reason == 0 && !m->motor,
+         "MOTOR_HARD_STOP reason=0 (E-Stop) without MOTOR within 500 ms", Show(hs));
+  c.target.SetEStop(false);
+  WaitRest(h, kRestTimeout);
+  MoveAndRest(c, 1, At(*p0, 0));
+}
+
 // ---------------------------------------------------------------- errors
 
 void BadMotor(CaseContext& c) {
@@ -731,6 +757,7 @@ std::vector<Case> MakeCases() {
       {"motor", "configure-jog", N::kMotors, "CONFIGURE, SET_LIMITS, SET_SPEED, JOG", Configure},
       {"motor", "no-host-ack", N::kMotors, "updates left un-ACKed do not stall the device",
        NoHostAck},
+      {"motor", "estop", N::kMotors, "the e-stop button (in-process): MOTOR_HARD_STOP", EStop},
       {"errors", "bad-motor", N::kMotors, "motor 0 and MOTOR COUNT + 1 for every motor command",
        BadMotor},
       {"errors", "checksum", N::kNothing, "corrupted check bytes, then a valid request", Checksum},

@@ -17,6 +17,7 @@
 #include <exception>
 
 #include "devices/registry.h"
+#include "sim/rig.h"
 
 namespace moco::conformance {
 namespace {
@@ -108,6 +109,17 @@ bool InProcessTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   }
   out.insert(out.end(), sink_.pending.begin(), sink_.pending.end());
   sink_.pending.clear();
+  return true;
+}
+
+bool InProcessTarget::SetEStop(bool engaged) {
+  sim::Rig* rig = device_ ? device_->rig() : nullptr;
+  if (rig == nullptr) return false;
+  if (engaged) {
+    rig->EngageEStop();
+  } else {
+    rig->ReleaseEStop();
+  }
   return true;
 }
 

@@ -47,6 +47,10 @@ class Target {
   // Waits until device bytes arrive or Now() reaches `deadline_ns` and appends
   // what arrived to `out`. Returns false when the link is gone.
   virtual bool Receive(TimeNs deadline_ns, wire::Bytes& out) = 0;
+
+  // Presses (true) or releases the device's e-stop button, where the runner
+  // can reach it (in-process only). False when it cannot.
+  virtual bool SetEStop(bool /*engaged*/) { return false; }
 };
 
 // Builds a device for an in-process target; it writes its output to `sink`.
@@ -73,6 +77,7 @@ class InProcessTarget final : public Target {
   TimeNs Now() const override { return scheduler_->Now(); }
   bool Send(wire::ByteView bytes) override;
   bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
+  bool SetEStop(bool engaged) override;
 
   // The device under test (null before Open()).
   devices::Device* device() { return device_.get(); }
