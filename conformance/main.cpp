@@ -89,6 +89,10 @@ int main(int argc, char** argv) {
   run->add_option("--deadline-ms", deadline_ms, "DMC-DL-* answer deadline")
       ->check(CLI::Range(int64_t{1}, int64_t{600000}))
       ->capture_default_str();
+  std::vector<std::string> deadlines;
+  run->add_option("--deadline", deadlines,
+                  "Per-kind deadline KIND=MS (kinds: hi, query, command, upload, rt); repeatable, "
+                  "overrides --deadline-ms for that kind");
   run->add_option("--answer-timeout-ms", answer_timeout_ms,
                   "DMC-ACK-001: a request unanswered after this has no answer")
       ->check(CLI::Range(int64_t{1}, int64_t{600000}))
@@ -139,6 +143,24 @@ int main(int argc, char** argv) {
   options.rules = rules_glob;
   options.cases = cases_glob;
   options.host.deadline_ns = deadline_ms * moco::sim::kNsPerMs;
+  for (const std::string& d : deadlines) {
+    const size_t eq = d.find('=');
+    const std::string kind = d.substr(0, eq);
+    bool known = false;
+    for (const char* k : kDeadlineKinds) known = known || kind == k;
+    int64_t ms = 0;
+    try {
+      ms = eq == std::string::npos ? 0 : std::stoll(d.substr(eq + 1));
+    } catch (const std::exception&) {
+      ms = 0;
+    }
+    if (!known || ms <= 0) {
+      return Fail("--deadline " + d +
+                  ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS > 0, "
+                  "e.g. --deadline rt=500");
+    }
+    options.host.deadline_by_kind_ns[kind] = ms * moco::sim::kNsPerMs;
+  }
   options.host.answer_timeout_ns = answer_timeout_ms * moco::sim::kNsPerMs;
   options.host.position_gap_ns = position_gap_ms * moco::sim::kNsPerMs;
   options.random.seed = seed;

@@ -185,6 +185,26 @@ TEST(BrokenDevice, DelayedPositionReportIsCaughtByPos002) {
   EXPECT_EQ(FindRule("DMC-POS-002")->level, Level::kShould);
 }
 
+TEST(BrokenDevice, SlowQueryAnswersMissTheirKindsDeadline) {
+  const Breakage slow_status = [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
+                                  devices::ByteSink& out) {
+    if (f.type == ToWire(MsgType::kMotorStatus)) {
+      s.After(100 * sim::kNsPerMs, [&out, raw] { out.Write(raw); });
+      return;
+    }
+    out.Write(raw);
+  };
+  RunOptions o;
+  o.cases = "connect/*";
+  const RunReport lenient = RunBroken(slow_status, o);
+  EXPECT_EQ(lenient.rules.at("DMC-DL-002").status, Status::kPass);  // 100 ms < 250 ms
+  o.host.deadline_by_kind_ns["query"] = 50 * sim::kNsPerMs;
+  const RunReport strict = RunBroken(slow_status, o);
+  ExpectCaught(strict, "DMC-DL-002");
+  EXPECT_EQ(strict.rules.at("DMC-DL-001").status, Status::kPass);  // HI keeps 250 ms
+  EXPECT_EQ(ExitCode(strict), 0) << "deadlines are SHOULD rules";
+}
+
 TEST(BrokenDevice, SwallowedRtEndIsCaughtByRt005) {
   const RunReport r = RunBroken(
       [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {

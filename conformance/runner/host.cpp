@@ -69,21 +69,21 @@ bool IsMotionRequest(uint16_t type) {
 
 bool IsRealTimeOrVirtual(uint16_t type) { return type >= 0x0100 && type < 0x0300; }
 
-// The DMC-DL rule for a request type.
-std::string_view DeadlineRule(uint16_t type) {
-  if (type == ToWire(MsgType::kHi)) return "DMC-DL-001";
+// The DMC-DL rule and deadline kind of a request type.
+std::pair<std::string_view, std::string_view> DeadlineRule(uint16_t type) {
+  if (type == ToWire(MsgType::kHi)) return {"DMC-DL-001", "hi"};
   switch (static_cast<MsgType>(type)) {
     case MsgType::kMotorStatus:
     case MsgType::kMotorGetPosition:
     case MsgType::kGioIn:
     case MsgType::kVirtGetPosition:
-      return "DMC-DL-002";
+      return {"DMC-DL-002", "query"};
     default:
       break;
   }
-  if (type >= 0x0100 && type <= 0x0104) return "DMC-DL-004";
-  if (type >= 0x0110 && type < 0x0200) return "DMC-DL-005";
-  return "DMC-DL-003";
+  if (type >= 0x0100 && type <= 0x0104) return {"DMC-DL-004", "upload"};
+  if (type >= 0x0110 && type < 0x0200) return {"DMC-DL-005", "rt"};
+  return {"DMC-DL-003", "command"};
 }
 
 std::string Hex16(uint32_t v) {
@@ -302,8 +302,13 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
   });
   if (plain != req.type) return;
   const TimeNs latency = rec.t_ns - req.sent_ns;
-  verdicts_.Check(DeadlineRule(req.type), latency <= options_.deadline_ns, [&] {
-    return Ev(rec, "an answer within " + Ms(options_.deadline_ns), "answered after " + Ms(latency));
+  const auto [rule, kind] = DeadlineRule(req.type);
+  const auto custom = options_.deadline_by_kind_ns.find(kind);
+  const TimeNs deadline =
+      custom != options_.deadline_by_kind_ns.end() ? custom->second : options_.deadline_ns;
+  verdicts_.Check(rule, latency <= deadline, [&] {
+    return Ev(rec, "an answer within " + Ms(deadline) + " (" + std::string(kind) + ")",
+              "answered after " + Ms(latency));
   });
   if (is_ack) {
     const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;

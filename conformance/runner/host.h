@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -21,11 +22,17 @@ namespace moco::conformance {
 
 // Timing options of the checks, in the target's clock.
 struct HostOptions {
-  TimeNs deadline_ns = 250 * sim::kNsPerMs;         // DMC-DL-*: an answer within this
+  TimeNs deadline_ns = 250 * sim::kNsPerMs;  // DMC-DL-*: an answer within this
+  // Per request kind, overriding deadline_ns: "hi" (DMC-DL-001), "query"
+  // (DL-002), "command" (DL-003), "upload" (DL-004), "rt" (DL-005).
+  std::map<std::string, TimeNs, std::less<>> deadline_by_kind_ns;
   TimeNs answer_timeout_ns = 2000 * sim::kNsPerMs;  // DMC-ACK-001: no answer after this
   TimeNs position_gap_ns = 200 * sim::kNsPerMs;     // DMC-POS-002: largest update gap
   TimeNs quiet_ns = 50 * sim::kNsPerMs;             // listened for after a case
 };
+
+// The request kinds of HostOptions::deadline_by_kind_ns.
+inline constexpr const char* kDeadlineKinds[] = {"hi", "query", "command", "upload", "rt"};
 
 // One chunk of traffic as it crossed the link.
 struct Chunk {
