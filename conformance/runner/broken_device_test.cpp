@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "conformance/runner/report.h"
@@ -75,6 +77,9 @@ wire::Bytes Reencode(const dmc::FrameRef& f, uint32_t id, wire::ByteView data) {
 }
 
 void ExpectCaught(const RunReport& r, const std::string& rule, Status want = Status::kFail) {
+  // MOCOCHECK_PRINT=1 shows what a user of mococheck would see.
+  if (std::getenv("MOCOCHECK_PRINT") != nullptr)
+    std::printf("%s\n", ConsoleReport(r, false).c_str());
   ASSERT_TRUE(r.rules.count(rule)) << rule;
   EXPECT_EQ(r.rules.at(rule).status, want) << rule << "\n" << ConsoleReport(r, false);
   // The failing case explains itself: expected, observed, the time.
