@@ -7,6 +7,7 @@
 #define MOCO_CONFORMANCE_RUNNER_HOST_H_
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <optional>
@@ -97,7 +98,8 @@ class DmcHost {
 
   TimeNs Now() const { return target_.Now(); }
   bool link_lost() const { return link_lost_; }
-  const std::vector<DeviceRecord>& records() const { return records_; }
+  // A deque: pointers to records stay valid while more arrive.
+  const std::deque<DeviceRecord>& records() const { return records_; }
   const std::vector<Request>& requests() const { return requests_; }
   const std::vector<Chunk>& traffic() const { return traffic_; }
   Verdicts& verdicts() { return verdicts_; }
@@ -125,7 +127,7 @@ class DmcHost {
   HostOptions options_;
   dmc::FrameDecoder decoder_;
   wire::Bytes history_;  // the device stream (for the bytes of bad frames)
-  std::vector<DeviceRecord> records_;
+  std::deque<DeviceRecord> records_;
   std::vector<Request> requests_;
   std::vector<Chunk> traffic_;
   std::optional<dmc::HiResponse> hi_;

@@ -71,7 +71,8 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     const TimeNs t0 = host.Now();
     const auto* seen = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}));
     if (seen != nullptr && !host.link_lost()) {
-      CaseContext ctx{host, verdicts, *seen, target, options.host, options.random, result.log};
+      const dmc::HiResponse device_hi = *seen;
+      CaseContext ctx{host, verdicts, device_hi, target, options.host, options.random, result.log};
       k.run(ctx);
     }
     host.Close();
