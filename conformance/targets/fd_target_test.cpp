@@ -62,7 +62,10 @@ TEST(FdTarget, HandshakeErrorAndResetSuitesPassOverARealPty) {
     EXPECT_EQ(r.hi->motor_count, 16);
     EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, true);
     ExpectPassed(r, {"DMC-HI-001", "DMC-HI-002", "DMC-CSUM-001", "DMC-CSUM-002", "DMC-ACK-001",
-                     "DMC-ACK-003", "DMC-DL-001", "DMC-ERR-009", "DMC-RST-002"});
+                     "DMC-ACK-003", "DMC-ERR-009", "DMC-RST-002"});
+    // Deadlines are judged on the steady clock (their outcome depends on the
+    // machine's load, so only that they were judged is asserted here).
+    EXPECT_NE(r.rules.at("DMC-DL-001").status, Status::kNotExercised);
     // The start-up of an external device is not watched.
     EXPECT_EQ(r.rules.at("DMC-HI-011").status, Status::kNotExercised);
   });

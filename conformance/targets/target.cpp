@@ -11,6 +11,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -226,12 +227,18 @@ bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       return true;
     }
     if (r == 0) return false;
-    if (errno != EAGAIN && errno != EINTR) return errno == EIO ? true : false;
+    // EIO: a PTY whose other side is closed for now (the device may reopen it).
+    const bool hung_up = errno == EIO;
+    if (errno != EAGAIN && errno != EINTR && !hung_up) return false;
     const TimeNs left_ns = deadline_ns - Now();
     if (left_ns <= 0) return true;
-    pollfd p{fd_, POLLIN, 0};
     const int wait_ms = static_cast<int>((left_ns + sim::kNsPerMs - 1) / sim::kNsPerMs);
-    poll(&p, 1, wait_ms);
+    if (hung_up) {
+      poll(nullptr, 0, std::min(wait_ms, 10));
+    } else {
+      pollfd p{fd_, POLLIN, 0};
+      poll(&p, 1, wait_ms);
+    }
   }
 }
 
