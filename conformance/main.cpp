@@ -2,6 +2,7 @@
 // docs/rules.md). Drives Dragonframe-style traffic at a device and checks
 // every byte against the rule catalogue. Exit: 0 every MUST rule passed,
 // 1 a MUST rule failed, 2 usage or target error.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -11,6 +12,7 @@
 #include "conformance/rules/catalogue.h"
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
+#include "conformance/suites/suites.h"
 #include "conformance/targets/target.h"
 
 namespace {
@@ -52,7 +54,8 @@ int main(int argc, char** argv) {
       "  mococheck run --target in-process:dmc16\n"
       "  mococheck run --target pty:/tmp/dmc16 --baud 115200 --junit report.xml\n"
       "  mococheck run --target tcp:127.0.0.1:5000 --rules 'DMC-ACK-*,DMC-CSUM-*'\n"
-      "  mococheck rules --markdown > docs/rules.md"};
+      "  mococheck rules --markdown > docs/rules.md\n"
+      "  mococheck cases"};
   app.require_subcommand(1);
 
   // --- run ---
@@ -111,6 +114,10 @@ int main(int argc, char** argv) {
   bool markdown = false;
   rules->add_flag("--markdown", markdown, "Print docs/rules.md (the catalogue as Markdown)");
 
+  // --- cases ---
+  CLI::App* cases =
+      app.add_subcommand("cases", "List the scenario cases (suite/name) and what they need");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -122,6 +129,16 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
+  if (*cases) {
+    for (const Case& k : DmcCases()) {
+      std::string name = k.suite + "/" + k.name;
+      name.resize(std::max<size_t>(name.size() + 2, 26), ' ');
+      std::cout << name << k.summary;
+      if (k.needs != Needs::kNothing) std::cout << " [needs " << NeedsText(k.needs) << "]";
+      std::cout << "\n";
+    }
+    return 0;
+  }
   if (*rules) {
     std::cout << (markdown ? RulesMarkdown() : RulesText());
     return 0;
