@@ -1,0 +1,607 @@
+// The DMC v2 rule catalogue (dmc-v2-protocol.txt; ERRATA dmc 1-11; FACTS "DMC v2").
+// Clauses are quoted from the spec; where the spec is silent or garbled the
+// ERRATA reading is quoted instead and the rule says so.
+#include "conformance/rules/catalogue.h"
+
+#include <algorithm>
+
+namespace moco::conformance {
+namespace {
+
+using L = Level;
+using N = Needs;
+
+const std::vector<Rule> kRules = {
+    // --- Framing and checksum ("Message Format", "Computing and Validating the Checksum") ---
+    {"DMC-FRAME-001", L::kMust, N::kNothing,
+     "Every device byte belongs to a frame that starts with the 'D' 'F' marker",
+     "Marker 2 BYTES Start of message. Byte sequence: { 'D' 'F' }", "Message Format"},
+    {"DMC-FRAME-002", L::kMust, N::kNothing,
+     "A device frame's Length is at most 1036 (the 1048-byte receive buffer less header and check "
+     "bytes)",
+     "The receiving buffer on the device must be at least 1048 bytes.",
+     "Message Format; ERRATA 1.2"},
+    {"DMC-FRAME-003", L::kMust, N::kNothing,
+     "The device never leaves a frame unfinished (every frame it starts is completed)",
+     "Every message has a Header. Additionally, some messages contain a variable-length Data "
+     "section.",
+     "Message Format"},
+    {"DMC-FRAME-004", L::kShould, N::kNothing,
+     "Device frame types have no bits outside 0x83FF (the reference parser drops such frames)",
+     "the reference parser ... drops the frame and hunts again when ... the type has bits outside "
+     "0x83FF",
+     "FACTS DMC v2"},
+    {"DMC-FRAME-005", L::kMust, N::kNothing,
+     "Every device frame's data section fits the layout of its type",
+     "Most messages have different data sections depending on if the message is coming from "
+     "Dragonframe or from the device.",
+     "Message Types"},
+    {"DMC-CSUM-001", L::kMust, N::kNothing,
+     "The Fletcher-16 checksum over every device frame, check bytes included, is zero",
+     "outgoing messages add check bytes, so that the final computed checksum will be zero on the "
+     "receiver end.",
+     "Computing and Validating the Checksum; ERRATA 1.1"},
+    {"DMC-CSUM-002", L::kMust, N::kNothing,
+     "A request whose checksum is not zero is answered with ACK ERR_CHECKSUM",
+     "For received messages, this checksum should be zero. If it is not the device should respond "
+     "with response code ACK_ERR_CHECKSUM.",
+     "Computing and Validating the Checksum"},
+    {"DMC-CSUM-003", L::kShould, N::kNothing,
+     "The ERR_CHECKSUM answer carries the ID and Type as received",
+     "The response should use the message Type and ID from the received message.", "MSG_FLAG_ACK"},
+    {"DMC-CSUM-004", L::kMust, N::kNothing,
+     "A request with a valid checksum is never answered ERR_CHECKSUM",
+     "ERR_CHECKSUM 0x0011 Checksum didn't match", "MSG_FLAG_ACK"},
+    {"DMC-CSUM-005", L::kMust, N::kNothing,
+     "After a corrupted frame the next valid request is answered normally",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+
+    // --- Answers ("MSG_FLAG_ACK"; ERRATA 1.4) ---
+    {"DMC-ACK-001", L::kMust, N::kNothing, "Every request is answered (within the answer timeout)",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+    {"DMC-ACK-002", L::kMust, N::kNothing, "Every request is answered exactly once",
+     "Some requests have specific responses that they expect. Some just expect a response with a "
+     "MSG_FLAG_ACK set and a response code.",
+     "MSG_FLAG_ACK; ERRATA 1.4"},
+    {"DMC-ACK-003", L::kMust, N::kNothing,
+     "An answer carries the ID of the request it answers (no answer with an ID that matches no "
+     "request)",
+     "The response should use the message Type and ID from the received message.", "MSG_FLAG_ACK"},
+    {"DMC-ACK-004", L::kMust, N::kNothing,
+     "An answer's Type is the request's Type (specific response) or the request's Type | 0x8000 "
+     "(ACK)",
+     "An ACK response is the request's Type | 0x8000 with the request's ID and a u16 response "
+     "code.",
+     "ERRATA 1.4"},
+    {"DMC-ACK-005", L::kMust, N::kNothing,
+     "An ACK's data section is the response code WORD (or the 32-bit form of FACTS)",
+     "Response Code WORD OK (0x0010) or appropriate Error Code", "MSG_FLAG_ACK"},
+    {"DMC-ACK-006", L::kNote, N::kNothing, "ACK response codes written as 32-bit values",
+     "A published DMC firmware built on dmc-lite writes the ACK response code as a 32-bit value "
+     "(the spec says a 16-bit WORD)",
+     "FACTS DMC v2"},
+    {"DMC-ACK-007", L::kMust, N::kNothing, "An ACK's response code is one the spec lists",
+     "OK 0x0010 ... ERR_HARD_LOW 0x0023", "MSG_FLAG_ACK"},
+    {"DMC-ACK-008", L::kMust, N::kNothing,
+     "A request with a specific response is answered with that response, not with ACK OK",
+     "Requests with a specific response (HI, MOTOR_STATUS, MOTOR_MOVE, MOTOR_GET_POSITION, GIO_IN, "
+     "VIRT_GET_POSITION, VIRT_AIM_POINT) answer with the plain Type and the request's ID.",
+     "ERRATA 1.4"},
+    {"DMC-ACK-009", L::kMust, N::kNothing,
+     "A request whose response is \"None (MSG_FLAG_ACK + Response Code)\" is answered with an ACK",
+     "Response Data None (MSG_FLAG_ACK + Response Code)", "Message Types"},
+    {"DMC-ACK-010", L::kShould, N::kNothing,
+     "An error code fits the request (limit codes for motion, pre/post-roll and not-in-position "
+     "for real-time requests)",
+     "ERR_PREROLL 0x0017 A real-time move preroll failed ... ERR_SOFT_UP 0x0020 Software upper "
+     "limit hit",
+     "MSG_FLAG_ACK"},
+    {"DMC-ACK-011", L::kMust, N::kNothing,
+     "Valid requests within the advertised capabilities are answered OK (or ERR_MOVING while "
+     "motion is under way)",
+     "OK 0x0010 Received, understood, and acted on message", "MSG_FLAG_ACK"},
+
+    // --- Reply deadlines (runner options; the spec gives no number) ---
+    {"DMC-DL-001", L::kShould, N::kNothing,
+     "HI is answered within the deadline (--deadline-ms, default 250 ms)",
+     "Dragonframe always starts with this request.", "MSG_HI"},
+    {"DMC-DL-002", L::kShould, N::kNothing,
+     "Queries (MOTOR_STATUS, MOTOR_GET_POSITION, GIO_IN, VIRT_GET_POSITION) are answered within "
+     "the deadline",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+    {"DMC-DL-003", L::kShould, N::kNothing,
+     "Motor and I/O commands are answered within the deadline",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+    {"DMC-DL-004", L::kShould, N::kNothing,
+     "Upload messages (RT_UPLOAD_MOVE_*) are answered within the deadline",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+    {"DMC-DL-005", L::kShould, N::kNothing,
+     "Real-time commands (POSITION_FRAME, RUN_MOVE, SHOOT_FRAME, GO, JOG_ALL) are answered within "
+     "the deadline",
+     "The device must respond to every message it receives.", "MSG_FLAG_ACK"},
+
+    // --- MSG_HI ---
+    {"DMC-HI-001", L::kMust, N::kNothing,
+     "HI is answered with an HI response (Type 0x0001), not an ACK",
+     "MSG_HI [0x0001] Request basic information about the device.", "MSG_HI; ERRATA 1.4"},
+    {"DMC-HI-002", L::kMust, N::kNothing,
+     "The HI response is 51 bytes (49 without PROTOCOL VERSION is a NOTE)",
+     "MSG_HI response data is 51 bytes: name[32], fw major, minor, rev (u8 each), motor count "
+     "(u8), DMX count (u16), GIO out (u8), GIO in (u8), HW limit sets (u8), upload frame count "
+     "(u32), capabilities (u32), protocol version (u16).",
+     "ERRATA 1.3"},
+    {"DMC-HI-003", L::kNote, N::kNothing,
+     "The HI response ends without PROTOCOL VERSION (49 bytes)",
+     "Older devices end the HI reply without the PROTOCOL VERSION word (49 bytes instead of 51).",
+     "FACTS DMC v2"},
+    {"DMC-HI-004", L::kMust, N::kNothing, "MOTOR COUNT is 0-32",
+     "MOTOR COUNT BYTE 0-32: Number of motors the device supports", "MSG_HI"},
+    {"DMC-HI-005", L::kMust, N::kNothing, "DMX COUNT is 0-512",
+     "DMX COUNT WORD 0-512: Number of DMX channels the device supports", "MSG_HI"},
+    {"DMC-HI-006", L::kMust, N::kNothing, "GIO OUT COUNT is 0-32",
+     "GIO OUT COUNT BYTE 0-32: Number of general IO output triggers (relay, logic out)", "MSG_HI"},
+    {"DMC-HI-007", L::kMust, N::kNothing, "GIO INPUT COUNT is 0-32",
+     "GIO INPUT COUNT BYTE 0-32: Number of input triggers", "MSG_HI"},
+    {"DMC-HI-008", L::kMust, N::kNothing, "HW LIMIT COUNT is 0-32",
+     "HW LIMIT COUNT BYTE 0-32: How many hardware limit set inputs the device has", "MSG_HI"},
+    {"DMC-HI-009", L::kMust, N::kNothing, "PROTOCOL VERSION, when present, is 2",
+     "PROTOCOL VERSION WORD 2", "MSG_HI"},
+    {"DMC-HI-010", L::kShould, N::kNothing, "NAME is UTF-8 text filled with \\0 after its end",
+     "Device name, up to 32 bytes, UTF-8 encoded. Fill with \\0 characters if less than 32 bytes",
+     "MSG_HI"},
+    {"DMC-HI-011", L::kShould, N::kNothing, "The device sends an unsolicited HI when it starts up",
+     "Also, the device should issue a MSG_HI whenever it starts up.", "MSG_HI"},
+    {"DMC-HI-012", L::kShould, N::kNothing, "Repeated HI requests get the same description",
+     "Request basic information about the device.", "MSG_HI"},
+    {"DMC-HI-013", L::kNote, N::kNothing,
+     "CAPABILITIES has bits the spec does not define (above 0x0400)",
+     "Each bit in the capabilities parameter represents functionality the device supports.",
+     "MSG_HI Capabilities"},
+    {"DMC-HI-014", L::kShould, N::kRealTime,
+     "A real-time device can hold at least one uploaded frame (UPLOAD FRAME COUNT > 0)",
+     "UPLOAD FRAME COUNT DWORD How many frames of position/dmx data can the device hold", "MSG_HI"},
+    {"DMC-HI-015", L::kShould, N::kNothing,
+     "Go-motion, looping and camera-trigger capabilities come with real-time moves (0x0001)",
+     "MSG_RT_SHOOT_FRAME ... FRAME DWORD A frame in the uploaded move",
+     "MSG_RT_SHOOT_FRAME; MSG_RT_RUN_MOVE FLAGS"},
+
+    // --- Motor control ("Motor Control" capability, MSG_MOTOR_*) ---
+    {"DMC-STAT-001", L::kMust, N::kNothing,
+     "MOTOR_STATUS is answered with a 5-byte MOTOR_STATUS (DWORD bits, DMX byte)",
+     "MOTOR STATUS DWORD Bit 1=motor moving, 0=not moving; DMX STATUS BYTE 1=DMX adjusting, 0=Not "
+     "adjusting",
+     "MSG_MOTOR_STATUS"},
+    {"DMC-STAT-002", L::kMust, N::kNothing,
+     "MOTOR_STATUS sets bits only for motors the device has (bit n-1 is motor n)",
+     "MSG_MOTOR_STATUS: bit (n-1) of the u32 is motor n.", "ERRATA 1.5"},
+    {"DMC-STAT-003", L::kMust, N::kNothing, "DMX STATUS is 0 or 1",
+     "DMX STATUS BYTE 1=DMX adjusting, 0=Not adjusting", "MSG_MOTOR_STATUS"},
+    {"DMC-STAT-004", L::kMust, N::kMotors,
+     "MOTOR_STATUS shows a motor moving while it moves and at rest after it stopped",
+     "This is only a status of whether something is moving/adjusting.", "MSG_MOTOR_STATUS"},
+    {"DMC-MOVE-001", L::kMust, N::kMotors,
+     "MOTOR_MOVE is answered with a 1-byte MOTOR_MOVE response (0 or 1) or an error ACK",
+     "Response Data MOTOR STATUS BYTE 1=motor moving, 0=not moving", "MSG_MOTOR_MOVE"},
+    {"DMC-MOVE-002", L::kShould, N::kMotors,
+     "A move to a new position answers moving=1; a move to the current position answers 0",
+     "MOTOR STATUS BYTE 1=motor moving, 0=not moving", "MSG_MOTOR_MOVE"},
+    {"DMC-MOVE-003", L::kMust, N::kMotors,
+     "A motor told to move comes to rest on the commanded position",
+     "Instruct the device to move a motor to a new position.", "MSG_MOTOR_MOVE"},
+    {"DMC-MOVE-004", L::kMust, N::kMotors, "A move never disturbs the other motors",
+     "MOTOR BYTE Motor number, 1-MOTOR_COUNT", "MSG_MOTOR_MOVE"},
+    {"DMC-POS-001", L::kMust, N::kNothing,
+     "MOTOR_GET_POSITION carries MOVE TIME and one position per motor (4 + 4 x MOTOR COUNT bytes)",
+     "MOVE TIME DWORD ... MOTOR-1 POS DWORD Motor 1 position ... MOTOR-N POS DWORD Final motor "
+     "position",
+     "MSG_MOTOR_GET_POSITION"},
+    {"DMC-POS-002", L::kShould, N::kMotors,
+     "While a motor moves, position updates arrive about every 100 ms (gaps at most "
+     "--position-gap-ms, default 200)",
+     "The device should send these out, about every 0.10 seconds, if any of the motors are moving",
+     "MSG_MOTOR_GET_POSITION"},
+    {"DMC-POS-003", L::kNote, N::kMotors,
+     "Position updates come much more often than every 100 ms (dmc-lite sends every 50 ms)",
+     "dmc-lite sends unsolicited MOTOR_GET_POSITION about every 50 ms while moving (the spec asks "
+     "for about every 100 ms)",
+     "FACTS DMC v2"},
+    {"DMC-POS-004", L::kShould, N::kMotors,
+     "After motion stops, a position update reports the final position",
+     "to keep Dragonframe informed of the positions.",
+     "MSG_MOTOR_GET_POSITION; docs/protocol-notes"},
+    {"DMC-POS-005", L::kShould, N::kMotors,
+     "Positions reported during a move lie between the start and the target",
+     "Instruct the device to move a motor to a new position.", "MSG_MOTOR_MOVE"},
+    {"DMC-POS-006", L::kMust, N::kMotors,
+     "MOTOR_GET_POSITION at rest reports where the motor was sent",
+     "Request the motor positions and move 'time'.", "MSG_MOTOR_GET_POSITION"},
+    {"DMC-RST-001", L::kMust, N::kMotors, "RESET_POSITION of a resting motor is acknowledged OK",
+     "Instruct the device to reset a motor position to a new value. This does not move the motor.",
+     "MSG_MOTOR_RESET_POSITION"},
+    {"DMC-RST-002", L::kShould, N::kMotors,
+     "RESET_POSITION is followed by a MOTOR_GET_POSITION message with the new position",
+     "After changing the internal position and responding to this message, the device should send "
+     "a MSG_MOTOR_GET_POSITION message to confirm the new position.",
+     "MSG_MOTOR_RESET_POSITION"},
+    {"DMC-RST-003", L::kMust, N::kMotors,
+     "After RESET_POSITION the motor reports the new position and has not moved",
+     "This does not move the motor.", "MSG_MOTOR_RESET_POSITION"},
+    {"DMC-STOP-001", L::kMust, N::kMotors,
+     "MOTOR_STOP is acknowledged OK and the motor comes to rest short of a far target",
+     "Instruct the device to stop a motor.", "MSG_MOTOR_STOP"},
+    {"DMC-STOP-002", L::kMust, N::kMotors,
+     "MOTOR_STOP_ALL is acknowledged OK and every motor comes to rest",
+     "Instruct the device to stop all motors. The device should decelerate.", "MSG_MOTOR_STOP_ALL"},
+    {"DMC-STOP-003", L::kMust, N::kMotors,
+     "MOTOR_STOP_ALL is accepted with and without its optional FLAGS",
+     "Flags DWORD (Optional) 0x01 means silent", "MSG_MOTOR_STOP_ALL; ERRATA 1.7"},
+    {"DMC-STOP-004", L::kShould, N::kMotors,
+     "A second STOP_ALL soon after the first stops no later than a single one",
+     "If the device gets a second STOP_ALL soon after a first, it should HARD STOP. Meaning it "
+     "should decelerate faster than normal.",
+     "MSG_MOTOR_STOP_ALL"},
+    {"DMC-CFG-001", L::kMust, N::kMotors,
+     "MOTOR_SET_SPEED with positive velocity and acceleration is acknowledged OK",
+     "MAX VELOCITY DWORD The maximum steps per second the motor can go; MAX ACCEL DWORD The "
+     "maximum acceleration",
+     "MSG_MOTOR_SET_SPEED"},
+    {"DMC-CFG-002", L::kMust, N::kMotors,
+     "MOTOR_CONFIGURE is acknowledged OK, unknown flag bits included",
+     "dmc-lite's header also defines MOTOR_CONFIGURE flags beyond the spec's two ... Accept "
+     "unknown flag bits without error.",
+     "MSG_MOTOR_CONFIGURE; FACTS DMC v2"},
+    {"DMC-CFG-003", L::kMust, N::kMotors,
+     "MOTOR_JOG is acknowledged OK and the motor moves towards the destination",
+     "Instruct the device to jog/inch a motor.", "MSG_MOTOR_JOG"},
+    {"DMC-CFG-004", L::kShould, N::kMotors,
+     "MOTOR_JOG with SPEED outside 1-10000 is refused with ERR_RANGE",
+     "SPEED WORD 1=inching, 10000=jog at max velocity", "MSG_MOTOR_JOG"},
+    {"DMC-CFG-005", L::kMust, N::kMotors, "MOTOR_SET_LIMITS is acknowledged OK",
+     "Set the motor software and hardware limits.", "MSG_MOTOR_SET_LIMITS"},
+
+    // --- Errors ---
+    {"DMC-ERR-001", L::kMust, N::kMotors, "Motor number 0 is refused with ERR_RANGE",
+     "Any reference to a motor number is 1-based.", "Introduction; ERRATA 1.11"},
+    {"DMC-ERR-002", L::kMust, N::kMotors,
+     "A motor number above MOTOR COUNT is refused with ERR_RANGE",
+     "MOTOR BYTE Motor number, 1-MOTOR_COUNT", "MSG_MOTOR_*; ERRATA 1.11"},
+    {"DMC-ERR-003", L::kMust, N::kNothing, "An unknown message type is answered ERR_UNSUPPORTED",
+     "ERR_UNSUPPORTED 0x0013 The message type is not known or supported", "MSG_FLAG_ACK"},
+    {"DMC-ERR-004", L::kShould, N::kNothing,
+     "The pre-2018 VIRT_JOG_ON_LINE type 0x0204 is answered ERR_UNSUPPORTED",
+     "Changed MSG_VIRT_JOG_ON_LINE from 0x0204 to 0x0206", "Document Revision History"},
+    {"DMC-ERR-005", L::kMust, N::kNothing,
+     "A known type with a data length that fits no layout is answered with an error, never OK",
+     "OK 0x0010 Received, understood, and acted on message", "MSG_FLAG_ACK"},
+    {"DMC-ERR-006", L::kNote, N::kNothing,
+     "A malformed request (wrong length) is answered with a code other than ERR_GENERAL",
+     "a layout whose length does not fit ... is ERR_GENERAL (a malformed message, no single "
+     "parameter out of range)",
+     "docs/protocol-notes (dmc SuggestedAck)"},
+    {"DMC-ERR-007", L::kMust, N::kNothing,
+     "Noise between frames does not stop the device answering the next frame",
+     "Marker 2 BYTES Start of message. Byte sequence: { 'D' 'F' }", "Message Format"},
+    {"DMC-ERR-008", L::kMust, N::kNothing,
+     "A header declaring an oversize Length does not stop the device answering the next frame",
+     "A Length above that is a framing error, not an allocation.", "ERRATA 1.2"},
+    {"DMC-ERR-009", L::kMust, N::kNothing,
+     "A request delivered one byte at a time is answered as a whole one",
+     "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
+    {"DMC-ERR-010", L::kShould, N::kNoVirtual,
+     "Messages of a capability the device does not advertise are answered ERR_UNSUPPORTED",
+     "If the device advertises virtuals, Dragonframe expects it to handle the following commands",
+     "Capabilities"},
+    {"DMC-ERR-011", L::kShould, N::kDmx, "MSG_DMX with START CHANNEL 0 is refused with ERR_RANGE",
+     "START CHANNEL WORD First channel of lighting values, 1-512", "MSG_DMX"},
+    {"DMC-ERR-012", L::kMust, N::kNothing,
+     "The largest frame the receive buffer must hold is answered",
+     "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
+
+    // --- Soft limits ---
+    {"DMC-LIM-001", L::kMust, N::kMotors,
+     "A move above an enabled upper soft limit is refused with ERR_SOFT_UP",
+     "ERR_SOFT_UP 0x0020 Software upper limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
+    {"DMC-LIM-002", L::kMust, N::kMotors,
+     "A move below an enabled lower soft limit is refused with ERR_SOFT_LOW",
+     "ERR_SOFT_LOW 0x0021 Software lower limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
+    {"DMC-LIM-003", L::kMust, N::kMotors, "A refused move leaves the motor where it was",
+     "ERR_SOFT_UP 0x0020 Software upper limit hit", "MSG_FLAG_ACK"},
+    {"DMC-LIM-004", L::kMust, N::kMotors, "A move within enabled soft limits is carried out",
+     "LOWER LIMIT DWORD The lower software step limit; UPPER LIMIT DWORD The upper software step "
+     "limit",
+     "MSG_MOTOR_SET_LIMITS"},
+    {"DMC-LIM-005", L::kMust, N::kMotors, "Disabled soft limits do not restrict moves",
+     "LOWER ENABLE BYTE 0x01 enabled, 0x00 not", "MSG_MOTOR_SET_LIMITS"},
+    {"DMC-LIM-006", L::kShould, N::kMotors,
+     "A jog towards a point past an enabled soft limit never passes the limit",
+     "UPPER LIMIT DWORD The upper software step limit", "MSG_MOTOR_SET_LIMITS; MSG_MOTOR_JOG"},
+
+    // --- Unsolicited messages (ERRATA 1.9) ---
+    {"DMC-UNS-001", L::kMust, N::kNothing,
+     "Frames the device sends unprompted are only HI, MOTOR_GET_POSITION, GIO_IN, MOTOR_HARD_STOP, "
+     "RT_END or VIRT_AIM_POINT",
+     "Messages the device sends unprompted (HI at start-up/reset, MOTOR_GET_POSITION updates, "
+     "GIO_IN on change, MOTOR_HARD_STOP, RT_END, VIRT_AIM_POINT) carry a device-side sequence ID.",
+     "ERRATA 1.9"},
+    {"DMC-UNS-002", L::kMust, N::kMotors,
+     "The device does not stall when the host does not ACK its unsolicited messages",
+     "The host answers them with an ACK; a device must not stall waiting for that ACK.",
+     "ERRATA 1.9"},
+    {"DMC-UNS-003", L::kMust, N::kNothing,
+     "MOTOR_HARD_STOP carries REASON 0, 1, 2 or 100, and MOTOR only (and always) with 1 or 2",
+     "REASON BYTE 0=E-Stop/General, 1=Upper Limit, 2=Lower Limit, 100=Engine Exception; MOTOR BYTE "
+     "... (only present if REASON is 1 or 2)",
+     "MSG_MOTOR_HARD_STOP"},
+    {"DMC-UNS-004", L::kMust, N::kMotors,
+     "The device does not answer the host's ACKs of its unsolicited messages",
+     "The host answers them with an ACK", "ERRATA 1.9"},
+
+    // --- I/O and DMX ---
+    {"DMC-GIO-001", L::kMust, N::kNothing, "GIO_IN is answered with a 4-byte GIO_IN response",
+     "MSG_GIO_IN: the request carries no data; the response (and the unsolicited message on input "
+     "change) carries the u32 trigger bits.",
+     "ERRATA 1.6"},
+    {"DMC-GIO-002", L::kShould, N::kGioIn, "GIO_IN sets bits only for inputs the device has",
+     "GIO INPUT COUNT BYTE 0-32: Number of input triggers", "MSG_HI; MSG_GIO_IN"},
+    {"DMC-GIO-003", L::kMust, N::kGioOut,
+     "GIO_OUT within the advertised outputs is acknowledged OK",
+     "Set the state for general I/O output triggers.", "MSG_GIO_OUT"},
+    {"DMC-GIO-004", L::kMust, N::kNothing, "GIO_CAM is acknowledged OK", "Test the camera outputs.",
+     "MSG_GIO_CAM"},
+    {"DMC-DMX-001", L::kMust, N::kDmx, "MSG_DMX within the advertised channels is acknowledged OK",
+     "Set DMX light values. The request specifies the initial channel to change, and then one or "
+     "more light values.",
+     "MSG_DMX"},
+
+    // --- Real-time moves ---
+    {"DMC-RT-001", L::kMust, N::kRealTime,
+     "RT_UPLOAD_MOVE_BEGIN, _AXIS and _END of a valid move are acknowledged OK",
+     "MSG_RT_UPLOAD_MOVE_BEGIN ... MSG_RT_UPLOAD_MOVE_AXIS ... MSG_RT_UPLOAD_MOVE_END",
+     "Real-time Moves"},
+    {"DMC-RT-002", L::kMust, N::kRealTime,
+     "RT_POSITION_FRAME sends every uploaded motor to its position at that frame",
+     "Instructs the device to send all motors (and DMX if applicable) to the uploaded frame "
+     "position.",
+     "MSG_RT_POSITION_FRAME"},
+    {"DMC-RT-003", L::kMust, N::kRealTime,
+     "After the last set, the final value repeats until END FRAME",
+     "That means the device must repeat the final value until the end of the uploaded move frame "
+     "range",
+     "MSG_RT_UPLOAD_MOVE_AXIS"},
+    {"DMC-RT-004", L::kMust, N::kRealTime,
+     "During a live move a MOTOR_GET_POSITION arrives at each new frame with MOVE TIME = frame x "
+     "1000",
+     "If the device is running a live move (configured via MSG_RT_RUN_MOVE), it must send a "
+     "MSG_MOTOR_GET_POSITION each time it reaches a new frame in the move.",
+     "MSG_RT_GO; MSG_MOTOR_GET_POSITION"},
+    {"DMC-RT-005", L::kMust, N::kRealTime, "RT_END follows the end of a live run",
+     "After a MSG_RT_RUN_MOVE or MSG_RT_SHOOT_FRAME has finished shooting, the device sends "
+     "MSG_RT_END to notify Dragonframe that the process is over.",
+     "MSG_RT_END"},
+    {"DMC-RT-006", L::kMust, N::kRealTime,
+     "RT_END has an empty data section and is sent once per run",
+     "MSG_RT_END [0x0114] ... Request Data None", "MSG_RT_END"},
+    {"DMC-RT-007", L::kShould, N::kRealTime,
+     "Frame reports of a live move come at about the frame interval (1 / FPS)",
+     "it must send a MSG_MOTOR_GET_POSITION each time it reaches a new frame in the move. (If it "
+     "is slightly after, that is ok.)",
+     "MSG_RT_GO"},
+    {"DMC-RT-008", L::kShould, N::kRealTime,
+     "At a frame report each motor is within the uploaded path between that frame and the next",
+     "Current position in move (if playing back), in thousandths of a frame.",
+     "MSG_MOTOR_GET_POSITION"},
+    {"DMC-RT-009", L::kMust, N::kRealTime,
+     "RT_RUN_MOVE is accepted without its optional trailing fields (29 bytes) and GO after the "
+     "pre-roll is OK",
+     "Optional trailing fields: ... the MSG_RT_RUN_MOVE fields after BLOOP TIME (FLAGS, camera "
+     "angles) ... A device must accept each shorter form.",
+     "ERRATA 1.7"},
+    {"DMC-RT-010", L::kShould, N::kRealTime,
+     "RT_POSITION_FRAME outside the uploaded range is refused",
+     "FRAME DWORD The frame to send all motors to", "MSG_RT_POSITION_FRAME"},
+    {"DMC-RT-011", L::kShould, N::kRealTime, "RT_GO with nothing armed is refused",
+     "After a MSG_RT_RUN_MOVE or MSG_RT_SHOOT_FRAME the device may move the motors into position. "
+     "When the device has stopped moving, a MSG_RT_GO command will perform the run or shoot of the "
+     "frame.",
+     "MSG_RT_GO"},
+    {"DMC-RT-012", L::kShould, N::kRealTime, "STOP_ALL during a live run ends it with RT_END",
+     "the device sends MSG_RT_END to notify Dragonframe that the process is over.", "MSG_RT_END"},
+    {"DMC-RT-013", L::kMust, N::kRealTime,
+     "RT_JOG_ALL from a frame position is acknowledged OK and reports each frame reached",
+     "Jog all motors towards the destination frame. The rig must already be on a frame position "
+     "that is uploaded to the device.",
+     "MSG_RT_JOG_ALL"},
+    {"DMC-RT-014", L::kShould, N::kRealTime,
+     "RT_JOG_ALL when the rig is not on an uploaded frame position is refused "
+     "(ERR_NOT_IN_POSITION)",
+     "ERR_NOT_IN_POSITION 0x0016 ... if you attempt to jog all but aren't on a frame position.",
+     "MSG_FLAG_ACK"},
+    {"DMC-GM-001", L::kMust, N::kGoMotion,
+     "RT_SHOOT_FRAME then RT_GO are acknowledged OK and RT_END follows the exposure",
+     "Set up a blur-motion frame capture", "MSG_RT_SHOOT_FRAME; MSG_RT_END"},
+    {"DMC-GM-002", L::kMust, N::kGoMotion2,
+     "RT_SHOOT_FRAME2 then RT_GO are acknowledged OK and RT_END follows the exposure",
+     "Set up a blur-motion frame capture (alternate version)", "MSG_RT_SHOOT_FRAME2; ERRATA 1.8"},
+    {"DMC-LOOP-001", L::kMust, N::kLooping, "RT_STOP_LOOP is acknowledged OK",
+     "If the device supports 'real-time looping' capability, it must support this command.",
+     "MSG_RT_STOP_LOOP"},
+
+    // --- Virtuals ---
+    {"DMC-VIRT-001", L::kMust, N::kVirtual,
+     "VIRT_GET_POSITION is answered with 24 bytes (37 with the aim point)",
+     "vTrack POS ... vRoll POS DWORD ... Aim pt enabled BYTE This and below are only if device "
+     "supports aim point",
+     "MSG_VIRT_GET_POSITION"},
+};
+
+}  // namespace
+
+std::string_view LevelName(Level level) {
+  switch (level) {
+    case Level::kMust:
+      return "MUST";
+    case Level::kShould:
+      return "SHOULD";
+    case Level::kNote:
+      return "NOTE";
+  }
+  return "?";
+}
+
+std::string_view NeedsText(Needs needs) {
+  switch (needs) {
+    case Needs::kNothing:
+      return "-";
+    case Needs::kMotors:
+      return "MOTOR COUNT >= 1";
+    case Needs::kTwoMotors:
+      return "MOTOR COUNT >= 2";
+    case Needs::kDmx:
+      return "DMX COUNT >= 1";
+    case Needs::kGioOut:
+      return "GIO OUT COUNT >= 1";
+    case Needs::kGioIn:
+      return "GIO INPUT COUNT >= 1";
+    case Needs::kRealTime:
+      return "capability 0x0001 (real-time)";
+    case Needs::kGoMotion:
+      return "capability 0x0002 (go-motion)";
+    case Needs::kGoMotion2:
+      return "capability 0x0080 (go-motion 2)";
+    case Needs::kLooping:
+      return "capability 0x0200 (looping)";
+    case Needs::kVirtual:
+      return "a virtual capability (0x0004-0x0020)";
+    case Needs::kNoVirtual:
+      return "no virtual capability";
+  }
+  return "?";
+}
+
+const std::vector<Rule>& DmcRules() { return kRules; }
+
+const Rule* FindRule(std::string_view id) {
+  for (const Rule& r : kRules) {
+    if (r.id == id) return &r;
+  }
+  return nullptr;
+}
+
+bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
+  constexpr uint32_t kVirtualCaps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                                    dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
+  switch (rule.needs) {
+    case Needs::kNothing:
+      return true;
+    case Needs::kMotors:
+      return hi.motor_count >= 1;
+    case Needs::kTwoMotors:
+      return hi.motor_count >= 2;
+    case Needs::kDmx:
+      return hi.dmx_count >= 1;
+    case Needs::kGioOut:
+      return hi.gio_out_count >= 1;
+    case Needs::kGioIn:
+      return hi.gio_in_count >= 1;
+    case Needs::kRealTime:
+      return (hi.capabilities & dmc::kCapRealTime) != 0 && hi.motor_count >= 1;
+    case Needs::kGoMotion:
+      return (hi.capabilities & dmc::kCapGoMotion) != 0 && hi.motor_count >= 1;
+    case Needs::kGoMotion2:
+      return (hi.capabilities & dmc::kCapGoMotion2) != 0 && hi.motor_count >= 1;
+    case Needs::kLooping:
+      return (hi.capabilities & dmc::kCapRtLooping) != 0;
+    case Needs::kVirtual:
+      return (hi.capabilities & kVirtualCaps) != 0;
+    case Needs::kNoVirtual:
+      return (hi.capabilities & kVirtualCaps) == 0;
+  }
+  return false;
+}
+
+namespace {
+
+bool GlobOne(std::string_view p, std::string_view t) {
+  size_t pi = 0, ti = 0, star = std::string_view::npos, mark = 0;
+  while (ti < t.size()) {
+    if (pi < p.size() && (p[pi] == '?' || p[pi] == t[ti])) {
+      ++pi;
+      ++ti;
+    } else if (pi < p.size() && p[pi] == '*') {
+      star = pi++;
+      mark = ti;
+    } else if (star != std::string_view::npos) {
+      pi = star + 1;
+      ti = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (pi < p.size() && p[pi] == '*') ++pi;
+  return pi == p.size();
+}
+
+std::string Escape(std::string_view s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '|')
+      out += "\\|";
+    else
+      out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+bool GlobMatch(std::string_view patterns, std::string_view text) {
+  size_t start = 0;
+  while (start <= patterns.size()) {
+    const size_t comma = patterns.find(',', start);
+    const std::string_view one = patterns.substr(
+        start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+    if (!one.empty() && GlobOne(one, text)) return true;
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return false;
+}
+
+std::string RulesMarkdown() {
+  size_t must = 0, should = 0, note = 0;
+  for (const Rule& r : kRules) {
+    (r.level == Level::kMust ? must : r.level == Level::kShould ? should : note)++;
+  }
+  std::string s;
+  s += "# Conformance rules\n\n";
+  s += "Generated by `mococheck rules --markdown` from `conformance/rules/catalogue.cpp`;\n";
+  s += "do not edit by hand (a test compares this file with the generated text).\n\n";
+  s += "`mococheck run` checks these rules against a device. MUST failures fail the run\n";
+  s += "(exit 1); SHOULD failures are reported; NOTE marks a reading the spec leaves\n";
+  s += "open and never fails. A rule whose capability the device does not advertise in\n";
+  s += "its HI reply is reported \"not applicable\".\n\n";
+  s += "## DMC v2 (" + std::to_string(kRules.size()) + " rules: " + std::to_string(must) +
+       " MUST, " + std::to_string(should) + " SHOULD, " + std::to_string(note) + " NOTE)\n\n";
+  s += "| id | level | applies when | rule | spec clause | where |\n";
+  s += "| --- | --- | --- | --- | --- | --- |\n";
+  for (const Rule& r : kRules) {
+    s += "| " + std::string(r.id) + " | " + std::string(LevelName(r.level)) + " | " +
+         Escape(NeedsText(r.needs)) + " | " + Escape(r.title) + " | \"" + Escape(r.clause) +
+         "\" | " + Escape(r.source) + " |\n";
+  }
+  return s;
+}
+
+std::string RulesText() {
+  std::string s;
+  for (const Rule& r : kRules) {
+    std::string id(r.id);
+    id.resize(14, ' ');
+    std::string level(LevelName(r.level));
+    level.resize(7, ' ');
+    s += id + level + std::string(r.title) + "\n";
+  }
+  return s;
+}
+
+}  // namespace moco::conformance

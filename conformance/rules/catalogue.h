@@ -1,0 +1,64 @@
+// The catalogue of DMC v2 conformance rules (dmc-v2-protocol.txt, ERRATA dmc
+// 1-11, FACTS "DMC v2"): each rule names the spec clause it enforces, its
+// level and what the device must advertise for it to apply.
+#ifndef MOCO_CONFORMANCE_RULES_CATALOGUE_H_
+#define MOCO_CONFORMANCE_RULES_CATALOGUE_H_
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "wire/dmc.h"
+
+namespace moco::conformance {
+
+// MUST failures fail the run (exit 1); SHOULD failures are reported only;
+// NOTE marks a reading the spec leaves open (ERRATA) and never fails.
+enum class Level { kMust, kShould, kNote };
+std::string_view LevelName(Level level);  // "MUST", "SHOULD", "NOTE"
+
+// What the device's MSG_HI must advertise for a rule to apply.
+enum class Needs {
+  kNothing,
+  kMotors,     // MOTOR COUNT >= 1
+  kTwoMotors,  // MOTOR COUNT >= 2
+  kDmx,        // DMX COUNT >= 1
+  kGioOut,     // GIO OUT COUNT >= 1
+  kGioIn,      // GIO INPUT COUNT >= 1
+  kRealTime,   // capability 0x0001
+  kGoMotion,   // capability 0x0002
+  kGoMotion2,  // capability 0x0080
+  kLooping,    // capability 0x0200
+  kVirtual,    // any of 0x0004, 0x0008, 0x0010, 0x0020
+  kNoVirtual,  // none of the virtual capabilities
+};
+std::string_view NeedsText(Needs needs);
+
+struct Rule {
+  std::string_view id;  // "DMC-ACK-003"
+  Level level = Level::kMust;
+  Needs needs = Needs::kNothing;
+  std::string_view title;   // one line: what the device must do
+  std::string_view clause;  // the spec text enforced, quoted (or the ERRATA/FACTS reading)
+  std::string_view source;  // where the clause is: "MSG_FLAG_ACK", "ERRATA 1.4", ...
+};
+
+// Every DMC v2 rule, ordered by id family as the catalogue lists them.
+const std::vector<Rule>& DmcRules();
+// nullptr for an unknown id.
+const Rule* FindRule(std::string_view id);
+
+// Whether `rule` applies to a device that answered HI with `hi`.
+bool Applies(const Rule& rule, const dmc::HiResponse& hi);
+
+// Shell-style match: '*' any run, '?' one character; a comma separates
+// alternatives ("DMC-HI-*,DMC-ACK-00?").
+bool GlobMatch(std::string_view patterns, std::string_view text);
+
+// The catalogue as Markdown (docs/rules.md) and as plain text (`mococheck rules`).
+std::string RulesMarkdown();
+std::string RulesText();
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_RULES_CATALOGUE_H_

@@ -1,0 +1,100 @@
+// The DMC v2 rule catalogue: well-formed ids and clauses, glob selection, and
+// docs/rules.md equal to the generated text.
+#include "conformance/rules/catalogue.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace moco::conformance {
+namespace {
+
+TEST(Catalogue, IdsAreUniqueWellFormedAndEveryRuleQuotesItsClause) {
+  std::set<std::string> ids;
+  // "DMC-" FAMILY "-" three digits.
+  const auto shape = [](std::string_view id) {
+    if (id.rfind("DMC-", 0) != 0 || id.size() < 9) return false;
+    const size_t dash = id.rfind('-');
+    if (dash <= 4 || id.size() - dash != 4) return false;
+    for (size_t i = 4; i < dash; ++i) {
+      if (id[i] < 'A' || id[i] > 'Z') return false;
+    }
+    for (size_t i = dash + 1; i < id.size(); ++i) {
+      if (id[i] < '0' || id[i] > '9') return false;
+    }
+    return true;
+  };
+  for (const Rule& r : DmcRules()) {
+    EXPECT_TRUE(shape(r.id)) << r.id;
+    EXPECT_TRUE(ids.insert(std::string(r.id)).second) << "duplicate " << r.id;
+    EXPECT_FALSE(r.title.empty()) << r.id;
+    EXPECT_GE(r.clause.size(), 10u) << r.id << " quotes no clause";
+    EXPECT_FALSE(r.source.empty()) << r.id;
+    EXPECT_EQ(FindRule(r.id), &r);
+  }
+  EXPECT_GE(DmcRules().size(), 60u);
+  EXPECT_EQ(FindRule("DMC-NOPE-001"), nullptr);
+}
+
+TEST(Catalogue, RulesTheBriefNamesArePresentWithTheirLevels) {
+  for (const char* id : {"DMC-FRAME-001", "DMC-CSUM-001", "DMC-ACK-003", "DMC-HI-002",
+                         "DMC-POS-001", "DMC-RT-004"}) {
+    const Rule* r = FindRule(id);
+    ASSERT_NE(r, nullptr) << id;
+    EXPECT_EQ(r->level, Level::kMust) << id;
+  }
+  EXPECT_EQ(FindRule("DMC-HI-003")->level, Level::kNote);     // the 49-byte HI (FACTS)
+  EXPECT_EQ(FindRule("DMC-HI-011")->level, Level::kShould);   // "should issue a MSG_HI"
+  EXPECT_EQ(FindRule("DMC-POS-002")->level, Level::kShould);  // "about every 0.10 seconds"
+}
+
+TEST(Catalogue, ApplicabilityFollowsTheHiDescription) {
+  dmc::HiResponse bare;  // no motors, no capabilities
+  EXPECT_TRUE(Applies(*FindRule("DMC-CSUM-001"), bare));
+  EXPECT_FALSE(Applies(*FindRule("DMC-MOVE-003"), bare));
+  EXPECT_FALSE(Applies(*FindRule("DMC-RT-004"), bare));
+  dmc::HiResponse rt = bare;
+  rt.motor_count = 2;
+  rt.capabilities = dmc::kCapRealTime;
+  EXPECT_TRUE(Applies(*FindRule("DMC-RT-004"), rt));
+  EXPECT_FALSE(Applies(*FindRule("DMC-GM-001"), rt));
+  EXPECT_TRUE(Applies(*FindRule("DMC-ERR-010"), rt));
+  rt.capabilities |= dmc::kCapVirtXyz;
+  EXPECT_FALSE(Applies(*FindRule("DMC-ERR-010"), rt));
+  EXPECT_TRUE(Applies(*FindRule("DMC-VIRT-001"), rt));
+}
+
+TEST(Catalogue, GlobMatchesStarsQuestionMarksAndAlternatives) {
+  EXPECT_TRUE(GlobMatch("DMC-HI-*", "DMC-HI-002"));
+  EXPECT_FALSE(GlobMatch("DMC-HI-*", "DMC-HARD-002"));
+  EXPECT_TRUE(GlobMatch("DMC-ACK-00?", "DMC-ACK-003"));
+  EXPECT_FALSE(GlobMatch("DMC-ACK-00?", "DMC-ACK-010"));
+  EXPECT_TRUE(GlobMatch("DMC-RT-*,DMC-CSUM-001", "DMC-CSUM-001"));
+  EXPECT_TRUE(GlobMatch("*", "anything"));
+  EXPECT_TRUE(GlobMatch("motor/*", "motor/move"));
+  EXPECT_FALSE(GlobMatch("", "DMC-HI-001"));
+  EXPECT_FALSE(GlobMatch("DMC-HI-001", "DMC-HI-0011"));
+}
+
+TEST(Catalogue, DocsRulesMdIsTheGeneratedCatalogue) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  const std::string path = std::string(root != nullptr ? root : ".") + "/docs/rules.md";
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << "cannot read " << path;
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), RulesMarkdown())
+      << "docs/rules.md is stale: regenerate it with `mococheck rules --markdown > docs/rules.md`";
+}
+
+TEST(Catalogue, MarkdownCountsLevels) {
+  size_t must = 0;
+  for (const Rule& r : DmcRules()) must += r.level == Level::kMust;
+  EXPECT_NE(RulesMarkdown().find(std::to_string(must) + " MUST"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace moco::conformance

@@ -1,0 +1,26 @@
+// mococheck reports: console text, JSON and JUnit XML (one testcase per rule
+// and scenario case), each file written atomically.
+#ifndef MOCO_CONFORMANCE_RUNNER_REPORT_H_
+#define MOCO_CONFORMANCE_RUNNER_REPORT_H_
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "conformance/runner/runner.h"
+
+namespace moco::conformance {
+
+// Per case and failing rule with its evidence, then the rule summary.
+// `verbose` also lists the rules that passed in each case.
+std::string ConsoleReport(const RunReport& report, bool verbose);
+nlohmann::json JsonReport(const RunReport& report);
+std::string JunitReport(const RunReport& report);
+
+// Writes `text` to "<path>.partial" and renames it to `path`. Returns an
+// error message, or an empty string.
+std::string WriteAtomically(const std::string& path, const std::string& text);
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_RUNNER_REPORT_H_

@@ -1,0 +1,117 @@
+// The mococheck runner (see runner.h): capability discovery from MSG_HI
+// (dmc-v2-protocol.txt "Capabilities"), case selection and sharding, and the
+// roll-up of rule outcomes.
+#include "conformance/runner/runner.h"
+
+#include <chrono>
+
+namespace moco::conformance {
+
+bool CaseResult::MustFailed() const {
+  for (const auto& [id, o] : outcomes) {
+    const Rule* r = FindRule(id);
+    if (o.status == Status::kFail && r != nullptr && r->level == Level::kMust) return true;
+  }
+  return false;
+}
+
+bool RunReport::MustFailed() const {
+  for (const auto& [id, s] : rules) {
+    const Rule* r = FindRule(id);
+    if (s.status == Status::kFail && r != nullptr && r->level == Level::kMust) return true;
+  }
+  return false;
+}
+
+std::map<Status, size_t> RunReport::RuleCounts() const {
+  std::map<Status, size_t> n;
+  for (const auto& [id, s] : rules) ++n[s.status];
+  return n;
+}
+
+int ExitCode(const RunReport& report) { return report.MustFailed() ? 1 : 0; }
+
+RunReport RunDmc(Target& target, const RunOptions& options) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  RunReport report;
+  report.target = target.Name();
+  report.options = options;
+
+  // Discover what the device advertises.
+  {
+    Verdicts probe;
+    DmcHost host(target, probe, options.host);
+    if (const auto* hi = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}))) report.hi = *hi;
+    host.Close();
+  }
+  const dmc::HiResponse hi = report.hi.value_or(dmc::HiResponse{});
+
+  const std::vector<Case>& cases = DmcCases();
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& k = cases[i];
+    if (i % options.shard_count != options.shard_index) continue;
+    const std::string full = k.suite + "/" + k.name;
+    if (!options.cases.empty() && !GlobMatch(options.cases, full)) continue;
+    CaseResult result;
+    result.suite = k.suite;
+    result.name = k.name;
+    result.summary = k.summary;
+    const Rule gate{"", Level::kMust, k.needs, "", "", ""};
+    if (!Applies(gate, hi)) {
+      result.applicable = false;
+      result.not_applicable_because =
+          "the device does not advertise " + std::string(NeedsText(k.needs));
+      report.cases.push_back(std::move(result));
+      continue;
+    }
+    const auto c0 = std::chrono::steady_clock::now();
+    if (target.CanRestart()) target.Restart();
+    Verdicts verdicts(options.rules);
+    DmcHost host(target, verdicts, options.host);
+    const TimeNs t0 = host.Now();
+    const auto* seen = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}));
+    if (seen != nullptr && !host.link_lost()) {
+      const dmc::HiResponse device_hi = *seen;
+      CaseContext ctx{host, verdicts, device_hi, target, options.host, options.random, result.log};
+      k.run(ctx);
+    }
+    host.Close();
+    if (host.link_lost()) result.log.push_back("the link to the device was lost");
+    if (verdicts.MustFailed() && k.suite != "random") {
+      result.log.push_back("transcript:\n" + Transcript(host));
+    }
+    result.target_ns = host.Now() - t0;
+    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+    result.outcomes = verdicts.outcomes();
+    report.cases.push_back(std::move(result));
+  }
+
+  for (const Rule& rule : DmcRules()) {
+    if (!options.rules.empty() && !GlobMatch(options.rules, rule.id)) continue;
+    RuleSummary s;
+    if (!Applies(rule, hi)) {
+      s.status = Status::kNotApplicable;
+    } else {
+      bool noted = false;
+      for (const CaseResult& c : report.cases) {
+        auto it = c.outcomes.find(rule.id);
+        if (it == c.outcomes.end()) continue;
+        if (it->second.status == Status::kFail)
+          ++s.cases_failed;
+        else if (it->second.status == Status::kNoted)
+          noted = true;
+        else
+          ++s.cases_passed;
+      }
+      s.status = s.cases_failed > 0   ? Status::kFail
+                 : noted              ? Status::kNoted
+                 : s.cases_passed > 0 ? Status::kPass
+                                      : Status::kNotExercised;
+    }
+    report.rules.emplace(std::string(rule.id), s);
+  }
+  report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return report;
+}
+
+}  // namespace moco::conformance

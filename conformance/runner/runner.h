@@ -1,0 +1,70 @@
+// The mococheck runner (ARCHITECTURE "conformance"): reads the device's HI,
+// runs the applicable cases of every suite on the target and gathers the rule
+// outcomes per case and over the run.
+#ifndef MOCO_CONFORMANCE_RUNNER_RUNNER_H_
+#define MOCO_CONFORMANCE_RUNNER_RUNNER_H_
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "conformance/runner/host.h"
+#include "conformance/runner/verdicts.h"
+#include "conformance/suites/suites.h"
+#include "conformance/targets/target.h"
+
+namespace moco::conformance {
+
+struct RunOptions {
+  std::string rules;         // GlobMatch over rule ids; empty: all
+  std::string cases;         // GlobMatch over "suite/name"; empty: all
+  uint32_t shard_index = 0;  // 0-based; this run takes cases i, i+n, i+2n, ...
+  uint32_t shard_count = 1;
+  HostOptions host;
+  RandomOptions random;
+};
+
+struct CaseResult {
+  std::string suite;
+  std::string name;
+  std::string summary;
+  bool applicable = true;
+  std::string not_applicable_because;
+  std::map<std::string, RuleOutcome, std::less<>> outcomes;
+  TimeNs target_ns = 0;  // the case's length on the target's clock
+  double wall_s = 0;
+  std::vector<std::string> log;
+  bool MustFailed() const;
+};
+
+struct RuleSummary {
+  Status status = Status::kNotExercised;
+  uint32_t cases_failed = 0;
+  uint32_t cases_passed = 0;
+};
+
+struct RunReport {
+  std::string target;
+  std::string protocol = "dmc";
+  RunOptions options;
+  std::optional<dmc::HiResponse> hi;
+  std::vector<CaseResult> cases;
+  std::map<std::string, RuleSummary, std::less<>> rules;  // every rule within the filter
+  double wall_s = 0;
+
+  bool MustFailed() const;
+  // Counts of rules by status.
+  std::map<Status, size_t> RuleCounts() const;
+};
+
+// Runs the DMC v2 suites against an open `target`.
+RunReport RunDmc(Target& target, const RunOptions& options);
+
+// 0 when every MUST rule passed, 1 when one failed.
+int ExitCode(const RunReport& report);
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_RUNNER_RUNNER_H_

@@ -1,0 +1,302 @@
+// Targets of the conformance runner (ARCHITECTURE "conformance"): in-process
+// on the virtual clock, PTY/serial and TCP on the steady clock.
+#include "conformance/targets/target.h"
+
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <exception>
+
+#include "devices/registry.h"
+#include "sim/rig.h"
+
+namespace moco::conformance {
+namespace {
+
+int64_t SteadyNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+std::optional<speed_t> BaudConstant(uint32_t baud) {
+  switch (baud) {
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 921600:
+      return B921600;
+    default:
+      return std::nullopt;
+  }
+}
+
+}  // namespace
+
+// --- InProcessTarget ----------------------------------------------------------------
+
+InProcessTarget::InProcessTarget(std::string name, DeviceFactory factory)
+    : name_(std::move(name)), factory_(std::move(factory)) {}
+
+InProcessTarget::~InProcessTarget() {
+  device_.reset();  // before the scheduler it schedules on
+}
+
+std::unique_ptr<InProcessTarget> InProcessTarget::ForModel(const std::string& model,
+                                                           const std::string& profile_path) {
+  return std::make_unique<InProcessTarget>(
+      model, [model, profile_path](sim::Scheduler& s, devices::ByteSink& sink) {
+        return devices::CreateDevice(model, profile_path, s, sink);
+      });
+}
+
+void InProcessTarget::Build() {
+  device_.reset();
+  scheduler_ = std::make_unique<sim::Scheduler>();
+  sink_.pending.clear();
+  device_ = factory_(*scheduler_, sink_);
+  device_->PowerOn();
+  device_->OnHostLink(true);
+}
+
+std::optional<std::string> InProcessTarget::Open() {
+  try {
+    Build();
+  } catch (const std::exception& e) {
+    device_.reset();
+    return "cannot build the in-process device \"" + name_ + "\": " + e.what();
+  }
+  return std::nullopt;
+}
+
+void InProcessTarget::Restart() { Build(); }
+
+bool InProcessTarget::Send(wire::ByteView bytes) {
+  if (!device_) return false;
+  device_->OnHostBytes(bytes);
+  return true;
+}
+
+bool InProcessTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
+  if (!device_) return false;
+  while (sink_.pending.empty()) {
+    const std::optional<TimeNs> next = scheduler_->NextEventTime();
+    if (!next || *next > deadline_ns) {
+      if (deadline_ns > scheduler_->Now()) scheduler_->RunUntil(deadline_ns);
+      break;
+    }
+    scheduler_->RunNext();
+  }
+  out.insert(out.end(), sink_.pending.begin(), sink_.pending.end());
+  sink_.pending.clear();
+  return true;
+}
+
+bool InProcessTarget::SetEStop(bool engaged) {
+  sim::Rig* rig = device_ ? device_->rig() : nullptr;
+  if (rig == nullptr) return false;
+  if (engaged) {
+    rig->EngageEStop();
+  } else {
+    rig->ReleaseEStop();
+  }
+  return true;
+}
+
+// --- FdTarget ------------------------------------------------------------------------
+
+FdTarget::FdTarget(Kind kind, std::string address, uint32_t baud)
+    : kind_(kind), address_(std::move(address)), baud_(baud) {}
+
+FdTarget::~FdTarget() {
+  if (fd_ >= 0) close(fd_);
+}
+
+std::string FdTarget::Name() const {
+  if (kind_ == Kind::kTcp) return "tcp:" + address_;
+  return "pty:" + address_ + " @" + std::to_string(baud_);
+}
+
+std::optional<std::string> FdTarget::Open() {
+  if (kind_ == Kind::kSerial) {
+    const std::optional<speed_t> speed = BaudConstant(baud_);
+    if (!speed) {
+      return "unsupported baud rate " + std::to_string(baud_) +
+             "; use one of 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600";
+    }
+    fd_ = open(address_.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
+    if (fd_ < 0) {
+      return "cannot open " + address_ + ": " + std::strerror(errno) +
+             "; check the path (is the device or mocosim running?) and its permissions";
+    }
+    termios t{};
+    if (tcgetattr(fd_, &t) == 0) {
+      cfmakeraw(&t);
+      cfsetispeed(&t, *speed);
+      cfsetospeed(&t, *speed);
+      t.c_cflag |= CLOCAL | CREAD;
+      tcsetattr(fd_, TCSANOW, &t);
+    }
+  } else {
+    const size_t colon = address_.rfind(':');
+    const std::string host = address_.substr(0, colon);
+    const std::string port = address_.substr(colon + 1);
+    addrinfo hints{};
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* res = nullptr;
+    if (getaddrinfo(host.c_str(), port.c_str(), &hints, &res) != 0 || res == nullptr) {
+      return "cannot resolve " + address_ + "; give tcp:HOST:PORT, e.g. tcp:127.0.0.1:5000";
+    }
+    int err = 0;
+    for (addrinfo* a = res; a != nullptr; a = a->ai_next) {
+      fd_ = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+      if (fd_ < 0) continue;
+      if (connect(fd_, a->ai_addr, a->ai_addrlen) == 0) break;
+      err = errno;
+      close(fd_);
+      fd_ = -1;
+    }
+    freeaddrinfo(res);
+    if (fd_ < 0) {
+      return "cannot connect to " + address_ + ": " + std::strerror(err) +
+             "; is the device (or mocosim --tcp) listening there?";
+    }
+    const int one = 1;
+    setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+    fcntl(fd_, F_SETFL, fcntl(fd_, F_GETFL) | O_NONBLOCK);
+  }
+  origin_ns_ = SteadyNs();
+  return std::nullopt;
+}
+
+void FdTarget::Restart() {
+  wire::Bytes drop;
+  Receive(Now(), drop);
+}
+
+TimeNs FdTarget::Now() const { return SteadyNs() - origin_ns_; }
+
+bool FdTarget::Send(wire::ByteView bytes) {
+  if (fd_ < 0) return false;
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t w = write(fd_, bytes.data() + done, bytes.size() - done);
+    if (w > 0) {
+      done += static_cast<size_t>(w);
+      continue;
+    }
+    if (w < 0 && (errno == EAGAIN || errno == EINTR)) {
+      pollfd p{fd_, POLLOUT, 0};
+      poll(&p, 1, 100);
+      continue;
+    }
+    return false;
+  }
+  return true;
+}
+
+bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
+  if (fd_ < 0) return false;
+  for (;;) {
+    uint8_t buf[4096];
+    const ssize_t r = read(fd_, buf, sizeof buf);
+    if (r > 0) {
+      out.insert(out.end(), buf, buf + r);
+      return true;
+    }
+    if (r == 0) return false;
+    // EIO: a PTY whose other side is closed for now (the device may reopen it).
+    const bool hung_up = errno == EIO;
+    if (errno != EAGAIN && errno != EINTR && !hung_up) return false;
+    const TimeNs left_ns = deadline_ns - Now();
+    if (left_ns <= 0) return true;
+    const int wait_ms = static_cast<int>((left_ns + sim::kNsPerMs - 1) / sim::kNsPerMs);
+    if (hung_up) {
+      poll(nullptr, 0, std::min(wait_ms, 10));
+    } else {
+      pollfd p{fd_, POLLIN, 0};
+      poll(&p, 1, wait_ms);
+    }
+  }
+}
+
+// --- parsing -------------------------------------------------------------------------
+
+std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
+  const size_t colon = text.find(':');
+  const std::string_view scheme = colon == std::string_view::npos ? text : text.substr(0, colon);
+  const std::string rest =
+      colon == std::string_view::npos ? std::string() : std::string(text.substr(colon + 1));
+  const std::string usage =
+      "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH or tcp:HOST:PORT";
+  if (rest.empty()) return "--target \"" + std::string(text) + "\" names no address" + usage;
+  if (scheme == "in-process") return TargetSpec{TargetSpec::Kind::kInProcess, rest};
+  if (scheme == "pty" || scheme == "serial") return TargetSpec{TargetSpec::Kind::kSerial, rest};
+  if (scheme == "tcp") {
+    const size_t c = rest.rfind(':');
+    if (c == std::string::npos || c == 0 || c + 1 == rest.size()) {
+      return "--target \"" + std::string(text) + "\" lacks a host or a port" + usage;
+    }
+    for (size_t i = c + 1; i < rest.size(); ++i) {
+      if (rest[i] < '0' || rest[i] > '9') {
+        return "--target \"" + std::string(text) + "\": the port is not a number" + usage;
+      }
+    }
+    return TargetSpec{TargetSpec::Kind::kTcp, rest};
+  }
+  return "--target \"" + std::string(text) + "\": unknown kind \"" + std::string(scheme) + "\"" +
+         usage;
+}
+
+std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& spec,
+                                                              const std::string& profile_path,
+                                                              uint32_t baud) {
+  switch (spec.kind) {
+    case TargetSpec::Kind::kInProcess: {
+      const devices::DeviceModel* model = devices::FindDeviceModel(spec.address);
+      if (model != nullptr && model->protocol != wire::Protocol::kDmc) {
+        return "in-process model \"" + spec.address + "\" speaks " +
+               std::string(wire::ProtocolName(model->protocol)) +
+               "; mococheck has rules for DMC v2 only so far: use in-process:dmc16";
+      }
+      if (model == nullptr) {
+        std::string known;
+        for (const auto& m : devices::DeviceModels())
+          known += (known.empty() ? "" : ", ") + std::string(m.name);
+        return "unknown in-process model \"" + spec.address + "\"; the models are: " + known;
+      }
+      return std::unique_ptr<Target>(InProcessTarget::ForModel(spec.address, profile_path));
+    }
+    case TargetSpec::Kind::kSerial:
+      return std::unique_ptr<Target>(
+          std::make_unique<FdTarget>(FdTarget::Kind::kSerial, spec.address, baud));
+    case TargetSpec::Kind::kTcp:
+      return std::unique_ptr<Target>(
+          std::make_unique<FdTarget>(FdTarget::Kind::kTcp, spec.address, baud));
+  }
+  return std::string("unknown target kind");
+}
+
+}  // namespace moco::conformance

@@ -1,0 +1,149 @@
+// Where mococheck's bytes go (ARCHITECTURE "conformance", "One clock"): a
+// device reached in-process on the runner's own virtual clock, or outside the
+// process over a PTY/serial path or TCP on the steady clock.
+#ifndef MOCO_CONFORMANCE_TARGETS_TARGET_H_
+#define MOCO_CONFORMANCE_TARGETS_TARGET_H_
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+
+#include "devices/device.h"
+#include "sim/scheduler.h"
+#include "wire/bytes.h"
+
+namespace moco::conformance {
+
+using sim::TimeNs;
+
+// Carries bytes both ways and keeps the clock timing rules are judged on.
+// One thread uses a Target.
+class Target {
+ public:
+  virtual ~Target() = default;
+
+  // e.g. "in-process:dmc16", "pty:/tmp/dmc16 @115200", "tcp:127.0.0.1:5000".
+  virtual std::string Name() const = 0;
+  // True when Now() is the runner's virtual clock (waiting costs nothing).
+  virtual bool VirtualClock() const = 0;
+  // True when Restart() gives a freshly powered device (in-process only).
+  virtual bool CanRestart() const = 0;
+
+  // Opens the link (and powers an in-process device on). Returns an error
+  // message naming the problem and the fix, or nullopt.
+  virtual std::optional<std::string> Open() = 0;
+  // Powers the device off and on again, with time restarted at 0 (in-process);
+  // external targets keep their connection and only drop unread input.
+  virtual void Restart() = 0;
+
+  // The target's clock, in nanoseconds since Open() / Restart().
+  virtual TimeNs Now() const = 0;
+  // Writes `bytes` to the device. False when the link is gone.
+  virtual bool Send(wire::ByteView bytes) = 0;
+  // Waits until device bytes arrive or Now() reaches `deadline_ns` and appends
+  // what arrived to `out`. Returns false when the link is gone.
+  virtual bool Receive(TimeNs deadline_ns, wire::Bytes& out) = 0;
+
+  // Presses (true) or releases the device's e-stop button, where the runner
+  // can reach it (in-process only). False when it cannot.
+  virtual bool SetEStop(bool /*engaged*/) { return false; }
+};
+
+// Builds a device for an in-process target; it writes its output to `sink`.
+// `scheduler` and `sink` outlive the device.
+using DeviceFactory = std::function<std::unique_ptr<devices::Device>(sim::Scheduler& scheduler,
+                                                                     devices::ByteSink& sink)>;
+
+// A device in this process on a virtual clock: Receive() runs the scheduler's
+// events up to the deadline, stopping as soon as the device has written.
+class InProcessTarget final : public Target {
+ public:
+  // `name` is the model for Name(); `factory` builds the device (again on Restart()).
+  InProcessTarget(std::string name, DeviceFactory factory);
+  // A registered model (devices::CreateDevice) with its profile (empty: built-in).
+  static std::unique_ptr<InProcessTarget> ForModel(const std::string& model,
+                                                   const std::string& profile_path);
+  ~InProcessTarget() override;
+
+  std::string Name() const override { return "in-process:" + name_; }
+  bool VirtualClock() const override { return true; }
+  bool CanRestart() const override { return true; }
+  std::optional<std::string> Open() override;
+  void Restart() override;
+  TimeNs Now() const override { return scheduler_->Now(); }
+  bool Send(wire::ByteView bytes) override;
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
+  bool SetEStop(bool engaged) override;
+
+  // The device under test (null before Open()).
+  devices::Device* device() { return device_.get(); }
+
+ private:
+  class Sink final : public devices::ByteSink {
+   public:
+    void Write(wire::ByteView bytes) override {
+      pending.insert(pending.end(), bytes.begin(), bytes.end());
+    }
+    wire::Bytes pending;
+  };
+  void Build();
+
+  std::string name_;
+  DeviceFactory factory_;
+  std::unique_ptr<sim::Scheduler> scheduler_;
+  Sink sink_;
+  std::unique_ptr<devices::Device> device_;
+};
+
+// A device outside the process: a PTY or serial path (termios raw, 8N1 at
+// `baud`) or a TCP connection. The clock is std::chrono::steady_clock.
+class FdTarget final : public Target {
+ public:
+  enum class Kind { kSerial, kTcp };
+  // kSerial: `address` is a path; kTcp: "host:port" (IPv4 literal or a name).
+  FdTarget(Kind kind, std::string address, uint32_t baud = 115200);
+  ~FdTarget() override;
+  FdTarget(const FdTarget&) = delete;
+  FdTarget& operator=(const FdTarget&) = delete;
+
+  std::string Name() const override;
+  bool VirtualClock() const override { return false; }
+  bool CanRestart() const override { return false; }
+  std::optional<std::string> Open() override;
+  void Restart() override;
+  TimeNs Now() const override;
+  bool Send(wire::ByteView bytes) override;
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
+
+ private:
+  Kind kind_;
+  std::string address_;
+  uint32_t baud_;
+  int fd_ = -1;
+  int64_t origin_ns_ = 0;  // steady_clock at Open()
+};
+
+// A parsed --target: "in-process:MODEL", "pty:PATH" (also "serial:PATH") or
+// "tcp:HOST:PORT".
+struct TargetSpec {
+  enum class Kind { kInProcess, kSerial, kTcp };
+  Kind kind = Kind::kInProcess;
+  std::string address;  // model, path or host:port
+};
+
+// Parses a --target value; on failure the message names the problem and the fix.
+std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text);
+
+// Builds the target for `spec`. Unknown in-process models and bad profiles
+// come back as an error message.
+std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& spec,
+                                                              const std::string& profile_path,
+                                                              uint32_t baud);
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_TARGETS_TARGET_H_
