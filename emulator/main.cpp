@@ -164,6 +164,7 @@ int main(int argc, char** argv) {
   // --- one device: mocosim <model> --pty PATH | --tcp [HOST:]PORT ---
   struct OneDevice {
     CLI::App* cmd = nullptr;
+    CLI::Option* wifi_opt = nullptr;  // models that have a Wi-Fi link
     moco::transport::DeviceConfig config;
     std::string pty_path, tcp_spec, wifi_spec, log_level = "info", control_path, scenario_path;
   };
@@ -183,7 +184,7 @@ int main(int argc, char** argv) {
         "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
     pty_opt->excludes(tcp_opt);
     if (model.protocol == moco::wire::Protocol::kStackshot) {
-      auto* wifi_opt = o->cmd->add_option(
+      auto* wifi_opt = o->wifi_opt = o->cmd->add_option(
           "--wifi", o->wifi_spec,
           "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
           "connect to its TCP port. ADDRESS[:UDP_PORT[:HOST_TCP_PORT]], default "
@@ -249,7 +250,7 @@ int main(int argc, char** argv) {
   for (auto& o : one_device) {
     if (!o->cmd->parsed()) continue;
     const std::string cmd = o->config.model;
-    const bool wifi = o->cmd->count("--wifi") > 0;
+    const bool wifi = o->wifi_opt != nullptr && o->wifi_opt->count() > 0;
     if (o->pty_path.empty() && o->tcp_spec.empty() && !wifi) {
       std::fprintf(stderr,
                    "mocosim %s: say where to serve the device: --pty /tmp/%s or "

@@ -146,6 +146,7 @@ void Link::OnWritten(const ErrorCode& ec, size_t n) {
   write_buf_.clear();
   if (!host_present_) Reclaim();
   PumpWriter();
+  StartRead();  // resumes reading held back by a full outgoing queue
   driver_.Kick();
 }
 
@@ -155,6 +156,10 @@ void Link::StartRead() {
   if (stopped_ || reading_ || !stream_ || device_ == nullptr || in_.size() >= kMaxInboundBytes) {
     return;
   }
+  // Back-pressure: while the host leaves half the outgoing queue unread, its
+  // requests wait in the kernel (its writes block) instead of making answers
+  // that would overflow the queue and be lost.
+  if (host_open_ && queued_bytes() >= options_.max_queue_bytes / 2) return;
   reading_ = true;
   stream_->AsyncReadSome(asio::buffer(read_buf_), Guard(&Link::OnRead));
 }
