@@ -80,6 +80,63 @@ class DeviceServerTest : public ::testing::Test {
   RealtimeDriver driver_{io_, scheduler_};
 };
 
+// A host that writes far more than it reads back: the link stops reading its
+// requests while the answers wait (the host's writes then block in the
+// kernel), so nothing is dropped and every byte comes back in order.
+TEST_F(DeviceServerTest, HostThatDoesNotReadIsHeldBackNotAnsweredIntoTheVoid) {
+  ServeOptions opts;
+  opts.no_pacing = true;
+  opts.max_queue_bytes = 4096;
+  opts.log = [](std::string_view) {};
+  DeviceServer server(driver_, "tcp:127.0.0.1:0", opts);
+  EchoDevice device(server.sink());
+  server.Serve(device);
+  device.PowerOn();
+  driver_.Start();
+  const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(server.tcp_port());
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+  fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+  // 16 MiB of patterned bytes: far beyond the queue and the socket buffers.
+  constexpr size_t kTotal = 16u << 20;
+  std::string sent(kTotal, '\0');
+  for (size_t i = 0; i < kTotal; ++i) sent[i] = static_cast<char>((i * 131 + i / 251) & 0xff);
+  std::string got;
+  size_t written = 0;
+  // First only write, for a while: a link that kept reading would have to
+  // drop answers the host does not take.
+  RunUntil(
+      io_,
+      [&] {
+        const ssize_t w = send(fd, sent.data() + written, kTotal - written, MSG_NOSIGNAL);
+        if (w > 0) written += static_cast<size_t>(w);
+        return written == kTotal;
+      },
+      std::chrono::milliseconds(1500));
+  EXPECT_LT(written, kTotal) << "the host's writes were held back";
+  // Then read and write until everything came back.
+  ASSERT_TRUE(RunUntil(
+      io_,
+      [&] {
+        if (written < kTotal) {
+          const ssize_t w = send(fd, sent.data() + written, kTotal - written, MSG_NOSIGNAL);
+          if (w > 0) written += static_cast<size_t>(w);
+        }
+        char buf[65536];
+        const ssize_t n = read(fd, buf, sizeof buf);
+        if (n > 0) got.append(buf, static_cast<size_t>(n));
+        return got.size() == kTotal;
+      },
+      std::chrono::milliseconds(60000)));
+  EXPECT_EQ(server.link().stats().overflowed, 0u);
+  EXPECT_TRUE(got == sent) << "every byte back, in order";
+  close(fd);
+  server.Stop();
+}
+
 TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
   const fs::path file =
       fs::temp_directory_path() / ("moco_tap_" + std::to_string(getpid()) + ".jsonl");
