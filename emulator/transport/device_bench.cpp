@@ -260,19 +260,19 @@ void Dfmoco(const std::string& pty, int n) {
     asio::post(emulator.io(), [&] { emulator.Stop(); });
     t.join();
   }
-  // Memory per device: 64 DFMoco Unos in one process, in virtual time
-  // (heap in use by the allocator, which RSS rounds to pages).
-  const size_t before = mallinfo2().uordblks;
-  {
+  // Memory per device: 64 of a model in one process, in virtual time (heap
+  // in use by the allocator, which RSS rounds to pages).
+  for (const char* model : {"dfmoco", "stackshot3x", "dmc16"}) {
+    const size_t before = mallinfo2().uordblks;
     moco::sim::Scheduler scheduler;
     NullSink sink;
     std::vector<std::unique_ptr<moco::devices::Device>> devices;
     for (int i = 0; i < 64; ++i) {
-      devices.push_back(moco::devices::CreateDevice("dfmoco", "", scheduler, sink));
+      devices.push_back(moco::devices::CreateDevice(model, "", scheduler, sink));
       devices.back()->PowerOn();
     }
     const size_t after = mallinfo2().uordblks;
-    std::printf("dfmoco memory: %.1f KiB heap per device (64 devices)\n",
+    std::printf("%s memory: %.1f KiB heap per device, idle (64 devices)\n", model,
                 static_cast<double>(after - before) / 64.0 / 1024.0);
   }
 }
