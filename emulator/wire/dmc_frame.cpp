@@ -360,6 +360,8 @@ void FrameDecoder::ScanSpan(const uint8_t* p, size_t n, bool at_end, Sink sink, 
 }
 
 void FrameDecoder::FeedImpl(ByteView chunk, Sink sink, void* ctx) {
+  // An empty chunk changes nothing (and its data() may be null).
+  if (chunk.empty()) return;
   const uint8_t* in = chunk.data();
   const size_t n = chunk.size();
   size_t pos = 0;

@@ -172,6 +172,19 @@ rc::Gen<Bytes> GenStream() {
 
 // --- Checksum ---------------------------------------------------------------------
 
+TEST(DmcFrameDecoderTest, EmptyChunksChangeNothing) {
+  const Bytes frame = EncodeFrame(Frame{7, 0x0001, {}});
+  FrameDecoder d;
+  int frames = 0;
+  auto count = [&](const FrameEvent& e) { frames += std::holds_alternative<FrameRef>(e) ? 1 : 0; };
+  d.Feed(ByteView(), count);
+  d.Feed(ByteView(frame.data(), 5), count);
+  d.Feed(ByteView(), count);  // in the middle of a frame
+  d.Feed(ByteView(frame.data() + 5, frame.size() - 5), count);
+  d.Feed(ByteView(), count);
+  EXPECT_EQ(frames, 1);
+}
+
 TEST(DmcChecksumTest, PublishedFletcher16Values) {
   // Fletcher-16 reference values for the strings the spec's cited article uses.
   auto f = [](const char* s) {
