@@ -88,10 +88,11 @@ void BM_StepEdges32Motors(benchmark::State& state) {
 }
 BENCHMARK(BM_StepEdges32Motors)->Unit(benchmark::kMillisecond);
 
-// Raw analytic enumeration of one plan's edges (no sink overhead).
-void BM_PlanForEachEdge(benchmark::State& state) {
+// Raw analytic enumeration of a 1,000,000-step plan's edges (no sink
+// overhead) made by `planner` (null: the trapezoid).
+void EnumeratePlanEdges(benchmark::State& state, std::unique_ptr<Planner> planner) {
   Scheduler s;
-  StepperMotor m(s, 1);
+  StepperMotor m(s, 1, std::move(planner));
   MotionProfile p;
   p.max_velocity_steps_per_s = 20000;
   p.max_accel_steps_per_s2 = 10000;
@@ -108,6 +109,8 @@ void BM_PlanForEachEdge(benchmark::State& state) {
   state.counters["steps_per_s"] =
       benchmark::Counter(static_cast<double>(edges), benchmark::Counter::kIsRate);
 }
+
+void BM_PlanForEachEdge(benchmark::State& state) { EnumeratePlanEdges(state, nullptr); }
 BENCHMARK(BM_PlanForEachEdge)->Unit(benchmark::kMillisecond);
 
 // Memory of a motor with a ten-minute move in flight: the motor object plus
@@ -185,23 +188,7 @@ BENCHMARK(BM_DfmocoStepsAtTenMinuteMove);
 
 // Edge enumeration of a DFMoco plan (chunked runs walked piece by piece).
 void BM_DfmocoForEachEdge(benchmark::State& state) {
-  Scheduler s;
-  StepperMotor m(s, 1, std::make_unique<DfmocoPlanner>());
-  MotionProfile p;
-  p.max_velocity_steps_per_s = 20000;
-  p.max_accel_steps_per_s2 = 10000;
-  m.SetProfile(p);
-  m.MoveTo(1'000'000);
-  const Plan plan = m.CurrentPlan();
-  uint64_t edges = 0;
-  for (auto _ : state) {
-    int64_t sum = 0;
-    edges += static_cast<uint64_t>(
-        plan.ForEachEdge(0, kTimeNever, [&sum](const StepEdge& e) { sum += e.time_ns; }));
-    benchmark::DoNotOptimize(sum);
-  }
-  state.counters["steps_per_s"] =
-      benchmark::Counter(static_cast<double>(edges), benchmark::Counter::kIsRate);
+  EnumeratePlanEdges(state, std::make_unique<DfmocoPlanner>());
 }
 BENCHMARK(BM_DfmocoForEachEdge)->Unit(benchmark::kMillisecond);
 

@@ -288,7 +288,7 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           [&](const dmc::MotorSetSpeed& m) { Ack(id, type, OnSetSpeed(m)); },
           [&](const dmc::MotorSetLimits& m) { Ack(id, type, OnSetLimits(m)); },
           [&](const dmc::RtUploadMoveBegin& m) {
-            if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+            if (Playing()) {
               Ack(id, type, AckCode::kErrMoving);
               return;
             }
@@ -447,7 +447,7 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
   AckCode code = AckCode::kOk;
   if (!MotorValid(m.motor)) {
     code = AckCode::kErrRange;
-  } else if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  } else if (Playing()) {
     code = AckCode::kErrMoving;
   } else {
     code = FromMoveStatus(rig_.motor(m.motor).MoveTo(m.position_steps));
@@ -464,7 +464,7 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
 
 AckCode Dmc16::OnMotorStop(const dmc::MotorStop& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     // Stopping one motor of a synchronised run ends the run.
     Abort(true);
     rig_.StopAll();
@@ -502,7 +502,7 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
 AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
   if (m.speed < dmc::kJogSpeedInch || m.speed > dmc::kJogSpeedMax) return AckCode::kErrRange;
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     return AckCode::kErrMoving;
   }
   const AckCode code = FromMoveStatus(rig_.motor(m.motor).Jog(m.destination_steps, m.speed));
@@ -580,7 +580,7 @@ void Dmc16::ApplyFrameOutputs(uint32_t frame) {
 AckCode Dmc16::OnPositionFrame(const dmc::RtPositionFrame& m) {
   if (!upload_.complete()) return AckCode::kErrGeneral;
   if (!upload_.Contains(m.frame)) return AckCode::kErrRange;
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     return AckCode::kErrMoving;
   }
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
@@ -678,7 +678,7 @@ AckCode Dmc16::CheckPass(const Pass& p) const {
 }
 
 AckCode Dmc16::OnRunMove(const dmc::RtRunMove& m) {
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     return AckCode::kErrMoving;
   }
   if (!upload_.complete()) return AckCode::kErrGeneral;
@@ -735,7 +735,7 @@ AckCode Dmc16::OnRunMove(const dmc::RtRunMove& m) {
 
 AckCode Dmc16::OnShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, double open_deg,
                             double close_deg, const std::vector<dmc::BlurMotor>& motors) {
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     return AckCode::kErrMoving;
   }
   if (!upload_.complete()) return AckCode::kErrGeneral;
@@ -838,7 +838,7 @@ AckCode Dmc16::OnStopLoop() {
 }
 
 AckCode Dmc16::OnJogAll(const dmc::RtJogAll& m) {
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) {
+  if (Playing()) {
     return AckCode::kErrMoving;
   }
   if (!upload_.complete()) return AckCode::kErrGeneral;
@@ -1116,7 +1116,7 @@ void Dmc16::FinishRun(bool send_end) {
 // Ends whatever playback is going on (a stop, a limit, the e-stop); an armed
 // but not started run is simply disarmed.
 void Dmc16::Abort(bool send_end) {
-  const bool playing = mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll;
+  const bool playing = Playing();
   const bool live = mode_ == Mode::kPass || mode_ == Mode::kShooting;
   if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) {
     mode_ = Mode::kIdle;
@@ -1143,7 +1143,7 @@ void Dmc16::OnMotionFinished(int, TimeNs, int64_t) {
     StartPass(pass_);
     return;
   }
-  if (mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll) return;
+  if (Playing()) return;
   // "... and once when it stops".
   CancelTimer(report_timer_);
   SendPositionUpdate();

@@ -128,6 +128,10 @@ class Dmc16 final : public Device, private sim::RigObserver {
   dmc::AckCode OnJogAll(const dmc::RtJogAll& m);
 
   // --- motion helpers ---
+  // A live pass, a shoot or a jog-all is under way (motion commands wait).
+  bool Playing() const {
+    return mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll;
+  }
   static dmc::AckCode FromMoveStatus(sim::MoveStatus s);
   bool MotorValid(int motor) const { return motor >= 1 && motor <= profile_.motor_count; }
   // Motors of the upload that are enabled (they take part in playback).
