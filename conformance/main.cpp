@@ -6,15 +6,20 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+
+#include <unistd.h>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "conformance/fuzz/campaign.h"
+#include "conformance/fuzz/replay.h"
 #include "conformance/rules/catalogue.h"
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
 #include "conformance/suites/suites.h"
 #include "conformance/targets/target.h"
+#include "control/session.h"
 #include "devices/registry.h"
 
 namespace {
@@ -44,6 +49,151 @@ bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
   }
 }
 
+// The device model a session names ("dfmoco-uno" -> "dfmoco"), if registered.
+std::string ModelOfSessionDevice(const std::string& device) {
+  for (const auto& m : moco::devices::DeviceModels()) {
+    if (device == m.name || device.rfind(std::string(m.name) + "-", 0) == 0) {
+      return std::string(m.name);
+    }
+  }
+  return "";
+}
+
+uint32_t DefaultBaud(Protocol p) {
+  switch (p) {
+    case Protocol::kDfmoco:
+      return 57600;
+    case Protocol::kStackshot:
+      return 38400;
+    case Protocol::kDmc:
+      break;
+  }
+  return 115200;
+}
+
+int RunReplay(const std::string& path, std::string target_text, const std::string& profile,
+              uint32_t baud, int64_t steps, int64_t ms) {
+  auto loaded = moco::control::LoadSession(path);
+  if (const auto* err = std::get_if<moco::control::SessionError>(&loaded)) {
+    return Fail(path + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
+                err->message);
+  }
+  const moco::control::Session& session = std::get<moco::control::Session>(loaded);
+  const auto proto = ParseProtocol(moco::wire::ProtocolName(session.header.protocol));
+  if (!proto) {
+    return Fail(path + ": protocol " +
+                std::string(moco::wire::ProtocolName(session.header.protocol)) +
+                " cannot be replayed; sessions in dmc, dfmoco or stackshot can");
+  }
+  if (target_text.empty()) {
+    const std::string model = ModelOfSessionDevice(session.header.device);
+    if (model.empty()) {
+      return Fail(path + ": the session names no emulated device (\"" + session.header.device +
+                  "\"); give --target");
+    }
+    target_text = "in-process:" + model;
+  }
+  const auto spec = ParseTargetSpec(target_text);
+  if (const auto* err = std::get_if<std::string>(&spec)) return Fail(*err);
+  const TargetSpec& ts = std::get<TargetSpec>(spec);
+  if (ts.kind == TargetSpec::Kind::kInProcess) {
+    const auto* m = moco::devices::FindDeviceModel(ts.address);
+    if (m != nullptr && ParseProtocol(moco::wire::ProtocolName(m->protocol)) != proto) {
+      return Fail("in-process:" + ts.address + " does not speak the session's protocol " +
+                  std::string(ProtocolName(*proto)));
+    }
+  }
+  auto made = MakeTarget(ts, profile, baud ? baud : DefaultBaud(*proto));
+  if (const auto* err = std::get_if<std::string>(&made)) return Fail(*err);
+  std::unique_ptr<Target> target = std::move(std::get<std::unique_ptr<Target>>(made));
+  if (auto err = target->Open()) return Fail(*err);
+  ReplayOptions options;
+  if (steps >= 0) options.position_steps = steps;
+  if (ms >= 0) options.time_ms = ms;
+  const ReplayResult r = Replay(session, *proto, *target, options);
+  std::cout << "mococheck replay: " << path << " -> " << target->Name() << "\n" << ReplayText(r);
+  return r.ok() ? 0 : 1;
+}
+
+int RunFuzzCommand(const std::vector<std::string>& paths, std::string target_text,
+                   const std::string& profile, uint64_t seed, uint64_t runs, double seconds,
+                   const std::string& crashes, size_t max_failures) {
+  std::vector<Seed> seeds;
+  for (const std::string& p : paths) {
+    auto s = LoadSeed(p);
+    if (const auto* err = std::get_if<std::string>(&s)) return Fail(*err);
+    seeds.push_back(std::move(std::get<Seed>(s)));
+    if (seeds.back().protocol != seeds.front().protocol) {
+      return Fail(p + " speaks " + std::string(ProtocolName(seeds.back().protocol)) + " but " +
+                  seeds.front().path + " speaks " +
+                  std::string(ProtocolName(seeds.front().protocol)) +
+                  "; fuzz the sessions of one protocol at a time");
+    }
+  }
+  const Protocol proto = seeds.front().protocol;
+  if (target_text.empty()) {
+    const std::string model = ModelOfSessionDevice(seeds.front().device);
+    if (model.empty()) return Fail("the sessions name no emulated device; give --target");
+    target_text = "in-process:" + model;
+  }
+  const auto spec = ParseTargetSpec(target_text);
+  if (const auto* err = std::get_if<std::string>(&spec)) return Fail(*err);
+  const TargetSpec& ts = std::get<TargetSpec>(spec);
+  if (ts.kind != TargetSpec::Kind::kInProcess) {
+    return Fail(
+        "fuzz runs in-process devices only (each mutant needs a fresh device in virtual "
+        "time); give --target in-process:MODEL, and use replay for a real device");
+  }
+  const auto* model = moco::devices::FindDeviceModel(ts.address);
+  if (model == nullptr) {
+    std::string known;
+    for (const auto& m : moco::devices::DeviceModels())
+      known += (known.empty() ? "" : ", ") + std::string(m.name);
+    return Fail("unknown in-process model \"" + ts.address + "\"; the models are: " + known);
+  }
+  if (ParseProtocol(moco::wire::ProtocolName(model->protocol)) != proto) {
+    return Fail("in-process:" + ts.address + " does not speak the sessions' protocol " +
+                std::string(ProtocolName(proto)));
+  }
+  FuzzExecutor executor(proto, InProcessTarget::ForModel(ts.address, profile));
+  if (auto err = executor.Open()) return Fail(*err);
+  FuzzOptions options;
+  options.seed = seed;
+  options.runs = runs;
+  options.seconds = seconds;
+  options.crash_dir = crashes;
+  options.device = ts.address;
+  options.max_failures = max_failures;
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  const FuzzReport r = RunFuzz(executor, proto, seeds, options, [&](const FuzzReport& so_far) {
+    char line[160];
+    std::snprintf(line, sizeof line, "fuzz: %llu execs, %.0f/s, %zu failure(s)",
+                  static_cast<unsigned long long>(so_far.execs), so_far.ExecsPerSecond(),
+                  so_far.failures.size());
+    std::cerr << line << (tty ? "\r" : "\n") << std::flush;
+  });
+  if (tty) std::cerr << "\n";
+  char summary[200];
+  std::snprintf(summary, sizeof summary,
+                "mococheck fuzz: %s, %zu seed session(s), seed %llu: %llu execs in %.1f s (%.0f "
+                "execs/s, %llu host messages)\n",
+                ts.address.c_str(), seeds.size(), static_cast<unsigned long long>(seed),
+                static_cast<unsigned long long>(r.execs), r.wall_s, r.ExecsPerSecond(),
+                static_cast<unsigned long long>(r.messages));
+  std::cout << summary;
+  for (const FuzzFailure& f : r.failures) {
+    std::cout << "FAIL " << f.violation << "\n  mutations:";
+    for (const std::string& m : f.mutations) std::cout << " " << m;
+    std::cout << "\n  shrunk to " << f.messages.size() << " host message(s)";
+    if (!f.saved_path.empty()) std::cout << "; saved: " << f.saved_path;
+    std::cout << "\n";
+  }
+  std::cout << (r.failures.empty()
+                    ? "result: no invariant broken\n"
+                    : "result: " + std::to_string(r.failures.size()) + " invariant failure(s)\n");
+  return r.failures.empty() ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -57,6 +207,8 @@ int main(int argc, char** argv) {
       "  mococheck run --target in-process:dmc16\n"
       "  mococheck run --target pty:/tmp/dmc16 --baud 115200 --junit report.xml\n"
       "  mococheck run --target tcp:127.0.0.1:5000 --rules 'DMC-ACK-*,DMC-CSUM-*'\n"
+      "  mococheck replay fixtures/sessions/dmc16-workflow.jsonl --target in-process:dmc16\n"
+      "  mococheck fuzz fixtures/sessions/*.jsonl --target in-process:dmc16 --seconds 30\n"
       "  mococheck rules --markdown > docs/rules.md\n"
       "  mococheck cases"};
   app.require_subcommand(1);
@@ -124,6 +276,56 @@ int main(int argc, char** argv) {
   cases->add_option("--protocol", cases_protocol, "dmc, dfmoco or stackshot")
       ->capture_default_str();
 
+  // --- replay ---
+  CLI::App* replay = app.add_subcommand(
+      "replay",
+      "Resend a recorded session's host side and compare the device side (docs/sessions.md)");
+  std::string replay_session, replay_target, replay_profile;
+  int64_t replay_steps = -1, replay_ms = -1;
+  uint32_t replay_baud = 0;
+  replay->add_option("session", replay_session, "Session file (JSON Lines)")->required();
+  replay->add_option("--target", replay_target,
+                     "in-process:MODEL (default: the session's device), pty:PATH, serial:PATH or "
+                     "tcp:HOST:PORT");
+  replay->add_option("--profile", replay_profile, "Device profile for an in-process target");
+  replay->add_option("--baud", replay_baud,
+                     "Baud rate of a pty:/serial: target (default: the protocol's)");
+  replay
+      ->add_option("--position-tolerance", replay_steps,
+                   "Steps a reported position may differ (default: the session's, else 0)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 31));
+  replay
+      ->add_option("--time-tolerance-ms", replay_ms,
+                   "How far a device message may arrive from its recorded time (default: the "
+                   "session's, else 0 in-process and 50 on a real link)")
+      ->check(CLI::Range(int64_t{0}, int64_t{3600000}));
+
+  // --- fuzz ---
+  CLI::App* fuzz = app.add_subcommand(
+      "fuzz", "Mutate recorded host traffic and check device invariants (in-process targets)");
+  std::vector<std::string> fuzz_sessions;
+  std::string fuzz_target, fuzz_profile, fuzz_crashes = "mococheck-fuzz";
+  uint64_t fuzz_seed = 1, fuzz_runs = 0;
+  double fuzz_seconds = 10;
+  size_t fuzz_max_failures = 5;
+  fuzz->add_option("sessions", fuzz_sessions, "Session files to mutate (same protocol)")
+      ->required();
+  fuzz->add_option("--target", fuzz_target,
+                   "in-process:MODEL (default: the first session's device)");
+  fuzz->add_option("--profile", fuzz_profile, "Device profile for the in-process device");
+  fuzz->add_option("--seed", fuzz_seed, "Seed of the mutator")->capture_default_str();
+  fuzz->add_option("--runs", fuzz_runs, "Mutants to run (0: run for --seconds)")
+      ->capture_default_str();
+  fuzz->add_option("--seconds", fuzz_seconds, "Time budget when --runs is 0")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
+  fuzz->add_option("--crashes", fuzz_crashes,
+                   "Directory for failing mutants (session files that replay reruns)")
+      ->capture_default_str();
+  fuzz->add_option("--max-failures", fuzz_max_failures, "Stop after this many distinct failures")
+      ->check(CLI::Range(size_t{1}, size_t{1000}))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -154,6 +356,13 @@ int main(int argc, char** argv) {
   if (*rules) {
     std::cout << (markdown ? RulesMarkdown() : RulesText());
     return 0;
+  }
+  if (*replay)
+    return RunReplay(replay_session, replay_target, replay_profile, replay_baud, replay_steps,
+                     replay_ms);
+  if (*fuzz) {
+    return RunFuzzCommand(fuzz_sessions, fuzz_target, fuzz_profile, fuzz_seed, fuzz_runs,
+                          fuzz_seconds, fuzz_crashes, fuzz_max_failures);
   }
 
   const auto spec = ParseTargetSpec(target_text);

@@ -114,34 +114,56 @@ bool DmxUniverse::SetRampRate(double ramp_rate_per_s) {
   return true;
 }
 
-bool DmxUniverse::Set(int channel, uint8_t value) {
-  if (channel < 1 || channel > kChannels) return false;
+void DmxUniverse::Update(int channel, uint8_t value, bool ramp) {
   Channel& c = ch_[static_cast<size_t>(channel - 1)];
   const TimeNs now = scheduler_.Now();
-  c = Channel{value, value, now, now, rate_};
-  Reschedule();
+  if (!ramp) {
+    c = Channel{value, value, now, now, rate_};
+    return;
+  }
+  const uint8_t from = ValueAt(channel, now);
+  const int delta = value > from ? value - from : from - value;
+  const auto span_ns = static_cast<TimeNs>(std::ceil(delta / rate_ * 1e9));
+  c = Channel{from, value, now, now + span_ns, rate_};
+}
+
+bool DmxUniverse::Set(int channel, uint8_t value) {
+  if (channel < 1 || channel > kChannels) return false;
+  const TimeNs old_end = ch_[static_cast<size_t>(channel - 1)].end_ns;
+  Update(channel, value, false);
+  RescheduleAfter(old_end, ch_[static_cast<size_t>(channel - 1)].end_ns);
   return true;
 }
 
 bool DmxUniverse::RampTo(int channel, uint8_t value) {
   if (channel < 1 || channel > kChannels) return false;
-  Channel& c = ch_[static_cast<size_t>(channel - 1)];
-  const TimeNs now = scheduler_.Now();
-  const uint8_t from = ValueAt(channel, now);
-  const int delta = value > from ? value - from : from - value;
-  const auto span_ns = static_cast<TimeNs>(std::ceil(delta / rate_ * 1e9));
-  c = Channel{from, value, now, now + span_ns, rate_};
-  Reschedule();
+  const TimeNs old_end = ch_[static_cast<size_t>(channel - 1)].end_ns;
+  Update(channel, value, true);
+  RescheduleAfter(old_end, ch_[static_cast<size_t>(channel - 1)].end_ns);
   return true;
+}
+
+void DmxUniverse::RescheduleAfter(TimeNs old_end, TimeNs new_end) {
+  const TimeNs now = scheduler_.Now();
+  // Nothing was adjusting and nothing is: the settle time is now.
+  if (settle_ns_ <= now && new_end <= now) {
+    if (settle_ns_ < now) settle_ns_ = now;
+    return;
+  }
+  // Another channel's ramp ends last, before and after: the timer stands.
+  if (settle_ns_ > now && old_end < settle_ns_ && new_end <= settle_ns_) return;
+  Reschedule();
 }
 
 bool DmxUniverse::Apply(bool ramp, int start_channel, const std::vector<uint8_t>& values) {
   if (start_channel < 1 || start_channel > kChannels) return false;
+  // Every channel first, then one settle-time update (not one per channel).
   for (size_t i = 0; i < values.size(); ++i) {
     const int ch = start_channel + static_cast<int>(i);
     if (ch > kChannels) break;
-    ramp ? RampTo(ch, values[i]) : Set(ch, values[i]);
+    Update(ch, values[i], ramp);
   }
+  Reschedule();
   return true;
 }
 

@@ -145,6 +145,11 @@ class DmxUniverse {
     TimeNs end_ns = 0;
     double rate_per_s = 1;
   };
+  // Sets one channel (1..kChannels) without touching the settle timer.
+  void Update(int channel, uint8_t value, bool ramp);
+  // The settle timer after one channel's end moved from old_end to new_end:
+  // O(1) unless the channel that ends last changed.
+  void RescheduleAfter(TimeNs old_end, TimeNs new_end);
   void Reschedule();
 
   Scheduler& scheduler_;

@@ -1,0 +1,183 @@
+// The fuzz campaign (see campaign.h).
+#include "conformance/fuzz/campaign.h"
+
+#include <chrono>
+#include <filesystem>
+#include <set>
+
+#include "control/session.h"
+
+namespace moco::conformance {
+namespace {
+
+std::optional<Protocol> FromWire(control::Protocol p) {
+  switch (p) {
+    case control::Protocol::kDmc:
+      return Protocol::kDmc;
+    case control::Protocol::kDfmoco:
+      return Protocol::kDfmoco;
+    case control::Protocol::kStackshot:
+      return Protocol::kStackshot;
+    case control::Protocol::kStackshotDfmoco:
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+control::Protocol ToWire(Protocol p) {
+  switch (p) {
+    case Protocol::kDfmoco:
+      return control::Protocol::kDfmoco;
+    case Protocol::kStackshot:
+      return control::Protocol::kStackshot;
+    case Protocol::kDmc:
+      break;
+  }
+  return control::Protocol::kDmc;
+}
+
+// Drops messages while the mutant still fails (one pass, largest chunks first).
+Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violation) {
+  for (size_t chunk = messages.size() / 2; chunk >= 1; chunk /= 2) {
+    size_t at = 0;
+    while (at < messages.size() && messages.size() > 1) {
+      Messages fewer = messages;
+      const size_t n = std::min(chunk, fewer.size() - at);
+      fewer.erase(fewer.begin() + static_cast<ptrdiff_t>(at),
+                  fewer.begin() + static_cast<ptrdiff_t>(at + n));
+      const FuzzVerdict v = executor.Run(fewer);
+      if (!v.ok) {
+        messages = std::move(fewer);
+        violation = v.violation;
+      } else {
+        at += n;
+      }
+    }
+    if (chunk == 1) break;
+  }
+  return messages;
+}
+
+}  // namespace
+
+std::variant<Seed, std::string> LoadSeed(const std::string& path) {
+  auto loaded = control::LoadSession(path);
+  if (const auto* err = std::get_if<control::SessionError>(&loaded)) {
+    return path + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
+           err->message;
+  }
+  const control::Session& s = std::get<control::Session>(loaded);
+  const auto protocol = FromWire(s.header.protocol);
+  if (!protocol) {
+    return path + ": protocol " + std::string(control::ProtocolName(s.header.protocol)) +
+           " is not fuzzed; record the session in the device's packet protocol";
+  }
+  wire::Bytes host;
+  for (const control::SessionEntry& e : s.entries) {
+    if (!e.is_event && e.from == control::Origin::kHost) {
+      host.insert(host.end(), e.bytes.begin(), e.bytes.end());
+    }
+  }
+  Seed seed;
+  seed.path = path;
+  seed.protocol = *protocol;
+  seed.device = s.header.device;
+  seed.messages = SplitHostStream(*protocol, host);
+  if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
+  return seed;
+}
+
+std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
+                         const std::string& note, const Messages& messages, TimeNs gap_ns) {
+  try {
+    control::SessionHeader h;
+    h.protocol = ToWire(protocol);
+    h.device = device;
+    h.clock = "virtual";
+    h.note = note;
+    control::SessionWriter w(path, h);
+    TimeNs t = 0;
+    for (const wire::Bytes& m : messages) {
+      control::SessionEntry e;
+      e.t_ns = t;
+      e.from = control::Origin::kHost;
+      e.bytes = m;
+      w.Append(e);
+      t += gap_ns;
+    }
+    std::string error;
+    if (!w.Finish(&error)) return error;
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<Seed>& seeds,
+                   const FuzzOptions& options,
+                   const std::function<void(const FuzzReport&)>& progress) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  auto last_progress = t0;
+  FuzzReport report;
+  SessionMutator mutator(protocol, options.seed);
+  std::vector<Messages> donors;
+  for (const Seed& s : seeds) donors.push_back(s.messages);
+  std::set<std::string> seen;  // violations reported, by their first 60 characters
+
+  auto record = [&](Messages messages, const std::vector<std::string>& mutations,
+                    std::string violation) {
+    messages = Shrink(executor, std::move(messages), violation);
+    const std::string key = violation.substr(0, 60);
+    if (!seen.insert(key).second) return;
+    FuzzFailure f{std::move(messages), mutations, std::move(violation), ""};
+    if (!options.crash_dir.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(options.crash_dir, ec);
+      const std::string path = options.crash_dir + "/mutant-" + std::to_string(options.seed) + "-" +
+                               std::to_string(report.execs) + ".jsonl";
+      std::string note = "mococheck fuzz seed " + std::to_string(options.seed) + ": " +
+                         f.violation + " (mutations:";
+      for (const std::string& m : f.mutations) note += " " + m;
+      note += ")";
+      const std::string err =
+          SaveMessages(path, protocol, options.device, note, f.messages, executor.gap_ns());
+      f.saved_path = err.empty() ? path : "not saved: " + err;
+    }
+    report.failures.push_back(std::move(f));
+  };
+
+  for (const Seed& s : seeds) {
+    const FuzzVerdict v = executor.Run(s.messages);
+    ++report.execs;
+    report.messages += v.messages;
+    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v.violation);
+  }
+
+  Messages mutant;
+  while (report.failures.size() < options.max_failures) {
+    if (options.runs > 0
+            ? report.execs >= options.runs + seeds.size()
+            : std::chrono::duration<double>(Clock::now() - t0).count() >= options.seconds) {
+      break;
+    }
+    mutant = seeds[mutator.Below(seeds.size())].messages;
+    mutator.Mutate(mutant, donors);
+    const FuzzVerdict v = executor.Run(mutant);
+    ++report.execs;
+    report.messages += v.messages;
+    if (!v.ok) record(mutant, mutator.last_mutations(), v.violation);
+    if (progress && (report.execs & 255) == 0) {
+      const auto now = Clock::now();
+      if (now - last_progress >= std::chrono::seconds(1)) {
+        last_progress = now;
+        report.wall_s = std::chrono::duration<double>(now - t0).count();
+        progress(report);
+      }
+    }
+  }
+  report.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  return report;
+}
+
+}  // namespace moco::conformance

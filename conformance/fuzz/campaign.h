@@ -1,0 +1,68 @@
+// `mococheck fuzz`: mutates the host side of recorded sessions (docs/sessions.md)
+// and runs every mutant against an in-process device (see mutator.h and
+// executor.h). A mutant that breaks an invariant is shrunk (messages dropped
+// while it still fails) and saved as a session file `mococheck replay` reruns.
+#ifndef MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
+#define MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "conformance/fuzz/executor.h"
+#include "conformance/fuzz/mutator.h"
+
+namespace moco::conformance {
+
+// The host messages of one session file.
+struct Seed {
+  std::string path;
+  Protocol protocol = Protocol::kDmc;
+  std::string device;  // the header's device model, may be empty
+  Messages messages;
+};
+
+// Reads a session file and cuts its host traffic into messages. On failure
+// the message names the file, the line and the fix.
+std::variant<Seed, std::string> LoadSeed(const std::string& path);
+
+struct FuzzOptions {
+  uint64_t seed = 1;
+  uint64_t runs = 0;        // mutants to run; 0: until `seconds` pass
+  double seconds = 10;      // wall-clock budget when runs == 0
+  std::string crash_dir;    // where failing mutants are saved; empty: not saved
+  std::string device;       // the model name written into saved sessions
+  size_t max_failures = 5;  // stop after this many distinct failures
+};
+
+struct FuzzFailure {
+  Messages messages;  // shrunk
+  std::vector<std::string> mutations;
+  std::string violation;
+  std::string saved_path;  // empty when not saved
+};
+
+struct FuzzReport {
+  uint64_t execs = 0;
+  uint64_t messages = 0;  // host messages sent over all execs
+  double wall_s = 0;
+  std::vector<FuzzFailure> failures;
+  double ExecsPerSecond() const { return wall_s > 0 ? static_cast<double>(execs) / wall_s : 0; }
+};
+
+// Runs each seed once unmutated, then mutants until the budget is spent.
+// `progress` (may be empty) is called about once a second with the report so far.
+FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<Seed>& seeds,
+                   const FuzzOptions& options,
+                   const std::function<void(const FuzzReport&)>& progress = {});
+
+// Writes `messages` as a session file (host traffic only, one message every
+// `gap_ns`), atomically. Returns an error message or "".
+std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
+                         const std::string& note, const Messages& messages, TimeNs gap_ns);
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_

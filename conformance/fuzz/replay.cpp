@@ -1,0 +1,336 @@
+// Session replay (see replay.h). Messages match when their bytes are equal or
+// when they differ only within the tolerances: DMC position reports
+// (MOTOR_GET_POSITION) and DFMoco `mp` / `mm` positions by the step
+// tolerance, the ID of an unsolicited DMC message (the device numbers those
+// itself, dmc-v2-protocol.txt "Message Format"), and arrival times by the
+// time tolerance.
+#include "conformance/fuzz/replay.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string_view>
+
+#include "wire/dmc.h"
+#include "wire/dmc_frame.h"
+#include "wire/stackshot_constants.h"
+#include "wire/transcript.h"
+
+namespace moco::conformance {
+namespace {
+
+control::Protocol ToWire(Protocol p) {
+  switch (p) {
+    case Protocol::kDfmoco:
+      return control::Protocol::kDfmoco;
+    case Protocol::kStackshot:
+      return control::Protocol::kStackshot;
+    case Protocol::kDmc:
+      break;
+  }
+  return control::Protocol::kDmc;
+}
+
+// The length of the message starting at `at`, or 0 when none starts there.
+size_t MessageAt(Protocol protocol, const wire::Bytes& b, size_t at) {
+  const size_t left = b.size() - at;
+  switch (protocol) {
+    case Protocol::kDmc:
+      if (left >= dmc::kHeaderSize && b[at] == dmc::kMarker0 && b[at + 1] == dmc::kMarker1) {
+        const size_t len = static_cast<size_t>(b[at + 8] | (b[at + 9] << 8));
+        const size_t total = dmc::kHeaderSize + len + dmc::kCheckSize;
+        if (len <= dmc::kMaxDataLength && total <= left) return total;
+      }
+      return 0;
+    case Protocol::kStackshot:
+      if (left >= stackshot::kMinPacketBytes && b[at] == stackshot::kSyncDevice) {
+        const size_t total = stackshot::kMinPacketBytes + b[at + stackshot::kOffsetLength];
+        if (total <= left) return total;
+      }
+      return 0;
+    case Protocol::kDfmoco: {
+      for (size_t i = at; i < b.size(); ++i) {
+        if (b[i] == '\n') return i + 1 - at;
+      }
+      return 0;
+    }
+  }
+  return 0;
+}
+
+std::string Describe(Protocol protocol, const wire::Bytes& bytes) {
+  wire::TranscriptDecoder d(ToWire(protocol));
+  std::string s;
+  for (const auto& l : d.Feed(wire::Side::kDevice, bytes)) s += (s.empty() ? "" : "; ") + l.text;
+  for (const auto& l : d.Finish()) s += (s.empty() ? "" : "; ") + l.text;
+  if (s.empty()) s = wire::ToHex(bytes);
+  return s;
+}
+
+std::string Ms(TimeNs t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f ms", static_cast<double>(t) / 1e6);
+  return buf;
+}
+
+// Whether two DFMoco lines differ only in numbers within `tol` (positions).
+bool DfmocoClose(std::string_view a, std::string_view b, int64_t tol) {
+  auto split = [](std::string_view s) {
+    std::vector<std::string_view> t;
+    size_t i = 0;
+    while (i < s.size()) {
+      while (i < s.size() && (s[i] == ' ' || s[i] == '\r' || s[i] == '\n')) ++i;
+      size_t j = i;
+      while (j < s.size() && s[j] != ' ' && s[j] != '\r' && s[j] != '\n') ++j;
+      if (j > i) t.push_back(s.substr(i, j - i));
+      i = j;
+    }
+    return t;
+  };
+  const auto ta = split(a), tb = split(b);
+  if (ta.size() != tb.size() || ta.empty() || ta[0] != tb[0]) return false;
+  if (ta[0] != "mp" && ta[0] != "mm") return false;
+  for (size_t i = 1; i < ta.size(); ++i) {
+    if (ta[i] == tb[i]) continue;
+    if (i == 1) return false;  // the motor number must agree
+    char* end_a = nullptr;
+    char* end_b = nullptr;
+    const std::string sa(ta[i]), sb(tb[i]);
+    const long long va = std::strtoll(sa.c_str(), &end_a, 10);
+    const long long vb = std::strtoll(sb.c_str(), &end_b, 10);
+    if (*end_a != 0 || *end_b != 0 || std::llabs(va - vb) > tol) return false;
+  }
+  return true;
+}
+
+// Whether DMC frames `e` (recorded) and `o` (observed) match; `why` says why not.
+bool DmcMatch(const wire::Bytes& e, const wire::Bytes& o,
+              const std::map<uint32_t, TimeNs>& host_ids, TimeNs t_ns, int64_t tol,
+              std::string& why) {
+  auto fe = dmc::DecodeFrame(e);
+  auto fo = dmc::DecodeFrame(o);
+  if (!fe.ok() || !fo.ok()) {
+    why = "the bytes differ and one of the frames does not decode";
+    return false;
+  }
+  const dmc::Frame& a = fe.value();
+  const dmc::Frame& b = fo.value();
+  if (a.type != b.type) {
+    why = "a different message type";
+    return false;
+  }
+  // An answer: its ID is one the host had sent by then.
+  const auto sent = host_ids.find(a.id);
+  if (a.id != b.id && sent != host_ids.end() && sent->second <= t_ns) {
+    why = "the ID of an answer differs (an answer carries its request's ID)";
+    return false;
+  }
+  if (a.data == b.data) return true;
+  auto ma = dmc::DecodeDeviceMessage(a);
+  auto mb = dmc::DecodeDeviceMessage(b);
+  if (ma.ok() && mb.ok()) {
+    const auto* pa = std::get_if<dmc::MotorPositionReport>(&ma.value());
+    const auto* pb = std::get_if<dmc::MotorPositionReport>(&mb.value());
+    if (pa != nullptr && pb != nullptr && pa->move_time_x1000 == pb->move_time_x1000 &&
+        pa->positions_steps.size() == pb->positions_steps.size()) {
+      for (size_t i = 0; i < pa->positions_steps.size(); ++i) {
+        const int64_t d = static_cast<int64_t>(pa->positions_steps[i]) - pb->positions_steps[i];
+        if (std::llabs(d) > tol) {
+          why = "motor " + std::to_string(i + 1) + " is " + std::to_string(d) +
+                " steps off (tolerance " + std::to_string(tol) + ")";
+          return false;
+        }
+      }
+      return true;
+    }
+  }
+  why = "the data differ";
+  return false;
+}
+
+}  // namespace
+
+std::vector<TimedMessage> SplitDeviceChunks(Protocol protocol,
+                                            const std::vector<TimedMessage>& chunks) {
+  wire::Bytes all;
+  std::vector<std::pair<size_t, TimeNs>> ends;  // end offset of each chunk, its time
+  for (const TimedMessage& c : chunks) {
+    all.insert(all.end(), c.bytes.begin(), c.bytes.end());
+    ends.emplace_back(all.size(), c.t_ns);
+  }
+  auto time_of_end = [&](size_t end) {
+    // The first chunk whose end reaches `end` completed the message.
+    auto it = std::lower_bound(ends.begin(), ends.end(), end,
+                               [](const auto& p, size_t v) { return p.first < v; });
+    return it == ends.end() ? (ends.empty() ? TimeNs{0} : ends.back().second) : it->second;
+  };
+  std::vector<TimedMessage> out;
+  wire::Bytes noise;
+  size_t noise_end = 0;
+  size_t i = 0;
+  while (i < all.size()) {
+    const size_t n = MessageAt(protocol, all, i);
+    if (n == 0) {
+      noise.push_back(all[i++]);
+      noise_end = i;
+      continue;
+    }
+    if (!noise.empty()) out.push_back({time_of_end(noise_end), std::move(noise)});
+    noise.clear();
+    out.push_back({time_of_end(i + n), wire::Bytes(all.begin() + static_cast<ptrdiff_t>(i),
+                                                   all.begin() + static_cast<ptrdiff_t>(i + n))});
+    i += n;
+  }
+  if (!noise.empty()) out.push_back({time_of_end(noise_end), std::move(noise)});
+  return out;
+}
+
+ReplayResult Replay(const control::Session& session, Protocol protocol, Target& target,
+                    const ReplayOptions& options) {
+  ReplayResult result;
+  result.from_power_on = target.CanRestart();
+  result.position_tolerance_steps =
+      options.position_steps.value_or(session.header.tolerance_position_steps.value_or(0));
+  result.time_tolerance_ms = options.time_ms.value_or(
+      session.header.tolerance_time_ms.value_or(target.VirtualClock() ? 0 : 50));
+  const TimeNs time_tol = result.time_tolerance_ms * sim::kNsPerMs;
+
+  std::vector<TimedMessage> expected_chunks;
+  TimeNs first_host = -1;
+  TimeNs last_t = 0;
+  for (const control::SessionEntry& e : session.entries) {
+    if (e.is_event) continue;
+    last_t = std::max(last_t, e.t_ns);
+    if (e.from == control::Origin::kHost && first_host < 0) first_host = e.t_ns;
+    if (e.from == control::Origin::kDevice) expected_chunks.push_back({e.t_ns, e.bytes});
+  }
+  if (first_host < 0) first_host = 0;
+  // Recorded times map to target times: from power-on as they are; on a
+  // running target, the first host message is sent at once.
+  if (result.from_power_on) target.Restart();
+  const TimeNs origin = target.Now();
+  const TimeNs base = result.from_power_on ? 0 : first_host;
+  std::vector<TimedMessage> expected = SplitDeviceChunks(protocol, expected_chunks);
+  if (!result.from_power_on) {
+    std::erase_if(expected, [&](const TimedMessage& m) { return m.t_ns < first_host; });
+  }
+  for (TimedMessage& m : expected) m.t_ns -= base;
+
+  // Host IDs (DMC): answers carry them; unsolicited messages carry the device's own.
+  std::map<uint32_t, TimeNs> host_ids;  // ID -> when first sent (recorded time - base)
+  std::vector<TimedMessage> observed_chunks;
+  auto pump_until = [&](TimeNs t_target) {
+    while (true) {
+      wire::Bytes in;
+      if (!target.Receive(t_target, in)) return false;
+      if (!in.empty()) observed_chunks.push_back({target.Now() - origin, std::move(in)});
+      if (target.Now() >= t_target) return true;
+    }
+  };
+  for (const control::SessionEntry& e : session.entries) {
+    if (e.is_event || e.from != control::Origin::kHost) continue;
+    if (!pump_until(origin + (e.t_ns - base))) break;
+    if (protocol == Protocol::kDmc) {
+      for (const wire::Bytes& m : SplitHostStream(Protocol::kDmc, e.bytes)) {
+        if (m.size() >= 6 && m[0] == dmc::kMarker0) {
+          host_ids.emplace(static_cast<uint32_t>(m[2] | (m[3] << 8) | (m[4] << 16)) |
+                               (static_cast<uint32_t>(m[5]) << 24),
+                           e.t_ns - base);
+        }
+      }
+    }
+    if (!target.Send(e.bytes)) break;
+    ++result.host_messages_sent;
+  }
+  // Listen to the end of the recording (plus the time tolerance); what the
+  // device sends later was not recorded and is not compared.
+  const TimeNs end_ns = (last_t - base) + time_tol;
+  pump_until(origin + end_ns + 1);
+  std::vector<TimedMessage> observed = SplitDeviceChunks(protocol, observed_chunks);
+  std::erase_if(observed, [&](const TimedMessage& m) { return m.t_ns > end_ns; });
+
+  result.expected_messages = expected.size();
+  result.observed_messages = observed.size();
+  const size_t n = std::max(expected.size(), observed.size());
+  for (size_t i = 0; i < n && result.differences.size() < options.max_differences; ++i) {
+    ReplayDifference d;
+    d.index = i;
+    if (i < expected.size()) {
+      d.expected_t_ns = expected[i].t_ns;
+      d.expected = Describe(protocol, expected[i].bytes);
+    }
+    if (i < observed.size()) {
+      d.observed_t_ns = observed[i].t_ns;
+      d.observed = Describe(protocol, observed[i].bytes);
+    }
+    if (i >= observed.size()) {
+      d.why = "the device sent nothing more";
+      result.differences.push_back(std::move(d));
+      continue;
+    }
+    if (i >= expected.size()) {
+      d.why = "the device sent more than was recorded";
+      result.differences.push_back(std::move(d));
+      continue;
+    }
+    const wire::Bytes& e = expected[i].bytes;
+    const wire::Bytes& o = observed[i].bytes;
+    bool same = e == o;
+    std::string why;
+    if (!same) {
+      switch (protocol) {
+        case Protocol::kDmc:
+          same = DmcMatch(e, o, host_ids, expected[i].t_ns, result.position_tolerance_steps, why);
+          break;
+        case Protocol::kDfmoco:
+          same = DfmocoClose(std::string_view(reinterpret_cast<const char*>(e.data()), e.size()),
+                             std::string_view(reinterpret_cast<const char*>(o.data()), o.size()),
+                             result.position_tolerance_steps);
+          if (!same) why = "the line differs";
+          break;
+        case Protocol::kStackshot:
+          why = "the packet differs";
+          break;
+      }
+    }
+    const TimeNs dt = observed[i].t_ns - expected[i].t_ns;
+    if (same && (dt > time_tol || dt < -time_tol)) {
+      same = false;
+      why = "arrived " + Ms(dt) + " from the recorded time (tolerance " +
+            std::to_string(result.time_tolerance_ms) + " ms)";
+    }
+    if (same) {
+      ++result.matched;
+    } else {
+      d.why = why;
+      result.differences.push_back(std::move(d));
+    }
+  }
+  return result;
+}
+
+std::string ReplayText(const ReplayResult& r) {
+  std::string s;
+  s += "replay: " + std::to_string(r.host_messages_sent) + " host chunks sent; " +
+       std::to_string(r.matched) + " of " + std::to_string(r.expected_messages) +
+       " recorded device messages matched (" + std::to_string(r.observed_messages) +
+       " observed); tolerances " + std::to_string(r.position_tolerance_steps) + " steps, " +
+       std::to_string(r.time_tolerance_ms) + " ms" +
+       (r.from_power_on ? "" : "; boot messages not expected (target already running)") + "\n";
+  for (const ReplayDifference& d : r.differences) {
+    s += "  #" + std::to_string(d.index) + ": " + d.why + "\n";
+    s +=
+        "    recorded: " +
+        (d.expected_t_ns < 0 ? std::string("(nothing)") : Ms(d.expected_t_ns) + "  " + d.expected) +
+        "\n";
+    s +=
+        "    observed: " +
+        (d.observed_t_ns < 0 ? std::string("(nothing)") : Ms(d.observed_t_ns) + "  " + d.observed) +
+        "\n";
+  }
+  s += r.ok() ? "result: MATCH\n" : "result: DIFFERENT\n";
+  return s;
+}
+
+}  // namespace moco::conformance
