@@ -20,9 +20,12 @@ FuzzVerdict Violation(std::string what, size_t messages, size_t replies) {
   return FuzzVerdict{false, std::move(what), messages, replies};
 }
 
+// A frame the device must answer: marker, header and a Length within the
+// receive buffer (ERRATA 1.2: an oversize Length is dropped unanswered, and
+// the scan resumes inside it, so it counts as noise).
 bool WholeDmcFrame(const wire::Bytes& m) {
-  return m.size() >= dmc::kHeaderSize + dmc::kCheckSize && m[0] == dmc::kMarker0 &&
-         m[1] == dmc::kMarker1 &&
+  return m.size() >= dmc::kHeaderSize + dmc::kCheckSize && m.size() <= dmc::kMaxFrameSize &&
+         m[0] == dmc::kMarker0 && m[1] == dmc::kMarker1 &&
          static_cast<size_t>(m[8] | (m[9] << 8)) + dmc::kHeaderSize + dmc::kCheckSize == m.size();
 }
 
@@ -61,11 +64,16 @@ FuzzVerdict FuzzExecutor::RunDmc(const Messages& messages) {
   HostOptions options;
   options.quiet_ns = 20 * kMs;
   DmcHost host(*target_, verdicts, options);
+  std::vector<uint32_t> ids;
   for (const wire::Bytes& m : messages) {
     if (WholeDmcFrame(m)) {
       const uint16_t type = static_cast<uint16_t>(m[6] | (m[7] << 8));
       const bool good = dmc::DecodeFrame(m).ok();
-      host.SendFrame(type, wire::ByteView(m).subspan(dmc::kHeaderSize, m.size() - 12), !good);
+      const uint32_t id =
+          host.SendFrame(type, wire::ByteView(m).subspan(dmc::kHeaderSize, m.size() - 12), !good);
+      // A frame with the ACK flag is the host's acknowledgement, not a
+      // request: nothing answers it ("MSG_FLAG_ACK"), even when damaged.
+      if ((type & dmc::kFlagAck) == 0) ids.push_back(id);
     } else {
       host.SendNoise(m);
     }
@@ -76,6 +84,10 @@ FuzzVerdict FuzzExecutor::RunDmc(const Messages& messages) {
     // so its check fails and the device resynchronises) before asking again.
     host.SendNoise(wire::Bytes(dmc::kMaxFrameSize, 0));
     host.Idle(gap_ns_);
+  }
+  // Every request answered (DMC-ACK-001); in a noisy stream one may be swallowed.
+  if (strict) {
+    for (uint32_t id : ids) host.Await(id);
   }
   const uint32_t hi_id = host.Send(dmc::HiRequest{});
   const DeviceRecord* hi = host.Await(hi_id);
