@@ -302,7 +302,10 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
   });
   if (plain != req.type) return;
   const TimeNs latency = rec.t_ns - req.sent_ns;
-  const auto [rule, kind] = DeadlineRule(req.type);
+  // (Named copies, not a structured binding: the lambda below captures them.)
+  const auto rule_and_kind = DeadlineRule(req.type);
+  const auto rule = rule_and_kind.first;
+  const auto kind = rule_and_kind.second;
   const auto custom = options_.deadline_by_kind_ns.find(kind);
   const TimeNs deadline =
       custom != options_.deadline_by_kind_ns.end() ? custom->second : options_.deadline_ns;

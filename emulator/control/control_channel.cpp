@@ -483,7 +483,8 @@ std::variant<Command, std::string> ParseCommand(const json& request,
   }
 
   // Unknown fields are refused, so a typo never silently means "absent".
-  for (const auto& [key, value] : request.items()) {
+  for (const auto& item : request.items()) {
+    const std::string& key = item.key();
     if (key == "cmd" || key == "device" || key == "id") continue;
     if (std::find(extra_fields.begin(), extra_fields.end(), key) != extra_fields.end()) continue;
     const bool known = std::any_of(spec->fields.begin(), spec->fields.end(),
