@@ -292,6 +292,27 @@ TEST(SimavrTarget, TheClockIsCyclesOverTheGivenFrequency) {
   EXPECT_NEAR(static_cast<double>(at_ns[1]), 2.0 * static_cast<double>(at_ns[0]), 1.0);
 }
 
+#ifdef MOCO_DFMOCO_MMCU_ELF
+TEST(SimavrTarget, TheElfsMmcuSectionNamesTheMcuAndClock) {
+  // The same firmware built for 8 MHz, its .mmcu section saying atmega328p at 8 MHz.
+  SimavrTarget target(SimavrSpec{MOCO_DFMOCO_MMCU_ELF, "", 0});
+  ASSERT_EQ(target.Open(), std::nullopt);
+  EXPECT_EQ(target.mcu(), "atmega328p");
+  EXPECT_EQ(target.frequency_hz(), 8'000'000u);
+  Link link(target);
+  EXPECT_EQ(link.ReadLine(100 * kMs), kHello);
+  EXPECT_EQ(link.Ask("mp 1", "mp"), "mp 1 0");
+  // UBRR (8e6 / 4 / 57600 - 1) / 2 = 16 with U2X: 10 bits of 8 * 17 cycles.
+  EXPECT_EQ(target.FrameCycles(), 1360u);
+
+  SimavrTarget clash(SimavrSpec{MOCO_DFMOCO_MMCU_ELF, "atmega2560", 0});
+  const auto err = clash.Open();
+  ASSERT_TRUE(err.has_value());
+  EXPECT_NE(err->find("atmega2560"), std::string::npos) << *err;
+  EXPECT_NE(err->find("atmega328p"), std::string::npos) << *err;
+}
+#endif
+
 TEST(SimavrTarget, RunsFasterThanRealTime) {
   SimavrTarget target(FirmwareSpec());
   ASSERT_EQ(target.Open(), std::nullopt);
