@@ -109,6 +109,13 @@ void SimavrTarget::Restart() {
 
 void SimavrTarget::Teardown() {
   if (avr_ == nullptr) return;
+  if (uart_ != nullptr) {
+    const uint32_t ctl = AVR_IOCTL_UART_GETIRQ('0');
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUTPUT), &OnOutput, this);
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XON), &OnXon, this);
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XOFF), &OnXoff, this);
+  }
+  // simavr 1.6's avr_terminate() leaves the core's IRQs allocated (a few KB per core).
   avr_terminate(avr_);
   std::free(avr_);
   avr_ = nullptr;
@@ -246,10 +253,10 @@ bool SimavrTarget::CheckAlive() {
     char when[64];
     std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", at_s,
                   static_cast<unsigned>(avr_->pc));
-    stopped_ = std::string(avr_->state == cpu_Done
-                               ? "the core halted (sleep with interrupts off, or main returned)"
-                               : "the core crashed") +
-               when;
+    stopped_ =
+        std::string(avr_->state == cpu_Done ? "the core halted (it sleeps with interrupts off)"
+                                            : "the core crashed") +
+        when;
     return false;
   }
   return true;
