@@ -248,18 +248,20 @@ uint64_t SimavrTarget::FrameCycles() const {
 bool SimavrTarget::CheckAlive() {
   if (avr_ == nullptr) return false;
   if (!stopped_.empty()) return false;
-  if (avr_->state == cpu_Done || avr_->state == cpu_Crashed) {
-    const double at_s = static_cast<double>(Now()) / 1e9;
-    char when[64];
-    std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", at_s,
-                  static_cast<unsigned>(avr_->pc));
-    stopped_ =
-        std::string(avr_->state == cpu_Done ? "the core halted (it sleeps with interrupts off)"
-                                            : "the core crashed") +
-        when;
-    return false;
+  const int state = avr_->state;
+  if (state == cpu_Running || state == cpu_Sleeping) return true;
+  char when[64];
+  std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", static_cast<double>(Now()) / 1e9,
+                static_cast<unsigned>(avr_->pc));
+  if (state == cpu_Done) {
+    stopped_ = "the core halted (it sleeps with interrupts off)";
+  } else if (state == cpu_Crashed) {
+    stopped_ = "the core crashed";
+  } else {
+    stopped_ = "the core does not run (simavr state " + std::to_string(state) + ")";
   }
-  return true;
+  stopped_ += when;
+  return false;
 }
 
 bool SimavrTarget::Send(wire::ByteView bytes) {
@@ -350,20 +352,26 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       from_device_.pop_front();
       delivered = true;
     }
-    if (delivered || avr_->cycle >= deadline) break;
+    if (delivered) break;
     if (!(alive = CheckAlive())) {
       // Bytes already in the transmitter still reach the wire.
       for (const OutByte& b : from_device_) out.push_back(b.value);
       from_device_.clear();
       break;
     }
+    if (avr_->cycle >= deadline) break;
     uint64_t stop = deadline;
     if (!from_device_.empty()) stop = std::min(stop, from_device_.front().ready_cycle);
     ArmWake(stop);
     const size_t written = from_device_.size();
     while (avr_->cycle < stop && from_device_.size() == written) {
+      const uint64_t before = avr_->cycle;
       const int state = avr_run(avr_);
-      if (state == cpu_Done || state == cpu_Crashed) break;
+      if (state != cpu_Running && state != cpu_Sleeping) break;
+      if (avr_->cycle == before) {
+        stopped_ = "the core makes no progress (simavr state " + std::to_string(state) + ")";
+        break;
+      }
     }
   }
   ArmWake(0);
