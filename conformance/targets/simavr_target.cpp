@@ -364,11 +364,14 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
     if (!from_device_.empty()) stop = std::min(stop, from_device_.front().ready_cycle);
     ArmWake(stop);
     const size_t written = from_device_.size();
+    int stalls = 0;  // avr_run() calls in a row that left the cycle count alone
     while (avr_->cycle < stop && from_device_.size() == written) {
       const uint64_t before = avr_->cycle;
       const int state = avr_run(avr_);
       if (state != cpu_Running && state != cpu_Sleeping) break;
-      if (avr_->cycle == before) {
+      // A call may wake the core without a cycle passing; a thousand in a row is a hang.
+      stalls = avr_->cycle == before ? stalls + 1 : 0;
+      if (stalls > 1000) {
         stopped_ = "the core makes no progress (simavr state " + std::to_string(state) + ")";
         break;
       }
