@@ -162,7 +162,7 @@ std::optional<std::string> SimavrTarget::Build() {
            "; give an AVR ELF linked by avr-gcc (not a .hex file)";
   }
 
-  const std::string elf_mcu(fw.mmcu, strnlen(fw.mmcu, sizeof fw.mmcu));
+  const std::string elf_mcu(fw.mmcu, std::find(fw.mmcu, fw.mmcu + sizeof fw.mmcu, '\0'));
   if (!spec_.mcu.empty() && !elf_mcu.empty() && spec_.mcu != elf_mcu) {
     FreeFirmware(fw);
     return "\"" + spec_.elf_path + "\" names its MCU \"" + elf_mcu +

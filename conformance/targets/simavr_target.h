@@ -19,8 +19,10 @@ struct avr_uart_t;
 namespace moco::conformance {
 
 // Runs `spec.elf_path` in a simulated AVR. Time is the firmware's: cycles / F_CPU.
+// The MCU and clock are the spec's when given, else those the ELF's .mmcu section
+// names, else atmega328p at 16 MHz.
 //
-// Line model (USART0, 8 data bits, parity and stop bits as UCSR0C says):
+// Line model (USART0; data, parity and stop bits as UCSR0B/UCSR0C say):
 //  - Host bytes queue up; one starts every frame time of the baud the firmware set
 //    in UBRR0 and U2X0 (10 bit times for 8N1) and enters simavr's receiver at its
 //    start bit; simavr raises RXC0 one frame later. While simavr's input FIFO
