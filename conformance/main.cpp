@@ -224,7 +224,8 @@ int main(int argc, char** argv) {
   bool verbose = false, quiet = false;
   run->add_option("--target", target_text,
                   "in-process:MODEL (e.g. in-process:dmc16, virtual time), pty:PATH or serial:PATH "
-                  "(raw 8N1 at --baud), or tcp:HOST:PORT")
+                  "(raw 8N1 at --baud), tcp:HOST:PORT, or simavr:PATH.elf[@MCU[:HZ]] (AVR "
+                  "firmware under simavr on its own clock; default @atmega328p:16000000)")
       ->required();
   run->add_option("--protocol", protocol,
                   "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "

@@ -20,6 +20,10 @@
 #include "devices/registry.h"
 #include "sim/rig.h"
 
+#ifdef MOCO_HAVE_SIMAVR
+#include "conformance/targets/simavr_target.h"
+#endif
+
 namespace moco::conformance {
 namespace {
 
@@ -250,9 +254,17 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
   const std::string rest =
       colon == std::string_view::npos ? std::string() : std::string(text.substr(colon + 1));
   const std::string usage =
-      "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH or tcp:HOST:PORT";
+      "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH, tcp:HOST:PORT or "
+      "simavr:PATH.elf[@MCU[:HZ]]";
   if (rest.empty()) return "--target \"" + std::string(text) + "\" names no address" + usage;
   if (scheme == "in-process") return TargetSpec{TargetSpec::Kind::kInProcess, rest};
+  if (scheme == "simavr") {
+    const auto parsed = ParseSimavrAddress(rest);
+    if (const auto* err = std::get_if<std::string>(&parsed)) {
+      return "--target \"" + std::string(text) + "\": " + *err;
+    }
+    return TargetSpec{TargetSpec::Kind::kSimavr, rest};
+  }
   if (scheme == "pty" || scheme == "serial") return TargetSpec{TargetSpec::Kind::kSerial, rest};
   if (scheme == "tcp") {
     const size_t c = rest.rfind(':');
@@ -268,6 +280,35 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
   }
   return "--target \"" + std::string(text) + "\": unknown kind \"" + std::string(scheme) + "\"" +
          usage;
+}
+
+std::variant<SimavrSpec, std::string> ParseSimavrAddress(std::string_view address) {
+  const std::string usage =
+      "; give simavr:PATH.elf, optionally @MCU or @MCU:HZ, e.g. "
+      "simavr:dfmoco.elf@atmega328p:16000000";
+  SimavrSpec spec;
+  const size_t at = address.rfind('@');
+  spec.elf_path = std::string(address.substr(0, at));
+  if (spec.elf_path.empty()) return "no firmware ELF path" + usage;
+  if (at == std::string_view::npos) return spec;
+  const std::string_view mcu_hz = address.substr(at + 1);
+  const size_t colon = mcu_hz.find(':');
+  spec.mcu = std::string(mcu_hz.substr(0, colon));
+  if (spec.mcu.empty()) return "the MCU after '@' is empty" + usage;
+  if (colon == std::string_view::npos) return spec;
+  const std::string_view hz = mcu_hz.substr(colon + 1);
+  const bool digits =
+      !hz.empty() && hz.size() <= 10 &&
+      std::all_of(hz.begin(), hz.end(), [](char c) { return c >= '0' && c <= '9'; });
+  uint64_t value = 0;
+  for (const char c : digits ? hz : std::string_view())
+    value = value * 10 + static_cast<uint64_t>(c - '0');
+  if (value == 0 || value > 0xFFFFFFFFu) {
+    return "the clock \"" + std::string(hz) + "\" is not a number of hertz in 1..4294967295" +
+           usage;
+  }
+  spec.frequency_hz = static_cast<uint32_t>(value);
+  return spec;
 }
 
 std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& spec,
@@ -290,6 +331,19 @@ std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& 
     case TargetSpec::Kind::kTcp:
       return std::unique_ptr<Target>(
           std::make_unique<FdTarget>(FdTarget::Kind::kTcp, spec.address, baud));
+    case TargetSpec::Kind::kSimavr: {
+      auto parsed = ParseSimavrAddress(spec.address);
+      if (auto* err = std::get_if<std::string>(&parsed)) return std::move(*err);
+#ifdef MOCO_HAVE_SIMAVR
+      // The firmware sets its own baud rate; --baud does not apply.
+      return std::unique_ptr<Target>(
+          std::make_unique<SimavrTarget>(std::move(std::get<SimavrSpec>(parsed))));
+#else
+      return std::string(
+          "this mococheck was built without simavr, so it cannot run firmware; install "
+          "libsimavr-dev (ci/setup-deps) and configure and build again");
+#endif
+    }
   }
   return std::string("unknown target kind");
 }

@@ -127,13 +127,24 @@ class FdTarget final : public Target {
   int64_t origin_ns_ = 0;  // steady_clock at Open()
 };
 
-// A parsed --target: "in-process:MODEL", "pty:PATH" (also "serial:PATH") or
-// "tcp:HOST:PORT".
+// A parsed --target: "in-process:MODEL", "pty:PATH" (also "serial:PATH"),
+// "tcp:HOST:PORT" or "simavr:PATH.elf[@MCU[:HZ]]".
 struct TargetSpec {
-  enum class Kind { kInProcess, kSerial, kTcp };
+  enum class Kind { kInProcess, kSerial, kTcp, kSimavr };
   Kind kind = Kind::kInProcess;
-  std::string address;  // model, path or host:port
+  std::string address;  // model, path, host:port, or PATH.elf[@MCU[:HZ]]
 };
+
+// AVR firmware to run under simavr: the address of a "simavr:" target.
+struct SimavrSpec {
+  std::string elf_path;
+  std::string mcu;            // empty: the ELF's .mmcu section names it, else atmega328p
+  uint32_t frequency_hz = 0;  // 0: the ELF's .mmcu section gives it, else 16 MHz
+};
+
+// Parses "PATH.elf[@MCU[:HZ]]" (the last '@' splits; HZ is a decimal number of
+// hertz, 1..4294967295). On failure the message names the problem and the fix.
+std::variant<SimavrSpec, std::string> ParseSimavrAddress(std::string_view address);
 
 // Parses a --target value; on failure the message names the problem and the fix.
 std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text);

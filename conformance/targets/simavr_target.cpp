@@ -1,0 +1,384 @@
+// AVR firmware under libsimavr 1.6 as a conformance target on the firmware's clock
+// (ARCHITECTURE "conformance", "One clock"; FACTS "simavr (Debian 1.6)").
+#include "conformance/targets/simavr_target.h"
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <system_error>
+
+extern "C" {
+#include "avr_uart.h"
+#include "sim_avr.h"
+#include "sim_elf.h"
+#include "sim_io.h"
+#include "sim_irq.h"
+#include "sim_regbit.h"
+}
+
+namespace moco::conformance {
+namespace {
+
+constexpr const char* kDefaultMcu = "atmega328p";
+constexpr uint32_t kDefaultFrequencyHz = 16'000'000;
+constexpr uint64_t kNsPerSecond = 1'000'000'000;
+
+// simavr logs through one process-wide function. Nothing reaches stdout or stderr;
+// errors logged while a core is built are kept for the error message.
+thread_local std::string* log_capture = nullptr;
+
+void QuietLogger(avr_t* /*avr*/, const int level, const char* format, va_list ap) {
+  if (log_capture == nullptr || level > LOG_ERROR) return;
+  char text[512];
+  std::vsnprintf(text, sizeof text, format, ap);
+  std::string line(text);
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  if (line.empty()) return;
+  if (!log_capture->empty()) *log_capture += "; ";
+  *log_capture += line;
+}
+
+// Keeps simulated time virtual: simavr's own sleep callback would usleep() for
+// the time the firmware sleeps.
+void NoHostSleep(avr_t* /*avr*/, avr_cycle_count_t /*how_long*/) {}
+
+void FreeFirmware(elf_firmware_t& fw) {
+  std::free(fw.flash);
+  std::free(fw.eeprom);
+  std::free(fw.fuse);
+  std::free(fw.lockbits);
+#if ELF_SYMBOLS
+  if (fw.symbol != nullptr) {
+    for (uint32_t i = 0; i < fw.symbolcount; ++i) std::free(fw.symbol[i]);
+    std::free(fw.symbol);
+  }
+#endif
+  fw.flash = fw.eeprom = fw.fuse = fw.lockbits = nullptr;
+}
+
+// Checks the ELF header before simavr reads the file: simavr 1.6 takes any file
+// and crashes on ELFs for other machines. Returns a problem, or empty.
+std::string CheckAvrElf(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[20] = {};
+  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return "too short for an ELF";
+  if (h[0] != 0x7f || h[1] != 'E' || h[2] != 'L' || h[3] != 'F') return "not an ELF file";
+  constexpr unsigned kElfClass32 = 1, kElfDataLsb = 1, kMachineAvr = 83;
+  const unsigned machine = h[18] | (static_cast<unsigned>(h[19]) << 8);
+  if (h[4] != kElfClass32 || h[5] != kElfDataLsb || machine != kMachineAvr) {
+    return "an ELF for another machine (e_machine " + std::to_string(machine) + ", AVR is 83)";
+  }
+  return "";
+}
+
+// simavr's USART0 module: the avr_io_t that hands out its IRQs is the first member
+// of its avr_uart_t.
+avr_uart_t* FindUart0(avr_t* avr) {
+  for (avr_io_t* io = avr->io_port; io != nullptr; io = io->next) {
+    if (io->irq_ioctl_get == AVR_IOCTL_UART_GETIRQ('0') && io->kind != nullptr &&
+        std::strcmp(io->kind, "uart") == 0) {
+      return reinterpret_cast<avr_uart_t*>(io);
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+SimavrTarget::SimavrTarget(SimavrSpec spec, Options options)
+    : spec_(std::move(spec)), options_(options) {}
+
+SimavrTarget::~SimavrTarget() { Teardown(); }
+
+std::string SimavrTarget::Name() const {
+  std::string name = "simavr:" + spec_.elf_path;
+  if (!mcu_.empty()) name += " @" + mcu_ + " " + std::to_string(frequency_hz_) + " Hz";
+  if (!stopped_.empty()) name += " (firmware stopped: " + stopped_ + ")";
+  return name;
+}
+
+std::optional<std::string> SimavrTarget::Open() { return Build(); }
+
+void SimavrTarget::Restart() {
+  if (auto err = Build()) stopped_ = *err;
+}
+
+void SimavrTarget::Teardown() {
+  if (avr_ == nullptr) return;
+  if (uart_ != nullptr) {
+    const uint32_t ctl = AVR_IOCTL_UART_GETIRQ('0');
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUTPUT), &OnOutput, this);
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XON), &OnXon, this);
+    avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XOFF), &OnXoff, this);
+  }
+  // simavr 1.6's avr_terminate() leaves the core's IRQs allocated (a few KB per core).
+  avr_terminate(avr_);
+  std::free(avr_);
+  avr_ = nullptr;
+  uart_ = nullptr;
+  uart_input_ = nullptr;
+}
+
+std::optional<std::string> SimavrTarget::Build() {
+  Teardown();
+  stopped_.clear();
+  to_device_.clear();
+  from_device_.clear();
+  pacer_armed_ = false;
+  xoff_ = false;
+  rx_line_free_cycle_ = tx_line_free_cycle_ = 0;
+  wake_cycle_ = 0;
+
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(spec_.elf_path, ec)) {
+    return "firmware ELF \"" + spec_.elf_path +
+           "\" not found; give the path of an AVR ELF built with avr-gcc, e.g. "
+           "simavr:build/dev/fixtures/firmware/dfmoco_avr/dfmoco.elf";
+  }
+
+  if (const std::string problem = CheckAvrElf(spec_.elf_path); !problem.empty()) {
+    return "cannot read firmware ELF \"" + spec_.elf_path + "\": " + problem +
+           "; give an AVR ELF linked by avr-gcc (not a .hex file)";
+  }
+
+  avr_global_logger_set(&QuietLogger);
+  std::string log;
+  log_capture = &log;
+  struct Uncapture {
+    ~Uncapture() { log_capture = nullptr; }
+  } uncapture;
+
+  elf_firmware_t fw;
+  std::memset(&fw, 0, sizeof fw);
+  if (elf_read_firmware(spec_.elf_path.c_str(), &fw) != 0 || fw.flash == nullptr ||
+      fw.flashsize == 0) {
+    FreeFirmware(fw);
+    return "cannot read firmware ELF \"" + spec_.elf_path + "\"" +
+           (log.empty() ? std::string() : " (" + log + ")") +
+           "; give an AVR ELF linked by avr-gcc (not a .hex file)";
+  }
+
+  const std::string elf_mcu(fw.mmcu, std::find(fw.mmcu, fw.mmcu + sizeof fw.mmcu, '\0'));
+  if (!spec_.mcu.empty() && !elf_mcu.empty() && spec_.mcu != elf_mcu) {
+    FreeFirmware(fw);
+    return "\"" + spec_.elf_path + "\" names its MCU \"" + elf_mcu +
+           "\" in its .mmcu section but @" + spec_.mcu + " was given; drop the @MCU or give @" +
+           elf_mcu;
+  }
+  mcu_ = !spec_.mcu.empty() ? spec_.mcu : (!elf_mcu.empty() ? elf_mcu : kDefaultMcu);
+  frequency_hz_ = spec_.frequency_hz != 0
+                      ? spec_.frequency_hz
+                      : (fw.frequency != 0 ? fw.frequency : kDefaultFrequencyHz);
+
+  avr_ = avr_make_mcu_by_name(mcu_.c_str());
+  if (avr_ == nullptr) {
+    FreeFirmware(fw);
+    const std::string mcu = mcu_;
+    mcu_.clear();
+    return "simavr does not know the MCU \"" + mcu +
+           "\"; give one it models, e.g. @atmega328p (Uno) or @atmega2560 (Mega)";
+  }
+  avr_init(avr_);
+  avr_->log = LOG_ERROR;
+  avr_->sleep = &NoHostSleep;
+  std::snprintf(fw.mmcu, sizeof fw.mmcu, "%s", mcu_.c_str());
+  fw.frequency = frequency_hz_;
+  avr_load_firmware(avr_, &fw);
+  FreeFirmware(fw);
+  avr_->frequency = frequency_hz_;
+
+  uart_ = FindUart0(avr_);
+  if (uart_ == nullptr) {
+    const std::string mcu = mcu_;
+    Teardown();
+    return "the MCU \"" + mcu +
+           "\" has no USART0 in simavr; give an MCU with one, e.g. @atmega328p";
+  }
+  uint32_t flags = 0;  // no console echo, no usleep() while the firmware polls UCSR0A
+  avr_ioctl(avr_, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+  const uint32_t ctl = AVR_IOCTL_UART_GETIRQ('0');
+  uart_input_ = avr_io_getirq(avr_, ctl, UART_IRQ_INPUT);
+  avr_irq_register_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUTPUT), &OnOutput, this);
+  avr_irq_register_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XON), &OnXon, this);
+  avr_irq_register_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XOFF), &OnXoff, this);
+  txen_ = avr_regbit_get(avr_, uart_->txen) != 0;
+  if (options_.udre_fix) {
+    // Added after the UART's own handler for this register, so it runs second.
+    avr_register_io_write(avr_, uart_->txen.reg, &OnControlWrite, this);
+  }
+  return std::nullopt;
+}
+
+uint64_t SimavrTarget::cycles() const { return avr_ == nullptr ? 0 : avr_->cycle; }
+
+TimeNs SimavrTarget::Now() const {
+  if (avr_ == nullptr || frequency_hz_ == 0) return 0;
+  const uint64_t c = avr_->cycle;
+  return static_cast<TimeNs>((c / frequency_hz_) * kNsPerSecond +
+                             (c % frequency_hz_) * kNsPerSecond / frequency_hz_);
+}
+
+uint64_t SimavrTarget::NsToCycles(TimeNs ns) const {
+  if (ns <= 0) return 0;
+  const auto u = static_cast<uint64_t>(ns);
+  // Rounded up: the first cycle at or after `ns`.
+  return (u / kNsPerSecond) * frequency_hz_ +
+         ((u % kNsPerSecond) * frequency_hz_ + kNsPerSecond - 1) / kNsPerSecond;
+}
+
+uint64_t SimavrTarget::FrameCycles() const {
+  if (avr_ == nullptr) return 0;
+  const uint64_t ubrr = avr_regbit_get(avr_, uart_->ubrrl) |
+                        (static_cast<uint64_t>(avr_regbit_get(avr_, uart_->ubrrh)) << 8);
+  const uint64_t cycles_per_bit = (ubrr + 1) * (avr_regbit_get(avr_, uart_->u2x) ? 8 : 16);
+  // UCSZ 0..3 are 5..8 data bits, 7 is 9 bits (4..6 are reserved: taken as 8).
+  const unsigned ucsz = avr_regbit_get(avr_, uart_->ucsz) |
+                        static_cast<unsigned>(avr_regbit_get(avr_, uart_->ucsz2) << 2);
+  const uint64_t data_bits = ucsz <= 3 ? 5 + ucsz : (ucsz == 7 ? 9 : 8);
+  // UPMn1..0 (parity mode) are bits 5..4 of UCSRnC on the megaAVRs simavr models.
+  const uint64_t parity_bits = (avr_->data[uart_->r_ucsrc] & 0x30) != 0 ? 1 : 0;
+  const uint64_t stop_bits = 1 + avr_regbit_get(avr_, uart_->usbs);
+  return cycles_per_bit * (1 + data_bits + parity_bits + stop_bits);
+}
+
+bool SimavrTarget::CheckAlive() {
+  if (avr_ == nullptr) return false;
+  if (!stopped_.empty()) return false;
+  const int state = avr_->state;
+  if (state == cpu_Running || state == cpu_Sleeping) return true;
+  char when[64];
+  std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", static_cast<double>(Now()) / 1e9,
+                static_cast<unsigned>(avr_->pc));
+  if (state == cpu_Done) {
+    stopped_ = "the core halted (it sleeps with interrupts off)";
+  } else if (state == cpu_Crashed) {
+    stopped_ = "the core crashed";
+  } else {
+    stopped_ = "the core does not run (simavr state " + std::to_string(state) + ")";
+  }
+  stopped_ += when;
+  return false;
+}
+
+bool SimavrTarget::Send(wire::ByteView bytes) {
+  if (!CheckAlive()) return false;
+  to_device_.insert(to_device_.end(), bytes.begin(), bytes.end());
+  StartPacer();
+  return true;
+}
+
+void SimavrTarget::StartPacer() {
+  if (pacer_armed_ || to_device_.empty()) return;
+  const uint64_t now = avr_->cycle;
+  const uint64_t start = std::max(now, rx_line_free_cycle_);
+  pacer_armed_ = true;
+  avr_cycle_timer_register(avr_, start - now, &PacerTick, this);
+}
+
+// Starts the next host byte on the line: it enters the receiver at its start bit.
+uint64_t SimavrTarget::PacerTick(avr_t* /*avr*/, uint64_t when, void* param) {
+  auto* self = static_cast<SimavrTarget*>(param);
+  const uint64_t frame = self->FrameCycles();
+  if (self->to_device_.empty()) {
+    self->pacer_armed_ = false;
+    return 0;
+  }
+  if (self->xoff_) return when + frame;  // simavr's FIFO is full: hold the line
+  const uint8_t byte = self->to_device_.front();
+  self->to_device_.pop_front();
+  self->rx_line_free_cycle_ = when + frame;
+  avr_raise_irq(self->uart_input_, byte);
+  if (self->to_device_.empty()) {
+    self->pacer_armed_ = false;
+    return 0;
+  }
+  return when + frame;
+}
+
+uint64_t SimavrTarget::WakeTick(avr_t* /*avr*/, uint64_t /*when*/, void* param) {
+  static_cast<SimavrTarget*>(param)->wake_cycle_ = 0;
+  return 0;
+}
+
+// A sleeping core jumps to its next timer; this one makes it stop where Receive() must.
+void SimavrTarget::ArmWake(uint64_t cycle) {
+  if (wake_cycle_ == cycle) return;
+  avr_cycle_timer_cancel(avr_, &WakeTick, this);
+  wake_cycle_ = 0;
+  if (cycle <= avr_->cycle) return;
+  wake_cycle_ = cycle;
+  avr_cycle_timer_register(avr_, cycle - avr_->cycle, &WakeTick, this);
+}
+
+void SimavrTarget::OnOutput(avr_irq_t* /*irq*/, uint32_t value, void* param) {
+  auto* self = static_cast<SimavrTarget*>(param);
+  const uint64_t start = std::max(self->avr_->cycle, self->tx_line_free_cycle_);
+  const uint64_t ready = start + self->FrameCycles();
+  self->tx_line_free_cycle_ = ready;
+  self->from_device_.push_back(OutByte{static_cast<uint8_t>(value), ready});
+}
+
+void SimavrTarget::OnXon(avr_irq_t* /*irq*/, uint32_t value, void* param) {
+  if (value != 0) static_cast<SimavrTarget*>(param)->xoff_ = false;
+}
+
+void SimavrTarget::OnXoff(avr_irq_t* /*irq*/, uint32_t value, void* param) {
+  if (value != 0) static_cast<SimavrTarget*>(param)->xoff_ = true;
+}
+
+// UCSR0B written (after simavr's UART handler): TXEN0 0 -> 1 empties the transmit
+// buffer on the hardware, so UDRE0 is raised (and its interrupt, when enabled).
+void SimavrTarget::OnControlWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param) {
+  auto* self = static_cast<SimavrTarget*>(param);
+  const avr_regbit_t txen = self->uart_->txen;
+  if (addr != txen.reg) return;
+  const bool now_on = ((value >> txen.bit) & txen.mask) != 0;
+  if (now_on && !self->txen_) avr_raise_interrupt(avr, &self->uart_->udrc);
+  self->txen_ = now_on;
+}
+
+bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
+  if (avr_ == nullptr) return false;
+  const uint64_t deadline = NsToCycles(deadline_ns);
+  bool alive = true;
+  for (;;) {
+    bool delivered = false;
+    while (!from_device_.empty() && from_device_.front().ready_cycle <= avr_->cycle) {
+      out.push_back(from_device_.front().value);
+      from_device_.pop_front();
+      delivered = true;
+    }
+    if (delivered) break;
+    if (!(alive = CheckAlive())) {
+      // Bytes already in the transmitter still reach the wire.
+      for (const OutByte& b : from_device_) out.push_back(b.value);
+      from_device_.clear();
+      break;
+    }
+    if (avr_->cycle >= deadline) break;
+    uint64_t stop = deadline;
+    if (!from_device_.empty()) stop = std::min(stop, from_device_.front().ready_cycle);
+    ArmWake(stop);
+    const size_t written = from_device_.size();
+    int stalls = 0;  // avr_run() calls in a row that left the cycle count alone
+    while (avr_->cycle < stop && from_device_.size() == written) {
+      const uint64_t before = avr_->cycle;
+      const int state = avr_run(avr_);
+      if (state != cpu_Running && state != cpu_Sleeping) break;
+      // A call may wake the core without a cycle passing; a thousand in a row is a hang.
+      stalls = avr_->cycle == before ? stalls + 1 : 0;
+      if (stalls > 1000) {
+        stopped_ = "the core makes no progress (simavr state " + std::to_string(state) + ")";
+        break;
+      }
+    }
+  }
+  ArmWake(0);
+  return alive;
+}
+
+}  // namespace moco::conformance

@@ -1,0 +1,120 @@
+// Real AVR firmware as a conformance target: an ELF run by libsimavr (Debian 1.6)
+// on the firmware's own clock (ARCHITECTURE "conformance", "One clock"; FACTS
+// "simavr (Debian 1.6)"). Host bytes reach USART0's receiver at the baud the
+// firmware configured; device bytes are handed out when their stop bit is sent.
+#ifndef MOCO_CONFORMANCE_TARGETS_SIMAVR_TARGET_H_
+#define MOCO_CONFORMANCE_TARGETS_SIMAVR_TARGET_H_
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "conformance/targets/target.h"
+
+struct avr_t;
+struct avr_irq_t;
+struct avr_uart_t;
+
+namespace moco::conformance {
+
+// Runs `spec.elf_path` in a simulated AVR. Time is the firmware's: cycles / F_CPU.
+// The MCU and clock are the spec's when given, else those the ELF's .mmcu section
+// names, else atmega328p at 16 MHz.
+//
+// Line model (USART0; data, parity and stop bits as UCSR0B/UCSR0C say):
+//  - Host bytes queue up; one starts every frame time of the baud the firmware set
+//    in UBRR0 and U2X0 (10 bit times for 8N1) and enters simavr's receiver at its
+//    start bit; simavr raises RXC0 one frame later. While simavr's input FIFO
+//    signals XOFF no byte is started. Bytes sent while the receiver is off are
+//    lost, as on the wire.
+//  - A byte the firmware writes to UDR0 is handed out by Receive() once it has
+//    been shifted out: one frame after it started, and it starts when the
+//    previous byte has finished.
+//  - simavr 1.6 clears UDRE0 when TXEN0 is switched off but does not set it again
+//    when TXEN0 is switched back on; firmware that writes UCSR0B = 0 first (the
+//    Arduino core's init() does) and then polls UDRE0 would never transmit. A
+//    write hook on UCSR0B raises UDRE0 when TXEN0 goes from 0 to 1, as the
+//    hardware does (the transmit buffer is empty then).
+//  - Firmware that stops (sleep with interrupts off, or a crash) ends the link:
+//    Send() and Receive() return false and Name() says what happened.
+// simavr's own console output is silenced; its error messages go into Open()'s
+// error text.
+class SimavrTarget final : public Target {
+ public:
+  struct Options {
+    // Test only: false leaves simavr's UDRE0 behaviour as it is.
+    bool udre_fix = true;
+  };
+
+  explicit SimavrTarget(SimavrSpec spec) : SimavrTarget(std::move(spec), Options()) {}
+  SimavrTarget(SimavrSpec spec, Options options);
+  ~SimavrTarget() override;
+  SimavrTarget(const SimavrTarget&) = delete;
+  SimavrTarget& operator=(const SimavrTarget&) = delete;
+
+  // "simavr:PATH @MCU HZ", plus "(firmware stopped: ...)" once the core has ended.
+  std::string Name() const override;
+  bool VirtualClock() const override { return true; }
+  bool CanRestart() const override { return true; }
+  // Loads the ELF into a fresh core at cycle 0. Errors name a missing or unreadable
+  // ELF, an MCU simavr does not know, an MCU that contradicts the ELF's .mmcu
+  // section, or an MCU without USART0.
+  std::optional<std::string> Open() override;
+  // Reloads the firmware into a fresh core (time 0, empty queues).
+  void Restart() override;
+  TimeNs Now() const override;
+  bool Send(wire::ByteView bytes) override;
+  // Runs the core until a device byte has been shifted out or Now() >= deadline_ns.
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
+
+  // After Open(): the MCU and clock in use.
+  const std::string& mcu() const { return mcu_; }
+  uint32_t frequency_hz() const { return frequency_hz_; }
+  // CPU cycles executed since Open() / Restart().
+  uint64_t cycles() const;
+  // Cycles one USART0 frame takes at the firmware's current settings.
+  uint64_t FrameCycles() const;
+
+ private:
+  struct OutByte {
+    uint8_t value;
+    uint64_t ready_cycle;  // its stop bit has been sent
+  };
+
+  std::optional<std::string> Build();
+  void Teardown();
+  bool CheckAlive();
+  uint64_t NsToCycles(TimeNs ns) const;
+  void StartPacer();
+  void ArmWake(uint64_t cycle);
+
+  static uint64_t PacerTick(avr_t* avr, uint64_t when, void* param);
+  static uint64_t WakeTick(avr_t* avr, uint64_t when, void* param);
+  static void OnOutput(avr_irq_t* irq, uint32_t value, void* param);
+  static void OnXon(avr_irq_t* irq, uint32_t value, void* param);
+  static void OnXoff(avr_irq_t* irq, uint32_t value, void* param);
+  static void OnControlWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param);
+
+  SimavrSpec spec_;
+  Options options_;
+  std::string mcu_;
+  uint32_t frequency_hz_ = 0;
+
+  avr_t* avr_ = nullptr;
+  avr_uart_t* uart_ = nullptr;
+  avr_irq_t* uart_input_ = nullptr;
+  bool txen_ = false;              // TXEN0 as last written
+  std::string stopped_;            // why the core ended; empty while it runs
+  std::deque<uint8_t> to_device_;  // host bytes not yet started
+  bool pacer_armed_ = false;
+  bool xoff_ = false;
+  uint64_t rx_line_free_cycle_ = 0;  // the host's line is idle from here
+  std::deque<OutByte> from_device_;  // written by the firmware, maybe still shifting
+  uint64_t tx_line_free_cycle_ = 0;  // the device's line is idle from here
+  uint64_t wake_cycle_ = 0;          // an armed WakeTick, 0 when none
+};
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_TARGETS_SIMAVR_TARGET_H_
