@@ -242,6 +242,10 @@ int main(int argc, char** argv) {
   run->add_option("--junit", junit,
                   "Write a JUnit XML report here (one testcase per rule and case)");
   run->add_option("--json", json_path, "Write a JSON report here");
+  std::string html_path;
+  run->add_option(
+      "--html", html_path,
+      "Write a self-contained HTML report here (evidence, transcripts, position plots)");
   run->add_option("--shard", shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
   run->add_option("--baud", baud, "Baud rate of a pty:/serial: target")->capture_default_str();
@@ -454,6 +458,9 @@ int main(int argc, char** argv) {
   }
   if (!junit.empty()) {
     if (auto err = WriteAtomically(junit, JunitReport(report)); !err.empty()) return Fail(err);
+  }
+  if (!html_path.empty()) {
+    if (auto err = WriteAtomically(html_path, HtmlReport(report)); !err.empty()) return Fail(err);
   }
   if (!json_path.empty()) {
     if (auto err = WriteAtomically(json_path, JsonReport(report).dump(2) + "\n"); !err.empty()) {

@@ -1,5 +1,5 @@
-// mococheck reports: console text, JSON and JUnit XML (one testcase per rule
-// and scenario case), each file written atomically.
+// mococheck reports: console text, JSON, JUnit XML (one testcase per rule
+// and scenario case) and HTML, each file written atomically.
 #ifndef MOCO_CONFORMANCE_RUNNER_REPORT_H_
 #define MOCO_CONFORMANCE_RUNNER_REPORT_H_
 
@@ -16,6 +16,10 @@ namespace moco::conformance {
 std::string ConsoleReport(const RunReport& report, bool verbose);
 nlohmann::json JsonReport(const RunReport& report);
 std::string JunitReport(const RunReport& report);
+// A self-contained HTML page (html_report.cpp): verdict, rule table, per case
+// the failing rules with clause, evidence and the transcript around each
+// failure, and a plot of reported motor positions.
+std::string HtmlReport(const RunReport& report);
 
 // Writes `text` to "<path>.partial" and renames it to `path`. Returns an
 // error message, or an empty string.

@@ -3,6 +3,7 @@
 // roll-up of rule outcomes.
 #include "conformance/runner/runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -104,6 +105,10 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     result.target_ns = host.Now() - t0;
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
     result.outcomes = verdicts.outcomes();
+    const auto& traffic = host.traffic();
+    result.traffic.assign(traffic.begin(),
+                          traffic.begin() + static_cast<ptrdiff_t>(std::min(
+                                                traffic.size(), CaseResult::kMaxTrafficChunks)));
     report.cases.push_back(std::move(result));
   }
 

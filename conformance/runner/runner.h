@@ -39,6 +39,10 @@ struct CaseResult {
   TimeNs target_ns = 0;  // the case's length on the target's clock
   double wall_s = 0;
   std::vector<std::string> log;
+  // The case's traffic as it crossed the link (for the HTML report's
+  // transcripts and plots); at most kMaxTrafficChunks chunks are kept.
+  static constexpr size_t kMaxTrafficChunks = 20000;
+  std::vector<Chunk> traffic;
   bool MustFailed() const;
 };
 
