@@ -59,6 +59,8 @@ struct FaultCase {
   int exit_code;  // SHOULD rules do not fail the run
 };
 
+void PrintTo(const FaultCase& f, std::ostream* os) { *os << f.name << " -> " << f.rule; }
+
 class Fault : public ::testing::TestWithParam<FaultCase> {};
 
 TEST_P(Fault, IsCaughtByItsRuleAndPassesWithoutIt) {

@@ -130,7 +130,7 @@ void Compare(SsHost& h, Verdicts& v, const std::vector<AxisModel>& model) {
 void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axes) {
   std::vector<uint8_t> all;
   for (uint8_t a = 0; a < axes; ++a) all.push_back(a);
-  SsWaitRest(h, all, 600'000 * kMs);
+  SsWaitRest(h, all, 60'000 * kMs);
   std::vector<AxisModel> model(axes);
   for (uint8_t a = 0; a < axes; ++a) {
     model[a].rest_steps = SsPositionSteps(h, a);
@@ -209,7 +209,7 @@ void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axe
         r = h.Call(SsRead(Command::kPing, stackshot::PingRequest{static_cast<uint8_t>(s.a)}));
         break;
       case Step::Op::kSettle:
-        SsWaitRest(h, all, 600'000 * kMs);
+        SsWaitRest(h, all, 60'000 * kMs);
         for (AxisModel& am : model) am.settled = true;
         Compare(h, v, model);
         break;
@@ -221,7 +221,7 @@ void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axe
       });
     }
   }
-  SsWaitRest(h, all, 600'000 * kMs);
+  SsWaitRest(h, all, 60'000 * kMs);
   Compare(h, v, model);
 }
 

@@ -21,7 +21,7 @@ namespace moco::conformance {
 namespace {
 
 using stackshot::Action;
-using stackshot::Command;
+using SsCommand = stackshot::Command;
 constexpr uint8_t kAxes = 3;
 
 struct Model {
@@ -57,11 +57,11 @@ stackshot::HostCommand MoveCmd(uint8_t axis, int32_t delta, bool at_speed, float
   const auto dir = delta < 0 ? stackshot::Direction::kBack : stackshot::Direction::kForward;
   const float distance = static_cast<float>(delta < 0 ? -delta : delta);
   if (at_speed) {
-    return SsWrite(Command::kRailMoveAtSpeed,
+    return SsWrite(SsCommand::kRailMoveAtSpeed,
                    stackshot::RailMoveAtSpeed{dir, stackshot::Units::kSteps, distance, fraction},
                    axis);
   }
-  return SsWrite(Command::kRailMove,
+  return SsWrite(SsCommand::kRailMove,
                  stackshot::RailMove{dir, stackshot::Units::kSteps, backlash, distance}, axis);
 }
 
@@ -132,7 +132,7 @@ struct Stop : Cmd {
     if (!m.settled[axis]) m.rest_steps[axis].reset();
   }
   void run(const Model&, Sut& s) const override {
-    RC_ASSERT(StatusOf(s.host->Call(SsWrite(Command::kRailStop, stackshot::Empty{}, axis))) ==
+    RC_ASSERT(StatusOf(s.host->Call(SsWrite(SsCommand::kRailStop, stackshot::Empty{}, axis))) ==
               Action::kRspOk);
     AssertStreamRulesHold(s);
   }
@@ -144,7 +144,7 @@ struct Zero : Cmd {
   void checkPreconditions(const Model& m) const override { RC_PRE(m.settled[axis]); }
   void apply(Model& m) const override { m.rest_steps[axis] = 0; }
   void run(const Model&, Sut& s) const override {
-    RC_ASSERT(StatusOf(s.host->Call(SsWrite(Command::kRailPositionZero, stackshot::Empty{},
+    RC_ASSERT(StatusOf(s.host->Call(SsWrite(SsCommand::kRailPositionZero, stackshot::Empty{},
                                             axis))) == Action::kRspOk);
     AssertStreamRulesHold(s);
   }
