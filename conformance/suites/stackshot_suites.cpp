@@ -126,6 +126,14 @@ void IdentityCase(SsCaseContext& c) {
 }
 
 void BytewiseCase(SsCaseContext& c) {
+  if (!c.target.VirtualClock()) {
+    // Byte-sized writes on a real link may leave 2 ms between bytes, which
+    // rightly makes the device drop the partial packet (section 2).
+    c.log.push_back(
+        "a real link cannot promise byte-sized writes arrive within the 2 ms "
+        "inter-frame gap: SS-PKT-005 not exercised");
+    return;
+  }
   const SsRecord* r =
       c.host.Await(c.host.SendBytewise(SsRead(Command::kPing, stackshot::PingRequest{0x11})));
   ExpectOk(c, "SS-PKT-005", r);
