@@ -219,7 +219,7 @@ int main(int argc, char** argv) {
       shard = "1/1", session_path;
   uint64_t seed = 1;
   int steps = 40;
-  uint32_t baud = 115200;
+  uint32_t baud = 0;
   int64_t deadline_ms = 250, answer_timeout_ms = 2000, position_gap_ms = 200;
   bool verbose = false, quiet = false;
   run->add_option("--target", target_text,
@@ -248,7 +248,9 @@ int main(int argc, char** argv) {
       "Write a self-contained HTML report here (evidence, transcripts, position plots)");
   run->add_option("--shard", shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
-  run->add_option("--baud", baud, "Baud rate of a pty:/serial: target")->capture_default_str();
+  run->add_option("--baud", baud,
+                  "Baud rate of a pty:/serial: target (default: the protocol's: DMC v2 115200, "
+                  "DFMoco 57600, StackShot 38400)");
   run->add_option("--deadline-ms", deadline_ms, "DMC-DL-* answer deadline")
       ->check(CLI::Range(int64_t{1}, int64_t{600000}))
       ->capture_default_str();
@@ -440,7 +442,7 @@ int main(int argc, char** argv) {
   if (!profile.empty() && ts.kind != TargetSpec::Kind::kInProcess) {
     return Fail("--profile applies to in-process targets only; an external device has its own");
   }
-  auto made = MakeTarget(ts, profile, baud);
+  auto made = MakeTarget(ts, profile, baud ? baud : DefaultBaud(proto));
   if (const auto* err = std::get_if<std::string>(&made)) return Fail(*err);
   std::unique_ptr<Target> target = std::move(std::get<std::unique_ptr<Target>>(made));
   if (auto err = target->Open()) return Fail(*err);

@@ -474,6 +474,8 @@ std::string_view NeedsText(Needs needs) {
       return "a virtual capability (0x0004-0x0020)";
     case Needs::kNoVirtual:
       return "no virtual capability";
+    case Needs::kSsThreeAxes:
+      return "axes X, Y and Z (StackShot 3X)";
   }
   return "?";
 }
@@ -579,6 +581,8 @@ bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
       return (hi.capabilities & kVirtualCaps) != 0;
     case Needs::kNoVirtual:
       return (hi.capabilities & kVirtualCaps) == 0;
+    case Needs::kSsThreeAxes:
+      return false;  // a StackShot need: no DMC v2 device has it
   }
   return false;
 }

@@ -46,6 +46,7 @@ enum class Needs {
   kNoVirtual,  // none of the virtual capabilities
   // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
   // StackShot 3X: what the device reports (stackshot_rules.cpp).
+  kSsThreeAxes,  // answers CC_RAIL_STATUS for axes X, Y and Z (a StackShot 3X)
 };
 std::string_view NeedsText(Needs needs);
 

@@ -160,6 +160,7 @@ std::vector<CaseInfo> DmcCaseInfos() {
 // One entry per protocol with suites.
 const ProtocolRunner kRunners[] = {
     {Protocol::kDmc, &RunDmc, &DmcCaseInfos},
+    {Protocol::kStackshot, &RunStackshot, &StackshotCaseInfos},
 };
 
 }  // namespace

@@ -72,6 +72,8 @@ struct RunReport {
 
 // Runs the DMC v2 suites against an open `target`.
 RunReport RunDmc(Target& target, const RunOptions& options);
+// Runs the StackShot 3X suites against an open `target` (stackshot_runner.cpp).
+RunReport RunStackshot(Target& target, const RunOptions& options);
 
 // Fills report.rules for every rule of `rules` within options.rules: not
 // applicable when `applies` says so, else failed / noted / passed / not
@@ -86,6 +88,8 @@ struct CaseInfo {
   std::string summary;
   std::string needs;  // "" when the case needs nothing
 };
+// The StackShot 3X cases (stackshot_runner.cpp).
+std::vector<CaseInfo> StackshotCaseInfos();
 
 // What mococheck can run for one protocol.
 struct ProtocolRunner {

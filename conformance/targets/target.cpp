@@ -18,6 +18,7 @@
 #include <exception>
 
 #include "devices/registry.h"
+#include "devices/stackshot3x/stackshot3x.h"
 #include "sim/rig.h"
 
 #ifdef MOCO_HAVE_SIMAVR
@@ -69,6 +70,18 @@ InProcessTarget::~InProcessTarget() {
 
 std::unique_ptr<InProcessTarget> InProcessTarget::ForModel(const std::string& model,
                                                            const std::string& profile_path) {
+  if (model == "stackshot3x") {
+    // NVM outlives the device, so Restart() is a power cycle that keeps it.
+    auto nvm = std::make_shared<devices::MemoryStateStore>();
+    return std::make_unique<InProcessTarget>(
+        model, [profile_path, nvm](sim::Scheduler& s, devices::ByteSink& sink) {
+          return std::make_unique<devices::Stackshot3x>(
+              s, sink,
+              profile_path.empty() ? devices::Stackshot3xProfile{}
+                                   : devices::LoadStackshot3xProfile(profile_path),
+              nvm.get());
+        });
+  }
   return std::make_unique<InProcessTarget>(
       model, [model, profile_path](sim::Scheduler& s, devices::ByteSink& sink) {
         return devices::CreateDevice(model, profile_path, s, sink);

@@ -65,6 +65,8 @@ class InProcessTarget final : public Target {
   // `name` is the model for Name(); `factory` builds the device (again on Restart()).
   InProcessTarget(std::string name, DeviceFactory factory);
   // A registered model (devices::CreateDevice) with its profile (empty: built-in).
+  // A model with NVM (stackshot3x) keeps it in memory across Restart(), as a
+  // real power cycle does; each target starts with empty NVM.
   static std::unique_ptr<InProcessTarget> ForModel(const std::string& model,
                                                    const std::string& profile_path);
   ~InProcessTarget() override;

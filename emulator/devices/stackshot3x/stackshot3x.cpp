@@ -315,7 +315,13 @@ void Stackshot3x::Reply(const stackshot::Packet& packet, Action status, stacksho
     r.kind = read_response ? stackshot::ReplyKind::kReadResponse : stackshot::ReplyKind::kWriteAck;
     r.payload = std::move(payload);
   }
-  const stackshot::Packet out = stackshot::ToPacket(r, profile_.checksum);
+  stackshot::Packet out = stackshot::ToPacket(r, profile_.checksum);
+  if (faults_.drop_reply_to != 0 && packet.command == faults_.drop_reply_to) return;
+  if (faults_.misecho_reply_to != 0 && packet.command == faults_.misecho_reply_to) {
+    ++out.command;
+    stackshot::Seal(out, profile_.checksum);
+  }
+  if (faults_.bad_reply_checksum) ++out.checksum;
   wire::Bytes bytes;
   if (!stackshot::EncodePacket(out, bytes)) {
     // Data too long for one packet (cannot happen with the bounds kept on
@@ -406,6 +412,7 @@ int64_t Stackshot3x::RailPosition(int axis) const {
 
 bool Stackshot3x::AxisMoving(int axis) const {
   if (Motor(axis).IsMoving()) return true;
+  if (faults_.busy_never_clears && axes_[Index(axis)].last_dir != 0) return true;
   if (stack_.active && stack_.used[Index(axis)]) return true;
   return motion_.pending && motion_.axes[Index(axis)];
 }

@@ -103,6 +103,16 @@ struct Stackshot3xConfig {
   static std::optional<Stackshot3xConfig> FromJson(const nlohmann::json& j);
 };
 
+// Deliberate misbehaviour, for testing a conformance runner against a broken
+// controller. Everything is off by default.
+struct Stackshot3xFaults {
+  bool bad_reply_checksum = false;  // every reply's checksum byte is one off
+  uint16_t drop_reply_to = 0;       // replies to this command id are not sent (0: none)
+  uint16_t misecho_reply_to = 0;    // replies to this command id carry the next id (0: none)
+  bool serial_rewritable = false;   // CC_SERIAL_NUMBER takes every write
+  bool busy_never_clears = false;   // an axis that has moved reports MOVING (and BUSY) for good
+};
+
 class Stackshot3x : public Device, private sim::RigObserver {
  public:
   static constexpr int kAxes = 3;
@@ -160,6 +170,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // are the power-on settings, stores the mode in slot 0 (created from the
   // factory defaults when empty). The way out of DfMoco mode.
   void SetGlobalModeFromPanel(stackshot::GlobalMode mode);
+
+  // Test-only: makes the device misbehave as `faults` says, from now on.
+  void SetFaults(const Stackshot3xFaults& faults) { faults_ = faults; }
 
   // --- observation ---
   const Stackshot3xProfile& profile() const { return profile_; }
@@ -334,6 +347,7 @@ class Stackshot3x : public Device, private sim::RigObserver {
   sim::Scheduler::TimerId gap_timer_ = sim::Scheduler::kNoTimer;
   sim::Scheduler::TimerId boot_timer_ = sim::Scheduler::kNoTimer;
   std::vector<stackshot::DecodedPacket> scratch_;
+  Stackshot3xFaults faults_;
 };
 
 }  // namespace moco::devices

@@ -491,7 +491,9 @@ void Stackshot3x::HandleSystem(const stackshot::Packet& p, const stackshot::Host
       if (read) return Reply(p, Action::kRspOk, stackshot::U32Value{serial_number_}, true);
       const uint32_t v = As<stackshot::U32Value>(c)->value;
       // "Returns COMM_ACTION_FAILED if a second write is attempted."
-      if (serial_number_ != stackshot::kUnprogrammed) return Reply(p, Action::kFailed);
+      if (serial_number_ != stackshot::kUnprogrammed && !faults_.serial_rewritable) {
+        return Reply(p, Action::kFailed);
+      }
       if (v == stackshot::kUnprogrammed) return Reply(p, Action::kBadParam);
       serial_number_ = v;
       AddLog("serial number " + std::to_string(v) + " programmed");
