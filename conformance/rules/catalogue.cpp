@@ -474,6 +474,16 @@ std::string_view NeedsText(Needs needs) {
       return "a virtual capability (0x0004-0x0020)";
     case Needs::kNoVirtual:
       return "no virtual capability";
+    case Needs::kDfmMotors:
+      return "hi: axes >= 1";
+    case Needs::kDfmTwoMotors:
+      return "hi: axes >= 2";
+    case Needs::kDfmJogVelocity:
+      return "hi: major version >= 2 (jm velocity)";
+    case Needs::kDfmGoMotion:
+      return "hi: version >= 1.2.7 (go-motion)";
+    case Needs::kDfmBlurRefusal:
+      return "hi: version >= 1.3.1 (bf -1)";
   }
   return "?";
 }
@@ -579,6 +589,8 @@ bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
       return (hi.capabilities & kVirtualCaps) != 0;
     case Needs::kNoVirtual:
       return (hi.capabilities & kVirtualCaps) == 0;
+    default:  // another protocol's needs
+      return false;
   }
   return false;
 }

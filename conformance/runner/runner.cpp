@@ -155,6 +155,7 @@ std::vector<CaseInfo> DmcCaseInfos() {
 // One entry per protocol with suites.
 const ProtocolRunner kRunners[] = {
     {Protocol::kDmc, &RunDmc, &DmcCaseInfos},
+    {Protocol::kDfmoco, &RunDfmoco, &DfmocoCaseInfos},
 };
 
 }  // namespace

@@ -68,6 +68,8 @@ struct RunReport {
 
 // Runs the DMC v2 suites against an open `target`.
 RunReport RunDmc(Target& target, const RunOptions& options);
+// Runs the DFMoco suites against an open `target` (conformance/suites/dfmoco_suites.cpp).
+RunReport RunDfmoco(Target& target, const RunOptions& options);
 
 // Fills report.rules for every rule of `rules` within options.rules: not
 // applicable when `applies` says so, else failed / noted / passed / not
@@ -82,6 +84,9 @@ struct CaseInfo {
   std::string summary;
   std::string needs;  // "" when the case needs nothing
 };
+
+// The DFMoco cases (conformance/suites/dfmoco_suites.cpp).
+std::vector<CaseInfo> DfmocoCaseInfos();
 
 // What mococheck can run for one protocol.
 struct ProtocolRunner {
