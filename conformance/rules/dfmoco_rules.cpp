@@ -90,8 +90,7 @@ const std::vector<Rule> kRules = {
      "1 = moving", "Motor Status (ms)"},
     {"DFM-MS-004", L::kMust, N::kDfmMotors,
      "Every `ms` digit is 0 once every motor has come to rest",
-     "Dragonframe will keep requesting motor status (ms) until the movement is finished.",
-     "Notes"},
+     "Dragonframe will keep requesting motor status (ms) until the movement is finished.", "Notes"},
 
     // --- Move motor ("Move Motor (mm)"; ERRATA 2.4) ---
     {"DFM-MM-001", L::kMust, N::kDfmMotors,
@@ -133,8 +132,7 @@ const std::vector<Rule> kRules = {
     {"DFM-NP-001", L::kMust, N::kDfmMotors,
      "`np m p` is answered `mp m p` (FACTS) or `np m p` (protocol text)",
      "OUT: np <motor> <position>", "New Position (np); FACTS DFMoco"},
-    {"DFM-NP-002", L::kMust, N::kDfmMotors,
-     "`np m p` moves nothing and the motor then reports p",
+    {"DFM-NP-002", L::kMust, N::kDfmMotors, "`np m p` moves nothing and the motor then reports p",
      "sets the motor's current position to a new value (no movement)", "New Position (np)"},
     {"DFM-NP-003", L::kNote, N::kDfmMotors,
      "`np` is answered `np m p` as the protocol text says, where the sketch answers `mp m p`",
@@ -163,9 +161,8 @@ const std::vector<Rule> kRules = {
      "Stop All (sa) - stop all motors fairly quickly", "Stop All (sa)"},
 
     // --- Pulse rate ("Pulse Rate (pr)") ---
-    {"DFM-PR-001", L::kMust, N::kDfmMotors,
-     "`pr m v` with v in 100..20000 is answered `pr m v`", "OUT: pr <motor> <steps/second>",
-     "Pulse Rate (pr)"},
+    {"DFM-PR-001", L::kMust, N::kDfmMotors, "`pr m v` with v in 100..20000 is answered `pr m v`",
+     "OUT: pr <motor> <steps/second>", "Pulse Rate (pr)"},
     {"DFM-PR-002", L::kShould, N::kDfmMotors,
      "A pulse rate outside 100..20000 is clamped, and the answer shows the clamped rate",
      "`pr m v` -> `pr m v`, v clamped to 100..20000 steps/s", "FACTS DFMoco"},
@@ -259,8 +256,7 @@ const std::vector<Rule> kRules = {
      "Hello (hi) - initiate communication", "Hello (hi)"},
     {"DFM-DL-002", L::kShould, N::kNothing,
      "Queries (`ms`, `mp m`) are answered within the deadline",
-     "Dragonframe will keep requesting motor status (ms) until the movement is finished.",
-     "Notes"},
+     "Dragonframe will keep requesting motor status (ms) until the movement is finished.", "Notes"},
     {"DFM-DL-003", L::kShould, N::kNothing,
      "Motor commands (mm, sm, sa, jm, im, pr, zm, np) are answered within the deadline",
      "Messages are given from perspective of DFMoco device.", "Messages"},
@@ -270,11 +266,11 @@ const std::vector<Rule> kRules = {
 
     // --- Motors ---
     {"DFM-MOTOR-001", L::kMust, N::kNothing,
-     "Every motor number in a device line is 1 to the number of axes",
-     "Motor number starts at 1.", "Messages"},
+     "Every motor number in a device line is 1 to the number of axes", "Motor number starts at 1.",
+     "Messages"},
     {"DFM-MOTOR-002", L::kMust, N::kDfmTwoMotors,
-     "A command to one motor leaves every other motor where it is", "IN: mm <motor> <step position>",
-     "Move Motor (mm)"},
+     "A command to one motor leaves every other motor where it is",
+     "IN: mm <motor> <step position>", "Move Motor (mm)"},
 
     // --- The outgoing queue ---
     {"DFM-QUEUE-001", L::kShould, N::kNothing,

@@ -111,8 +111,7 @@ std::filesystem::path Fixture(const char* name) {
 }
 
 TEST(DfmocoRun, EveryRuleHoldsOnTheUnoProfile) {
-  const RunReport r =
-      RunDevice(devices::LoadDfmocoProfile(Fixture("dfmoco-uno.json")));
+  const RunReport r = RunDevice(devices::LoadDfmocoProfile(Fixture("dfmoco-uno.json")));
   ExpectCertified(r);
   EXPECT_EQ(r.device_info["motor_count"], 4);
   EXPECT_EQ(r.device_info["version"], "2.0.0");
@@ -167,7 +166,9 @@ TEST(DfmocoBroken, LateMpReportsAreCaughtByMp003) {
   const RunReport r = RunFaulty(f);
   ExpectCaught(r, "DFM-MP-003");
   ExpectCaught(r, "DFM-MP-004");
-  EXPECT_EQ(r.rules.at("DFM-MP-005").status, Status::kPass);
+  // Late, but not wrong: the positions the reports carry are right.
+  EXPECT_NE(r.rules.at("DFM-MP-005").status, Status::kFail);
+  EXPECT_EQ(r.rules.at("DFM-MP-006").status, Status::kPass);
 }
 
 TEST(DfmocoBroken, WrongPositionAfterAStopIsCaughtByMp005) {
@@ -191,8 +192,8 @@ TEST(DfmocoBroken, GarbageLineIsCaughtByLine004) {
   for (const CaseResult& c : r.cases) {
     auto it = c.outcomes.find("DFM-LINE-004");
     if (it == c.outcomes.end() || it->second.evidence.empty()) continue;
-    quoted = quoted || it->second.evidence[0].hex == wire::ToHex(wire::FromHex(
-                                                         "6462673a2073746570733d31320d0a").value());
+    quoted = quoted || it->second.evidence[0].hex ==
+                           wire::ToHex(wire::FromHex("6462673a2073746570733d31320d0a").value());
   }
   EXPECT_TRUE(quoted);
 }

@@ -26,8 +26,8 @@ namespace moco::conformance {
 // One line the device sent.
 struct DfmLine {
   TimeNs t_ns = 0;
-  std::string text;  // without its terminator
-  wire::Bytes raw;   // as it crossed the link, terminator included
+  std::string text;                          // without its terminator
+  wire::Bytes raw;                           // as it crossed the link, terminator included
   std::optional<dfmoco::DeviceReply> reply;  // nullopt: no reply of the grammar
   int command = -1;  // index of the command it answers; -1: unprompted (or stray)
 };
@@ -41,12 +41,13 @@ enum class DfmExpect {
 };
 
 struct DfmCommand {
-  std::string line;  // without its terminator
+  std::string line;                           // without its terminator
   std::optional<dfmoco::HostCommand> parsed;  // in the device's dialect
   DfmExpect expect = DfmExpect::kReply;
   std::string_view error_rule;  // the rule judging the error answer (kError, kTooMany)
   TimeNs sent_ns = 0;
-  int answer = -1;  // index into lines()
+  bool timed = true;  // judged by the DFM-DL rules (ended by "\r\n")
+  int answer = -1;    // index into lines()
   int answers = 0;
 };
 

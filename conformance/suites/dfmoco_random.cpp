@@ -15,8 +15,20 @@ namespace {
 constexpr TimeNs kMs = sim::kNsPerMs;
 
 struct Step {
-  enum class Op { kStatus, kPosition, kMove, kStop, kStopAll, kNewPosition, kZero, kPulseRate,
-                  kJog, kInch, kWait, kSettle };
+  enum class Op {
+    kStatus,
+    kPosition,
+    kMove,
+    kStop,
+    kStopAll,
+    kNewPosition,
+    kZero,
+    kPulseRate,
+    kJog,
+    kInch,
+    kWait,
+    kSettle
+  };
   Op op = Op::kStatus;
   int32_t motor = 1;
   int32_t a = 0;
@@ -26,7 +38,7 @@ struct Step {
 struct MotorModel {
   std::optional<int32_t> rest_steps = 0;  // where it will rest; nullopt: unknown (stopped, jogged)
   std::string_view rule = "DFM-MM-003";   // the rule that judges rest_steps
-  bool settled = true;                     // known to rest now
+  bool settled = true;                    // known to rest now
 };
 
 std::vector<Step> Generate(uint64_t seed, int steps, int32_t motor_count) {
@@ -160,8 +172,9 @@ void Execute(DfmHost& h, Verdicts& v, const std::vector<Step>& steps, int32_t mo
     const auto got = DfmPosition(h, m);
     if (!got) continue;
     v.Check(mm.rule, *got == *mm.rest_steps, [&] {
-      return Evidence{"motor " + std::to_string(m) + " at rest on " + std::to_string(*mm.rest_steps),
-                      std::to_string(*got), "", h.Now()};
+      return Evidence{
+          "motor " + std::to_string(m) + " at rest on " + std::to_string(*mm.rest_steps),
+          std::to_string(*got), "", h.Now()};
     });
   }
 }

@@ -87,7 +87,8 @@ struct Move : Cmd {
 struct StopOne : Cmd {
   int32_t motor = *rc::gen::inRange<int32_t>(1, kMotors + 1);
   void apply(Model& m) const override {
-    if (!m.settled[static_cast<size_t>(motor - 1)]) m.rest_steps[static_cast<size_t>(motor - 1)].reset();
+    if (!m.settled[static_cast<size_t>(motor - 1)])
+      m.rest_steps[static_cast<size_t>(motor - 1)].reset();
   }
   void run(const Model&, Sut& s) const override {
     CallExpecting<dfmoco::StopMotorReply>(s, "sm " + std::to_string(motor));

@@ -19,7 +19,7 @@ namespace {
 
 constexpr TimeNs kMs = sim::kNsPerMs;
 constexpr TimeNs kRestTimeout = 120'000 * kMs;
-constexpr TimeNs kPollNs = 50 * kMs;       // DfmWaitRest's `ms` polling period
+constexpr TimeNs kPollNs = 50 * kMs;            // DfmWaitRest's `ms` polling period
 constexpr TimeNs kReportPeriodNs = 1000 * kMs;  // FACTS: `mp` once a second
 constexpr TimeNs kStopWithinNs = 5000 * kMs;    // DFM-SM-002 / SA-002 "fairly quickly"
 
@@ -86,8 +86,7 @@ void JudgeReports(DfmCaseContext& c, const Motion& m, const DfmRest& rest, int32
   for (const Report& r : reports) {
     Expect(c, "DFM-MP-006", r.position_steps >= lo && r.position_steps <= hi,
            "mp " + Str(m.motor) + " within " + Str(lo) + ".." + Str(hi),
-           "mp " + Str(m.motor) + " " + Str(r.position_steps) + " at " +
-               Str(r.t_ns / kMs) + " ms");
+           "mp " + Str(m.motor) + " " + Str(r.position_steps) + " at " + Str(r.t_ns / kMs) + " ms");
   }
   std::vector<TimeNs> times = {m.t0_ns};
   for (const Report& r : reports) {
@@ -96,8 +95,8 @@ void JudgeReports(DfmCaseContext& c, const Motion& m, const DfmRest& rest, int32
   const bool long_move = last_moving - m.t0_ns > 1500 * kMs;
   if (long_move) {
     Expect(c, "DFM-MP-002", times.size() > 1,
-           "mp " + Str(m.motor) + " reports during a move of " + Str((last_moving - m.t0_ns) / kMs) +
-               " ms",
+           "mp " + Str(m.motor) + " reports during a move of " +
+               Str((last_moving - m.t0_ns) / kMs) + " ms",
            "none");
   }
   if (last_moving - m.t0_ns > kReportPeriodNs) {
@@ -126,10 +125,10 @@ void JudgeReports(DfmCaseContext& c, const Motion& m, const DfmRest& rest, int32
       break;
     }
   }
-  Expect(c, "DFM-MP-004", first_after != nullptr && first_after->t_ns <= stop_report_by,
-         "an mp " + Str(m.motor) + " within 1 s of the stop (by " + Str(stop_report_by / kMs) +
-             " ms)",
-         first_after == nullptr ? "none" : "the first at " + Str(first_after->t_ns / kMs) + " ms");
+  Expect(
+      c, "DFM-MP-004", first_after != nullptr && first_after->t_ns <= stop_report_by,
+      "an mp " + Str(m.motor) + " within 1 s of the stop (by " + Str(stop_report_by / kMs) + " ms)",
+      first_after == nullptr ? "none" : "the first at " + Str(first_after->t_ns / kMs) + " ms");
   if (after != nullptr) {
     Expect(c, "DFM-MP-005", after->position_steps == rest_steps,
            "mp " + Str(m.motor) + " " + Str(rest_steps) + " (where it rests)",
@@ -260,7 +259,8 @@ void Pipelined(DfmCaseContext& c) {
     const int li = h.commands()[static_cast<size_t>(first + i)].answer;
     if (li < prev_line || l->t_ns < prev) {
       ordered = false;
-      order_note = "the answer to \"" + batch[static_cast<size_t>(i)] + "\" came before earlier ones";
+      order_note =
+          "the answer to \"" + batch[static_cast<size_t>(i)] + "\" came before earlier ones";
     }
     prev = l->t_ns;
     prev_line = li;
@@ -356,9 +356,10 @@ void Stop(DfmCaseContext& c) {
     }
     h.Idle(kPollNs);
   }
-  Expect(c, "DFM-SM-002", rested_at >= 0 && rested_at - t_stop <= kStopWithinNs + kPollNs,
-         "motor 1 at rest within 5 s of sm 1",
-         rested_at < 0 ? "still moving" : "at rest after " + Str((rested_at - t_stop) / kMs) + " ms");
+  Expect(
+      c, "DFM-SM-002", rested_at >= 0 && rested_at - t_stop <= kStopWithinNs + kPollNs,
+      "motor 1 at rest within 5 s of sm 1",
+      rested_at < 0 ? "still moving" : "at rest after " + Str((rested_at - t_stop) / kMs) + " ms");
   if (two) h.Call("sa");
   const DfmRest rest = Rest(c);
   const auto p = DfmPosition(h, 1);
@@ -379,17 +380,18 @@ void StopAll(DfmCaseContext& c) {
   for (int32_t m = 1; m <= n; ++m) {
     h.Call(Cmd("pr", {m, 5000}));
     const int32_t to = (*from)[static_cast<size_t>(m - 1)] - 40000;
-    motions.push_back(Motion{m, (*from)[static_cast<size_t>(m - 1)], to, h.lines().size(), h.Now()});
+    motions.push_back(
+        Motion{m, (*from)[static_cast<size_t>(m - 1)], to, h.lines().size(), h.Now()});
     h.Call(Cmd("mm", {m, to}));
   }
   h.Idle(1500 * kMs);
   const TimeNs t_stop = h.Now();
   h.Call("sa");
   const DfmRest rest = Rest(c);
-  Expect(c, "DFM-SA-002", rest.rested && rest.rest_ns - t_stop <= kStopWithinNs + kPollNs,
-         "every motor at rest within 5 s of sa",
-         rest.rested ? "at rest after " + Str((rest.rest_ns - t_stop) / kMs) + " ms"
-                     : "still moving");
+  Expect(
+      c, "DFM-SA-002", rest.rested && rest.rest_ns - t_stop <= kStopWithinNs + kPollNs,
+      "every motor at rest within 5 s of sa",
+      rest.rested ? "at rest after " + Str((rest.rest_ns - t_stop) / kMs) + " ms" : "still moving");
   const auto p = Positions(h, n);
   if (!p) return;
   for (const Motion& m : motions) {
@@ -467,8 +469,8 @@ void Jog(DfmCaseContext& c) {
     Rest(c);
     const auto v = DfmPosition(h, 1);
     if (v) {
-      Expect(c, "DFM-JM-003", *v < *at && *v >= back,
-             "motor 1 towards " + Str(back) + " at 50 %", "rests on " + Str(*v));
+      Expect(c, "DFM-JM-003", *v < *at && *v >= back, "motor 1 towards " + Str(back) + " at 50 %",
+             "rests on " + Str(*v));
     }
   }
   h.Call(Cmd("mm", {1, *from}));
@@ -642,8 +644,7 @@ void BlurTooFast(DfmCaseContext& c) {
   const DfmLine* ms = h.Call("ms");
   Expect(c, "DFM-GO-008", !ShowsMoving(ms, 1), "nothing moves after bf -1", Show(ms));
   const auto p = DfmPosition(h, 1);
-  Expect(c, "DFM-GO-008", p == *from, "motor 1 stays on " + Str(*from),
-         p ? Str(*p) : "no answer");
+  Expect(c, "DFM-GO-008", p == *from, "motor 1 stays on " + Str(*from), p ? Str(*p) : "no answer");
 }
 
 // ---------------------------------------------------------------- shoot
@@ -703,8 +704,8 @@ std::vector<DfmCase> MakeCases() {
        BadMotor},
       {"errors", "too-many-args", N::kNothing, "40 and more arguments", TooMany},
       {"errors", "unknown", N::kNothing, "unknown words get no reply", Unknown},
-      {"gomotion", "blur", N::kDfmGoMotion, "bf, pre-position, go, exposure timing, bf while moving",
-       Blur},
+      {"gomotion", "blur", N::kDfmGoMotion,
+       "bf, pre-position, go, exposure timing, bf while moving", Blur},
       {"gomotion", "too-fast", N::kDfmBlurRefusal, "bf faster than 20000 steps/s: bf -1",
        BlurTooFast},
       {"shoot", "frames", N::kDfmMotors, "a shoot of 6 frames on up to 2 motors", Shoot},
@@ -800,10 +801,10 @@ RunReport RunDfmoco(Target& target, const RunOptions& options) {
     host.Close();
   }
   if (hello) {
-    report.device = "\"" + dfmoco::FormatDevice(*hello).substr(0, dfmoco::FormatDevice(*hello).size() - 2) +
-                    "\": DFMoco " + hello->version + ", protocol " +
-                    std::to_string(hello->protocol_major) + ", " +
-                    std::to_string(hello->motor_count) + " motors";
+    report.device =
+        "\"" + dfmoco::FormatDevice(*hello).substr(0, dfmoco::FormatDevice(*hello).size() - 2) +
+        "\": DFMoco " + hello->version + ", protocol " + std::to_string(hello->protocol_major) +
+        ", " + std::to_string(hello->motor_count) + " motors";
     report.device_info = {{"protocol_major", hello->protocol_major},
                           {"motor_count", hello->motor_count},
                           {"version", hello->version}};
@@ -836,7 +837,7 @@ RunReport RunDfmoco(Target& target, const RunOptions& options) {
     const auto* seen = As<dfmoco::HelloReply>(host.Call("hi"));
     if (seen != nullptr && !host.link_lost()) {
       const dfmoco::HelloReply device_hello = *seen;
-      DfmCaseContext ctx{host,          verdicts,       device_hello, target,
+      DfmCaseContext ctx{host,         verdicts,       device_hello, target,
                          options.host, options.random, result.log};
       k.run(ctx);
     }

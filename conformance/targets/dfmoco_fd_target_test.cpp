@@ -17,7 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(DfmocoFdTarget, HandshakeMotorAndErrorSuitesPassOverARealPty) {
-  const fs::path dir = fs::temp_directory_path() / ("mococheck_dfm_pty_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("mococheck_dfm_pty_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   transport::EmulatorConfig config;
@@ -39,8 +40,8 @@ TEST(DfmocoFdTarget, HandshakeMotorAndErrorSuitesPassOverARealPty) {
   const RunReport r = RunDfmoco(target, o);
   EXPECT_EQ(r.device_info["motor_count"], 4);
   EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, true);
-  for (const char* id : {"DFM-HI-002", "DFM-MS-002", "DFM-LINE-001", "DFM-REPLY-001",
-                         "DFM-ERR-004", "DFM-MM-003", "DFM-MP-005", "DFM-NP-002"}) {
+  for (const char* id : {"DFM-HI-002", "DFM-MS-002", "DFM-LINE-001", "DFM-REPLY-001", "DFM-ERR-004",
+                         "DFM-MM-003", "DFM-MP-005", "DFM-NP-002"}) {
     ASSERT_TRUE(r.rules.count(id)) << id;
     EXPECT_EQ(r.rules.at(id).status, Status::kPass) << id << "\n" << ConsoleReport(r, false);
   }

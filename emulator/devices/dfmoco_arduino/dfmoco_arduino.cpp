@@ -520,7 +520,8 @@ std::string DfmocoArduino::Format(const TxMsg& m) const {
     case Msg::kMs: {
       dfmoco::MotorStatusReply ms;
       for (int i = 1; i <= rig_.motor_count(); ++i) ms.moving.push_back(MotorMoving(i));
-      ms.moving.resize(static_cast<size_t>(std::max(1, rig_.motor_count() + faults_.ms_width_delta)));
+      ms.moving.resize(
+          static_cast<size_t>(std::max(1, rig_.motor_count() + faults_.ms_width_delta)));
       reply = std::move(ms);
       break;
     }
