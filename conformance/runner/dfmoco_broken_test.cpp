@@ -11,7 +11,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <set>
 
+#include "conformance/rules/dfmoco_rules.h"
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
 #include "control/session.h"
@@ -108,6 +110,46 @@ void ExpectCertified(const RunReport& r) {
 std::filesystem::path Fixture(const char* name) {
   const char* root = std::getenv("MOCO_SOURCE_DIR");
   return std::filesystem::path(root != nullptr ? root : ".") / "fixtures" / "profiles" / name;
+}
+
+TEST(DfmocoCatalogue, IdsAreUniqueWellFormedAndEveryRuleQuotesItsClause) {
+  std::set<std::string> ids;
+  for (const Rule& r : DfmocoRules()) {
+    const std::string_view id = r.id;
+    const size_t dash = id.rfind('-');
+    EXPECT_EQ(id.rfind("DFM-", 0), 0u) << id;
+    EXPECT_EQ(id.size() - dash, 4u) << id;  // three digits
+    EXPECT_TRUE(ids.insert(std::string(id)).second) << "duplicate " << id;
+    EXPECT_GE(r.clause.size(), 10u) << id << " quotes no clause";
+    EXPECT_FALSE(r.title.empty()) << id;
+    EXPECT_FALSE(r.source.empty()) << id;
+    EXPECT_EQ(FindRule(id), &r);
+  }
+  EXPECT_GE(DfmocoRules().size(), 30u);
+  EXPECT_EQ(FindRule("DFM-MS-002")->level, Level::kMust);
+  EXPECT_EQ(FindRule("DFM-NP-003")->level, Level::kNote);    // protocol text vs FACTS
+  EXPECT_EQ(FindRule("DFM-MP-002")->level, Level::kShould);  // "should send occasional"
+}
+
+TEST(DfmocoCatalogue, ApplicabilityFollowsTheHiReply) {
+  const Rule& velocity = *FindRule("DFM-JM-003");
+  const Rule& refusal = *FindRule("DFM-GO-008");
+  const Rule& two = *FindRule("DFM-SM-003");
+  EXPECT_TRUE(DfmocoApplies(velocity, {2, 4, "2.0.0"}));
+  EXPECT_FALSE(DfmocoApplies(velocity, {1, 4, "1.3.1"}));
+  EXPECT_TRUE(DfmocoApplies(refusal, {1, 4, "1.3.1"}));
+  EXPECT_FALSE(DfmocoApplies(refusal, {1, 4, "1.3.0"}));
+  EXPECT_FALSE(DfmocoApplies(refusal, {1, 4, "1.2.7"}));
+  EXPECT_TRUE(DfmocoApplies(*FindRule("DFM-GO-001"), {1, 4, "1.2.7"}));
+  EXPECT_FALSE(DfmocoApplies(*FindRule("DFM-GO-001"), {1, 4, "beta"}));
+  EXPECT_TRUE(DfmocoApplies(two, {2, 2, "2.0.0"}));
+  EXPECT_FALSE(DfmocoApplies(two, {2, 1, "2.0.0"}));
+  EXPECT_TRUE(DfmocoApplies(*FindRule("DFM-LINE-001"), {0, 0, ""}));
+  EXPECT_FALSE(DfmocoApplies(*FindRule("DFM-MM-001"), {2, 0, "2.0.0"}));
+  EXPECT_FALSE(DfmocoApplies(*FindRule("DMC-MOVE-003"), {2, 4, "2.0.0"}));
+  EXPECT_EQ(ParseDfmocoVersion("1.3.1"), (std::array<int, 3>{1, 3, 1}));
+  EXPECT_EQ(ParseDfmocoVersion("2"), (std::array<int, 3>{2, 0, 0}));
+  EXPECT_FALSE(ParseDfmocoVersion("x1").has_value());
 }
 
 TEST(DfmocoRun, EveryRuleHoldsOnTheUnoProfile) {

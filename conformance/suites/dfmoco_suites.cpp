@@ -347,6 +347,7 @@ void Stop(DfmCaseContext& c) {
   }
   // Motor 1 rests within 5 s, short of its target.
   TimeNs rested_at = -1;
+  TimeNs last_moving = t_stop;
   while (h.Now() - t_stop <= kStopWithinNs + kPollNs && !h.link_lost()) {
     const DfmLine* ms = h.Call("ms");
     if (ms == nullptr) break;
@@ -354,6 +355,7 @@ void Stop(DfmCaseContext& c) {
       rested_at = h.Now();
       break;
     }
+    last_moving = h.Now();
     h.Idle(kPollNs);
   }
   Expect(
@@ -361,7 +363,10 @@ void Stop(DfmCaseContext& c) {
       "motor 1 at rest within 5 s of sm 1",
       rested_at < 0 ? "still moving" : "at rest after " + Str((rested_at - t_stop) / kMs) + " ms");
   if (two) h.Call("sa");
-  const DfmRest rest = Rest(c);
+  DfmRest rest = Rest(c);
+  if (!rest.last_moving_ns.empty()) {
+    rest.last_moving_ns[0] = std::max(rest.last_moving_ns[0], last_moving);
+  }
   const auto p = DfmPosition(h, 1);
   if (!p) return;
   Expect(c, "DFM-SM-002", *p < to, "motor 1 short of " + Str(to), "rests on " + Str(*p));
