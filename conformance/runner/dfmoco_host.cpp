@@ -123,36 +123,37 @@ Evidence DfmHost::Ev(const DfmLine& line, std::string expected, std::string obse
   return Evidence{std::move(expected), std::move(observed), wire::ToHex(line.raw), line.t_ns};
 }
 
-int DfmHost::Send(std::string_view line, std::string_view error_rule, std::string_view terminator) {
-  Pump(Now());  // what the device wrote before this command is not its answer
+DfmCommand DfmHost::MakeCommand(std::string_view line, std::string_view error_rule) const {
   DfmCommand c;
   c.line = std::string(line);
   c.sent_ns = Now();
-  c.timed = terminator == "\r\n";
   const dfmoco::Dialect d = dialect();
   const auto parsed = dfmoco::ParseHostLine(line, d);
   if (!parsed.ok()) {
     c.expect = dfmoco::IsTooManyArgs(parsed.error()) ? DfmExpect::kTooMany : DfmExpect::kError;
     c.error_rule = c.expect == DfmExpect::kTooMany ? "DFM-ERR-003" : "DFM-ERR-001";
-  } else {
-    c.parsed = parsed.value();
-    const auto motor = dfmoco::AddressedMotor(*c.parsed);
-    if (std::holds_alternative<dfmoco::UnknownCommand>(*c.parsed)) {
-      c.expect = DfmExpect::kSilence;
-    } else if (motor && hello_ && !dfmoco::MotorInRange(*motor, d)) {
-      c.expect = DfmExpect::kError;
-      c.error_rule = "DFM-ERR-002";
-    } else if (!error_rule.empty()) {
-      c.expect = DfmExpect::kError;
-      c.error_rule = error_rule;
-    }
+    return c;
   }
+  c.parsed = parsed.value();
+  const auto motor = dfmoco::AddressedMotor(*c.parsed);
+  if (std::holds_alternative<dfmoco::UnknownCommand>(*c.parsed)) {
+    c.expect = DfmExpect::kSilence;
+  } else if (motor && hello_ && !dfmoco::MotorInRange(*motor, d)) {
+    c.expect = DfmExpect::kError;
+    c.error_rule = "DFM-ERR-002";
+  } else if (!error_rule.empty()) {
+    c.expect = DfmExpect::kError;
+    c.error_rule = error_rule;
+  }
+  return c;
+}
+
+int DfmHost::Send(std::string_view line, std::string_view error_rule, std::string_view terminator) {
+  Pump(Now());  // what the device wrote before this command is not its answer
+  DfmCommand c = MakeCommand(line, error_rule);
+  c.timed = terminator == "\r\n";
   commands_.push_back(std::move(c));
-  const std::string bytes = std::string(line) + std::string(terminator);
-  const wire::ByteView view(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
-  traffic_.push_back(Chunk{Now(), true, wire::Bytes(view.begin(), view.end())});
-  if (!target_.Send(view)) link_lost_ = true;
-  Pump(Now());  // what the device wrote at once (in-process: the answer)
+  SendRaw(std::string(line) + std::string(terminator));
   return static_cast<int>(commands_.size() - 1);
 }
 
@@ -161,14 +162,7 @@ int DfmHost::SendBatch(const std::vector<std::string>& lines) {
   const int first = static_cast<int>(commands_.size());
   std::string bytes;
   for (const std::string& l : lines) {
-    DfmCommand c;
-    c.line = l;
-    c.sent_ns = Now();
-    const auto parsed = dfmoco::ParseHostLine(l, dialect());
-    if (parsed.ok()) c.parsed = parsed.value();
-    c.expect = parsed.ok() ? DfmExpect::kReply : DfmExpect::kError;
-    c.error_rule = "DFM-ERR-001";
-    commands_.push_back(std::move(c));
+    commands_.push_back(MakeCommand(l, {}));
     bytes += l + "\r\n";
   }
   SendRaw(bytes);

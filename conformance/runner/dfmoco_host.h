@@ -101,7 +101,10 @@ class DfmHost {
   int32_t axes() const { return hello_ ? hello_->motor_count : 0; }
 
  private:
+  // A command record for `line`: what the device must answer (see Send()).
+  DfmCommand MakeCommand(std::string_view line, std::string_view error_rule) const;
   void Pump(TimeNs deadline_ns);
+
   void OnBytes(wire::ByteView bytes);
   void EndLine(bool crlf);
   void OnLine(DfmLine line, bool crlf);
