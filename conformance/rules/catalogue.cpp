@@ -476,6 +476,16 @@ std::string_view NeedsText(Needs needs) {
       return "no virtual capability";
     case Needs::kSsThreeAxes:
       return "axes X, Y and Z (StackShot 3X)";
+    case Needs::kDfmMotors:
+      return "hi: axes >= 1";
+    case Needs::kDfmTwoMotors:
+      return "hi: axes >= 2";
+    case Needs::kDfmJogVelocity:
+      return "hi: major version >= 2 (jm velocity)";
+    case Needs::kDfmGoMotion:
+      return "hi: version >= 1.2.7 (go-motion)";
+    case Needs::kDfmBlurRefusal:
+      return "hi: version >= 1.3.1 (bf -1)";
   }
   return "?";
 }
@@ -583,6 +593,8 @@ bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
       return (hi.capabilities & kVirtualCaps) == 0;
     case Needs::kSsThreeAxes:
       return false;  // a StackShot need: no DMC v2 device has it
+    default:         // another protocol's needs
+      return false;
   }
   return false;
 }

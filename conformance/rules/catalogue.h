@@ -45,6 +45,11 @@ enum class Needs {
   kVirtual,    // any of 0x0004, 0x0008, 0x0010, 0x0020
   kNoVirtual,  // none of the virtual capabilities
   // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
+  kDfmMotors,       // `hi` number of axes >= 1
+  kDfmTwoMotors,    // `hi` number of axes >= 2
+  kDfmJogVelocity,  // `hi` major version >= 2 (the jm velocity argument)
+  kDfmGoMotion,     // `hi` version 1.2.7 or later (bf / go)
+  kDfmBlurRefusal,  // `hi` version 1.3.1 or later (`bf -1`)
   // StackShot 3X: what the device reports (stackshot_rules.cpp).
   kSsThreeAxes,  // answers CC_RAIL_STATUS for axes X, Y and Z (a StackShot 3X)
 };

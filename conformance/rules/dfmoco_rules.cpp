@@ -1,12 +1,327 @@
-// The DFMoco rule catalogue (the DFMoco spec; FACTS "DFMoco"): the sketch's
-// reply grammar, `mp` while moving and the dialect differences.
-#include "conformance/rules/catalogue.h"
+// The DFMoco rule catalogue (dfmoco-protocol.txt "Message Format", "Messages",
+// "Go-Motion", "Notes"; ERRATA dfmoco 1-5; FACTS "DFMoco"): the sketch's line
+// and reply grammar, `mp` while moving and the dialect differences. Clauses
+// are quoted from the protocol text; where it is silent the FACTS or ERRATA
+// reading is quoted instead and the source says so.
+#include "conformance/rules/dfmoco_rules.h"
+
+#include <charconv>
 
 namespace moco::conformance {
+namespace {
 
-const std::vector<Rule>& DfmocoRules() {
-  static const std::vector<Rule> rules = {};
-  return rules;
+using L = Level;
+using N = Needs;
+
+const std::vector<Rule> kRules = {
+    // --- Lines ("Message Format") ---
+    {"DFM-LINE-001", L::kMust, N::kNothing, "Every device line ends in \"\\r\\n\"",
+     "Messages are in ASCII text, with trailing \\r\\n", "Message Format; ERRATA 2.1"},
+    {"DFM-LINE-002", L::kMust, N::kNothing,
+     "Device lines hold printable ASCII only (0x20-0x7E before the terminator)",
+     "Messages are in ASCII text, with trailing \\r\\n", "Message Format"},
+    {"DFM-LINE-003", L::kMust, N::kNothing,
+     "The device never leaves a line unfinished (every line it starts ends in its terminator)",
+     "Messages are in ASCII text, with trailing \\r\\n", "Message Format"},
+    {"DFM-LINE-004", L::kMust, N::kNothing,
+     "Every device line is a reply of the protocol (hi, ms, mm, mp, sm, sa, jm, im, pr, zm, np, "
+     "bf, go, or the sketch's two error lines): no stray output",
+     "Messages are given from perspective of DFMoco device.", "Messages; FACTS DFMoco"},
+    {"DFM-LINE-005", L::kMust, N::kNothing,
+     "Apart from `mp` reports and the boot `hi`, every device line answers a command the host "
+     "sent",
+     "Any time a motor is moving, the device should send occasional \"mp\" messages.", "Notes"},
+    {"DFM-LINE-006", L::kShould, N::kNothing,
+     "Device lines are in the plain form of the examples: one space between fields, no leading or "
+     "trailing space, decimals without sign or leading zeros",
+     "EXAMPLE: hi 1 8 1.2.7", "Hello (hi)"},
+    {"DFM-LINE-007", L::kNote, N::kNothing,
+     "A command ended by a bare \"\\n\" is not taken (the sketch's framing), where ERRATA reads "
+     "that it should be",
+     "lines end with `\\r\\n`. Accept a bare `\\n` or `\\r` too.", "ERRATA 2.1; FACTS DFMoco"},
+
+    // --- Hello ("Hello (hi) - initiate communication") ---
+    {"DFM-HI-001", L::kShould, N::kNothing,
+     "The device announces itself with `hi` unprompted when it starts",
+     "At boot the sketch sends `hi <major> <axes> <version>` unprompted", "FACTS DFMoco"},
+    {"DFM-HI-002", L::kMust, N::kNothing,
+     "`hi` is answered with `hi <major version> <number of axes> <full version string>`",
+     "OUT: hi <major version> <number of axes> <full version string>", "Hello (hi)"},
+    {"DFM-HI-003", L::kMust, N::kNothing,
+     "The major version is at least 1 and is the leading number of the full version string",
+     "EXAMPLE: hi 1 8 1.2.7", "Hello (hi); ERRATA 2.2"},
+    {"DFM-HI-004", L::kMust, N::kNothing, "The number of axes is at least 1",
+     "Motor number starts at 1.", "Hello (hi)"},
+    {"DFM-HI-005", L::kShould, N::kNothing,
+     "The full version string is dotted decimal (major.minor.patch)", "EXAMPLE: hi 1 8 1.2.7",
+     "Hello (hi)"},
+    {"DFM-HI-006", L::kMust, N::kNothing,
+     "Every `hi` the device sends (at boot and on request) is the same",
+     "Hello (hi) - initiate communication", "Hello (hi)"},
+    {"DFM-HI-007", L::kNote, N::kNothing,
+     "The device is none of the known sketches (1.2.7, 1.3.0, 1.3.1, 2.0.0 with 4 or 8 axes)",
+     "Version 1.x answers `hi 1 4 1.3.0` / `hi 1 4 1.2.7`. ... Uno drives 4 motors ...; Mega 8.",
+     "FACTS DFMoco"},
+
+    // --- One reply per command ---
+    {"DFM-REPLY-001", L::kMust, N::kNothing,
+     "Every command that has an OUT line is answered (within the answer timeout)",
+     "Messages are given from perspective of DFMoco device. IN: ... OUT: ...", "Messages"},
+    {"DFM-REPLY-002", L::kMust, N::kNothing, "Every command is answered exactly once",
+     "IN: sa OUT: sa", "Messages"},
+    {"DFM-REPLY-003", L::kShould, N::kNothing,
+     "A command word the device does not know gets no reply at all",
+     "Unknown two-letter commands get no reply at all.", "FACTS DFMoco"},
+    {"DFM-REPLY-004", L::kMust, N::kNothing,
+     "Replies come in the order of the commands, also for commands sent back to back",
+     "Outgoing messages wait in a 16-slot queue", "FACTS DFMoco"},
+    {"DFM-REPLY-005", L::kMust, N::kNothing,
+     "A reply to a motor command names the motor of the command",
+     "OUT: sm <motor> ... OUT: jm <motor> ... OUT: pr <motor> <steps/second>", "Messages"},
+
+    // --- Motor status ("Motor Status (ms)"; ERRATA 2.3) ---
+    {"DFM-MS-001", L::kMust, N::kNothing,
+     "`ms` is answered with `ms ` and one 0/1 digit per motor, no spaces",
+     "OUT: ms <0 or 1 for each motor, 1 = moving>", "Motor Status (ms); ERRATA 2.3"},
+    {"DFM-MS-002", L::kMust, N::kNothing,
+     "The `ms` reply has exactly as many digits as the `hi` reply has axes",
+     "`ms` -> `ms ` followed by one `0`/`1` digit per motor, no spaces.", "ERRATA 2.3"},
+    {"DFM-MS-003", L::kMust, N::kDfmMotors, "A motor's `ms` digit is 1 while it moves",
+     "1 = moving", "Motor Status (ms)"},
+    {"DFM-MS-004", L::kMust, N::kDfmMotors,
+     "Every `ms` digit is 0 once every motor has come to rest",
+     "Dragonframe will keep requesting motor status (ms) until the movement is finished.", "Notes"},
+
+    // --- Move motor ("Move Motor (mm)"; ERRATA 2.4) ---
+    {"DFM-MM-001", L::kMust, N::kDfmMotors,
+     "`mm m p` to a position the motor is not at is answered `mm m p` with the target",
+     "EXAMPLE: mm 1 250 (if motor needs to move)", "Move Motor (mm)"},
+    {"DFM-MM-002", L::kMust, N::kDfmMotors,
+     "`mm m p` to the position a resting motor is at is answered `mp m p`",
+     "EXAMPLE: mp 1 250 (if motor was already there)", "Move Motor (mm); ERRATA 2.4"},
+    {"DFM-MM-003", L::kMust, N::kDfmMotors, "After `mm m p` the motor comes to rest on p",
+     "Move Motor (mm) - move a motor to a position", "Move Motor (mm)"},
+
+    // --- Motor position ("Motor Position Query (mp)", "Notes") ---
+    {"DFM-MP-001", L::kMust, N::kDfmMotors,
+     "`mp m` is answered `mp m pos` with the position of the resting motor",
+     "OUT: mp <motor> <step position>", "Motor Position Query (mp)"},
+    {"DFM-MP-002", L::kShould, N::kDfmMotors,
+     "A motor that moves for more than 1.5 s is reported by unprompted `mp` lines while it moves",
+     "Any time a motor is moving, the device should send occasional \"mp\" messages.", "Notes"},
+    {"DFM-MP-003", L::kShould, N::kDfmMotors,
+     "While a motor moves, its `mp` reports are at most 1 s apart (+ the reply deadline)",
+     "While moving, `mp m pos` goes out once per second per moving motor", "FACTS DFMoco"},
+    {"DFM-MP-004", L::kShould, N::kDfmMotors,
+     "An `mp` report follows a motor's stop within 1 s (+ the reply deadline)",
+     "plus once after the motor stops (so the last one can lag the stop by up to 1 s)",
+     "FACTS DFMoco"},
+    {"DFM-MP-005", L::kMust, N::kDfmMotors,
+     "An `mp` the device sends after a motor stopped carries the position the motor rests at",
+     "OUT: mp <motor> <step position>", "Motor Position Query (mp); Notes"},
+    {"DFM-MP-006", L::kMust, N::kDfmMotors,
+     "`mp` reports of a moving motor lie between where the move started and its target",
+     "Any time a motor is moving, the device should send occasional \"mp\" messages.", "Notes"},
+    {"DFM-MP-007", L::kShould, N::kNothing,
+     "Nothing is sent unprompted while every motor rests and no stop is still to be reported",
+     "While moving, `mp m pos` goes out once per second per moving motor, plus once after the "
+     "motor stops",
+     "FACTS DFMoco"},
+
+    // --- New position / zero ("New Position (np)", "Zero Motor (zm)") ---
+    {"DFM-NP-001", L::kMust, N::kDfmMotors,
+     "`np m p` is answered `mp m p` (FACTS) or `np m p` (protocol text)",
+     "OUT: np <motor> <position>", "New Position (np); FACTS DFMoco"},
+    {"DFM-NP-002", L::kMust, N::kDfmMotors, "`np m p` moves nothing and the motor then reports p",
+     "sets the motor's current position to a new value (no movement)", "New Position (np)"},
+    {"DFM-NP-003", L::kNote, N::kDfmMotors,
+     "`np` is answered `np m p` as the protocol text says, where the sketch answers `mp m p`",
+     "`np m p` -> `mp m p` (not `np` as the protocol text says).", "FACTS DFMoco"},
+    {"DFM-ZM-001", L::kMust, N::kDfmMotors,
+     "`zm m` is answered `mp m 0` (FACTS) or `zm m` (protocol text)", "OUT: zm <motor>",
+     "Zero Motor (zm); FACTS DFMoco"},
+    {"DFM-ZM-002", L::kMust, N::kDfmMotors, "`zm m` moves nothing and the motor then reports 0",
+     "resets the motor's current position to zero (no movement)", "Zero Motor (zm)"},
+    {"DFM-ZM-003", L::kNote, N::kDfmMotors,
+     "`zm` is answered `zm m` as the protocol text says, where the sketch answers `mp m 0`",
+     "`zm m` -> `mp m 0`, sent twice.", "FACTS DFMoco"},
+
+    // --- Stopping ("Stop Motor (sm)", "Stop All (sa)") ---
+    {"DFM-SM-001", L::kMust, N::kDfmMotors, "`sm m` is answered `sm m`", "OUT: sm <motor>",
+     "Stop Motor (sm)"},
+    {"DFM-SM-002", L::kMust, N::kDfmMotors,
+     "After `sm m` the moving motor comes to rest short of its target within 5 s",
+     "Stop Motor (sm) - stop a motor fairly quickly", "Stop Motor (sm)"},
+    {"DFM-SM-003", L::kMust, N::kDfmTwoMotors, "`sm m` leaves the other motors moving",
+     "Stop Motor (sm) - stop a motor fairly quickly", "Stop Motor (sm)"},
+    {"DFM-SA-001", L::kMust, N::kNothing, "`sa` is answered `sa`", "IN: sa OUT: sa",
+     "Stop All (sa)"},
+    {"DFM-SA-002", L::kMust, N::kDfmMotors,
+     "After `sa` every moving motor comes to rest short of its target within 5 s",
+     "Stop All (sa) - stop all motors fairly quickly", "Stop All (sa)"},
+
+    // --- Pulse rate ("Pulse Rate (pr)") ---
+    {"DFM-PR-001", L::kMust, N::kDfmMotors, "`pr m v` with v in 100..20000 is answered `pr m v`",
+     "OUT: pr <motor> <steps/second>", "Pulse Rate (pr)"},
+    {"DFM-PR-002", L::kShould, N::kDfmMotors,
+     "A pulse rate outside 100..20000 is clamped, and the answer shows the clamped rate",
+     "`pr m v` -> `pr m v`, v clamped to 100..20000 steps/s", "FACTS DFMoco"},
+    {"DFM-PR-003", L::kMust, N::kDfmMotors,
+     "A motor never moves faster than its pulse rate (a move of d steps at rate v takes at least "
+     "d/v)",
+     "Pulse Rate (pr) - set the maximum steps/second of motor", "Pulse Rate (pr)"},
+
+    // --- Jog and inch ("Jog Motor (jm)", "Inch Motor (im)") ---
+    {"DFM-JM-001", L::kMust, N::kDfmMotors, "`jm m dest` is answered `jm m`", "OUT: jm <motor>",
+     "Jog Motor (jm)"},
+    {"DFM-JM-002", L::kMust, N::kDfmMotors,
+     "A jog moves the motor towards its destination and never past it",
+     "move the motor at a reasonable speed (pulse rate) towards destination", "Jog Motor (jm)"},
+    {"DFM-JM-003", L::kMust, N::kDfmJogVelocity,
+     "With major version 2 or greater, `jm m dest velocity` is accepted (`jm m`) and moves "
+     "towards dest",
+     "velocity will be passed as a third argument if the major version in the hi response is 2 "
+     "or greater.",
+     "Jog Motor (jm); ERRATA 2.2"},
+    {"DFM-IM-001", L::kMust, N::kDfmMotors, "`im m dest` is answered `im m`", "OUT: im <motor>",
+     "Inch Motor (im)"},
+    {"DFM-IM-002", L::kMust, N::kDfmMotors,
+     "An inch from rest moves the motor towards its destination by at least one step, never past "
+     "it",
+     "move the in very small increments towards destination", "Inch Motor (im)"},
+    {"DFM-IM-003", L::kShould, N::kDfmMotors, "One inch moves the motor 16 steps at most",
+     "move the in very small increments towards destination", "Inch Motor (im); FACTS DFMoco"},
+
+    // --- Errors (the protocol text has none; FACTS) ---
+    {"DFM-ERR-001", L::kShould, N::kNothing,
+     "A known command with a wrong argument count or a malformed number is answered `parse "
+     "error`",
+     "A wrong argument count, an invalid motor, or `bf`/`go` while a motor moves answer `parse "
+     "error`.",
+     "FACTS DFMoco"},
+    {"DFM-ERR-002", L::kShould, N::kDfmMotors,
+     "A motor number of 0 or above the number of axes is answered `parse error`",
+     "A wrong argument count, an invalid motor, or `bf`/`go` while a motor moves answer `parse "
+     "error`.",
+     "FACTS DFMoco"},
+    {"DFM-ERR-003", L::kShould, N::kNothing,
+     "A command with 40 or more arguments is answered `error: too many args`",
+     "40 or more arguments answer `error: too many args`.", "FACTS DFMoco"},
+    {"DFM-ERR-004", L::kMust, N::kDfmMotors,
+     "A command the device refuses moves nothing and changes no position",
+     "Motor number starts at 1.", "Messages; FACTS DFMoco"},
+    {"DFM-ERR-005", L::kMust, N::kNothing,
+     "After a refused or unknown command the next valid command is answered normally",
+     "Messages are in ASCII text, with trailing \\r\\n", "Message Format"},
+
+    // --- Go-motion ("Go-Motion (Blur)"; ERRATA 2.5) ---
+    {"DFM-GO-001", L::kMust, N::kDfmGoMotion,
+     "`bf ...` is answered with one `bf <n>` line: n = 1000, the exposure time, or -1 (refused)",
+     "OUT: bf 1000", "Go-Motion (Blur); ERRATA 2.5; FACTS DFMoco"},
+    {"DFM-GO-002", L::kNote, N::kDfmGoMotion,
+     "`bf` answers 1000 for an exposure other than 1000 ms (the sketch), where ERRATA reads the "
+     "number as an echo of the exposure time",
+     "`bf ...` reply: the document's example `bf 1000` is ambiguous; take it as an echo of the "
+     "exposure time.",
+     "ERRATA 2.5; FACTS DFMoco"},
+    {"DFM-GO-003", L::kMust, N::kDfmGoMotion,
+     "After an accepted `bf` the motors move to the start of the 1 s ramp before the exposure "
+     "(within 2 steps) and rest there",
+     "After the device calculates the go-motion move, it starts sending all motors into the "
+     "initial position.",
+     "Go-Motion (Blur); FACTS DFMoco"},
+    {"DFM-GO-004", L::kMust, N::kDfmGoMotion, "`go` is answered `go`", "IN: go OUT: go",
+     "Go-Motion (Blur)"},
+    {"DFM-GO-005", L::kMust, N::kDfmGoMotion,
+     "After `go` each motor runs through the exposure and rests at the end of the 1 s ramp after "
+     "it (within 2 steps)",
+     "At this point the rig should immediately start the go-motion move as described above.",
+     "Go-Motion (Blur); FACTS DFMoco"},
+    {"DFM-GO-006", L::kShould, N::kDfmGoMotion,
+     "The go-motion move lasts the 1 s ramp, the exposure and the 1 s slow-down (within 150 ms)",
+     "The ramp up to speed should take exactly 1 second, even if the device does not need to "
+     "move.",
+     "Go-Motion (Blur); ERRATA 2.5"},
+    {"DFM-GO-007", L::kShould, N::kDfmGoMotion,
+     "`bf` while a motor moves is refused with `parse error`",
+     "`bf exp blur {ch p0 p1 p2}...` is refused while moving.", "FACTS DFMoco"},
+    {"DFM-GO-008", L::kMust, N::kDfmBlurRefusal,
+     "A `bf` whose speed would exceed 20000 steps/s is answered `bf -1` and moves nothing",
+     "reply `bf 1000`, or `bf -1` (1.3.1 and later) if a speed would exceed 20000.",
+     "FACTS DFMoco"},
+
+    // --- Reply deadlines (runner options; the protocol gives no number) ---
+    {"DFM-DL-001", L::kShould, N::kNothing,
+     "`hi` is answered within the deadline (--deadline-ms, default 250 ms)",
+     "Hello (hi) - initiate communication", "Hello (hi)"},
+    {"DFM-DL-002", L::kShould, N::kNothing,
+     "Queries (`ms`, `mp m`) are answered within the deadline",
+     "Dragonframe will keep requesting motor status (ms) until the movement is finished.", "Notes"},
+    {"DFM-DL-003", L::kShould, N::kNothing,
+     "Motor commands (mm, sm, sa, jm, im, pr, zm, np) are answered within the deadline",
+     "Messages are given from perspective of DFMoco device.", "Messages"},
+    {"DFM-DL-004", L::kShould, N::kDfmGoMotion,
+     "`bf` and `go` are answered within the deadline (kind rt)",
+     "At this point the rig should immediately start the go-motion move", "Go-Motion (Blur)"},
+
+    // --- Motors ---
+    {"DFM-MOTOR-001", L::kMust, N::kNothing,
+     "Every motor number in a device line is 1 to the number of axes", "Motor number starts at 1.",
+     "Messages"},
+    {"DFM-MOTOR-002", L::kMust, N::kDfmTwoMotors,
+     "A command to one motor leaves every other motor where it is",
+     "IN: mm <motor> <step position>", "Move Motor (mm)"},
+
+    // --- The outgoing queue ---
+    {"DFM-QUEUE-001", L::kShould, N::kNothing,
+     "Twelve commands sent in one write are all answered, in order",
+     "Outgoing messages wait in a 16-slot queue that drops silently on overflow", "FACTS DFMoco"},
+};
+
+}  // namespace
+
+const std::vector<Rule>& DfmocoRules() { return kRules; }
+
+std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text) {
+  std::array<int, 3> v{0, 0, 0};
+  size_t at = 0;
+  for (size_t part = 0; part < v.size(); ++part) {
+    const char* begin = text.data() + at;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(begin, end, v[part]);
+    if (ec != std::errc()) {
+      if (part == 0) return std::nullopt;
+      break;
+    }
+    at = static_cast<size_t>(ptr - text.data());
+    if (at >= text.size() || text[at] != '.') break;
+    ++at;
+  }
+  return v;
+}
+
+bool DfmocoApplies(Needs needs, const dfmoco::HelloReply& hello) {
+  const auto version = ParseDfmocoVersion(hello.version);
+  switch (needs) {
+    case Needs::kNothing:
+      return true;
+    case Needs::kDfmMotors:
+      return hello.motor_count >= 1;
+    case Needs::kDfmTwoMotors:
+      return hello.motor_count >= 2;
+    case Needs::kDfmJogVelocity:
+      return hello.motor_count >= 1 && hello.protocol_major >= 2;
+    case Needs::kDfmGoMotion:
+      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 2, 7};
+    case Needs::kDfmBlurRefusal:
+      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 3, 1};
+    default:  // another protocol's needs
+      return false;
+  }
+}
+
+bool DfmocoApplies(const Rule& rule, const dfmoco::HelloReply& hello) {
+  return DfmocoApplies(rule.needs, hello);
 }
 
 }  // namespace moco::conformance

@@ -161,6 +161,7 @@ std::vector<CaseInfo> DmcCaseInfos() {
 const ProtocolRunner kRunners[] = {
     {Protocol::kDmc, &RunDmc, &DmcCaseInfos},
     {Protocol::kStackshot, &RunStackshot, &StackshotCaseInfos},
+    {Protocol::kDfmoco, &RunDfmoco, &DfmocoCaseInfos},
 };
 
 }  // namespace

@@ -74,6 +74,8 @@ struct RunReport {
 RunReport RunDmc(Target& target, const RunOptions& options);
 // Runs the StackShot 3X suites against an open `target` (stackshot_runner.cpp).
 RunReport RunStackshot(Target& target, const RunOptions& options);
+// Runs the DFMoco suites against an open `target` (conformance/suites/dfmoco_suites.cpp).
+RunReport RunDfmoco(Target& target, const RunOptions& options);
 
 // Fills report.rules for every rule of `rules` within options.rules: not
 // applicable when `applies` says so, else failed / noted / passed / not
@@ -90,6 +92,9 @@ struct CaseInfo {
 };
 // The StackShot 3X cases (stackshot_runner.cpp).
 std::vector<CaseInfo> StackshotCaseInfos();
+
+// The DFMoco cases (conformance/suites/dfmoco_suites.cpp).
+std::vector<CaseInfo> DfmocoCaseInfos();
 
 // What mococheck can run for one protocol.
 struct ProtocolRunner {

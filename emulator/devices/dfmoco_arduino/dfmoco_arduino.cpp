@@ -41,10 +41,12 @@ TimeNs NextTick(TimeNs t) {
 
 }  // namespace
 
-DfmocoArduino::DfmocoArduino(sim::Scheduler& scheduler, ByteSink& sink, DfmocoProfile profile)
+DfmocoArduino::DfmocoArduino(sim::Scheduler& scheduler, ByteSink& sink, DfmocoProfile profile,
+                             DfmocoFaults faults)
     : scheduler_(scheduler),
       sink_(sink),
       profile_(std::move(profile)),
+      faults_(std::move(faults)),
       dialect_(profile_.Dialect()),
       rig_(scheduler, profile_.MotorCount(), 0, nullptr, &MakeDfmocoPlanner),
       framer_(dfmoco::FramerOptions{dfmoco::LineTermination::kSketch, dfmoco::kMaxLineBytes}),
@@ -231,7 +233,9 @@ void DfmocoArduino::OnLine(std::string_view line) {
     SendDirect(dfmoco::ErrorReply(r.error()));
     return;
   }
+  mute_ = !faults_.silent_word.empty() && dfmoco::CommandWord(*r) == faults_.silent_word;
   Handle(*r);
+  mute_ = false;
   ArmReportTimer();
 }
 
@@ -245,7 +249,12 @@ void DfmocoArduino::Handle(const dfmoco::HostCommand& command) {
   const auto idx = static_cast<int>(m - 1);
   std::visit(wire::Overloaded{
                  [&](const dfmoco::Hello&) { Send(Msg::kHi); },
-                 [&](const dfmoco::MotorStatusQuery&) { Send(Msg::kMs); },
+                 [&](const dfmoco::MotorStatusQuery&) {
+                   Send(Msg::kMs);
+                   if (!faults_.extra_line_after_ms.empty() && !mute_) {
+                     Transmit(faults_.extra_line_after_ms + "\r\n");
+                   }
+                 },
                  [&](const dfmoco::MoveMotor& c) { HandleMove(m, c.position_steps); },
                  [&](const dfmoco::PositionQuery&) { Send(Msg::kMp, idx); },
                  [&](const dfmoco::PositionQueryAll&) { SendDirect(dfmoco::ParseErrorReply{}); },
@@ -459,9 +468,9 @@ void DfmocoArduino::HandleGo() {
 
 // --- output ---------------------------------------------------------------------------
 
-void DfmocoArduino::Send(Msg msg, int motor_index) {
-  if (!running_) return;
-  const TxMsg m{msg, static_cast<uint8_t>(motor_index)};
+void DfmocoArduino::Send(Msg msg, int motor_index, int32_t offset_steps) {
+  if (!running_ || mute_) return;
+  const TxMsg m{msg, static_cast<uint8_t>(motor_index), offset_steps};
   if (ring_count_ == 0 && scheduler_.Now() >= uart_free_ns_) {
     Transmit(Format(m));  // straight into the empty transmit buffer
     return;
@@ -506,11 +515,13 @@ std::string DfmocoArduino::Format(const TxMsg& m) const {
       reply = dfmoco::MoveReply{motor, Saturate32(Motor(motor).Target())};
       break;
     case Msg::kMp:
-      reply = dfmoco::PositionReply{motor, Saturate32(ReportedPosition(motor))};
+      reply = dfmoco::PositionReply{motor, Saturate32(ReportedPosition(motor) + m.offset_steps)};
       break;
     case Msg::kMs: {
       dfmoco::MotorStatusReply ms;
       for (int i = 1; i <= rig_.motor_count(); ++i) ms.moving.push_back(MotorMoving(i));
+      ms.moving.resize(
+          static_cast<size_t>(std::max(1, rig_.motor_count() + faults_.ms_width_delta)));
       reply = std::move(ms);
       break;
     }
@@ -567,7 +578,11 @@ TimeNs DfmocoArduino::NextReportTick(TimeNs after_ns) const {
       FloorDiv(start_ns_ + sim::kDfmocoChunkNs - 1, sim::kDfmocoChunkNs) * sim::kDfmocoChunkNs;
   const TimeNs origin = first_boundary + kFirstReportNs;
   if (after_ns < origin) return origin;
-  return origin + (FloorDiv(after_ns - origin, kReportPeriodNs) + 1) * kReportPeriodNs;
+  return origin + (FloorDiv(after_ns - origin, ReportPeriodNs()) + 1) * ReportPeriodNs();
+}
+
+TimeNs DfmocoArduino::ReportPeriodNs() const {
+  return faults_.report_period_ms > 0 ? faults_.report_period_ms * sim::kNsPerMs : kReportPeriodNs;
 }
 
 void DfmocoArduino::ArmReportTimer() {
@@ -586,7 +601,7 @@ void DfmocoArduino::OnReportTick() {
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     MotorState& s = motors_[Index(m)];
     if (!Motor(m).IsMoving() && !s.report_pending) continue;
-    Send(Msg::kMp, m - 1);
+    Send(Msg::kMp, m - 1, Motor(m).IsMoving() ? 0 : faults_.stop_report_offset_steps);
     s.report_pending = false;
     s.last_report_ns = now;
   }

@@ -43,6 +43,16 @@
 
 namespace moco::devices {
 
+// Deliberate deviations from the sketch, for testing hosts and the conformance
+// runner against a broken device. The default (every field off) is the sketch.
+struct DfmocoFaults {
+  int32_t ms_width_delta = 0;            // `ms` carries motor count + this many digits
+  std::string silent_word;               // commands with this word get no reply ("pr")
+  int64_t report_period_ms = 0;          // periodic `mp` period; 0: the sketch's 1000 ms
+  int32_t stop_report_offset_steps = 0;  // added to the `mp` report of a motor at rest
+  std::string extra_line_after_ms;       // a line (without "\r\n") sent after each `ms` reply
+};
+
 class DfmocoArduino final : public Device, private sim::RigObserver {
  public:
   // Messages outstanding at most: 15 waiting in the 16-slot ring (one slot
@@ -56,7 +66,8 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   static constexpr int32_t kBlurReady = 1000;
 
   // `scheduler` and `sink` must outlive the device. Constructed powered off.
-  DfmocoArduino(sim::Scheduler& scheduler, ByteSink& sink, DfmocoProfile profile = {});
+  DfmocoArduino(sim::Scheduler& scheduler, ByteSink& sink, DfmocoProfile profile = {},
+                DfmocoFaults faults = {});
   ~DfmocoArduino() override;
   DfmocoArduino(const DfmocoArduino&) = delete;
   DfmocoArduino& operator=(const DfmocoArduino&) = delete;
@@ -108,6 +119,7 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   struct TxMsg {
     Msg msg = Msg::kHi;
     uint8_t motor_index = 0;
+    int32_t offset_steps = 0;  // DfmocoFaults::stop_report_offset_steps
   };
   struct MotorState {
     int32_t pulse_rate_steps_per_s = dfmoco::kDefaultPulseRate;
@@ -143,7 +155,7 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   void LeaveGoMotion(int motor);
 
   // Output.
-  void Send(Msg msg, int motor_index = 0);
+  void Send(Msg msg, int motor_index = 0, int32_t offset_steps = 0);
   // `parse error` and `error: too many args`: straight to the UART.
   void SendDirect(const dfmoco::DeviceReply& reply);
   void Transmit(const std::string& bytes);
@@ -155,6 +167,7 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   void ArmReportTimer();
   void OnReportTick();
   sim::TimeNs NextReportTick(sim::TimeNs after_ns) const;
+  sim::TimeNs ReportPeriodNs() const;
 
   // sim::RigObserver
   void OnMotionFinished(int motor_id, sim::TimeNs time_ns, int64_t steps) override;
@@ -162,6 +175,8 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   sim::Scheduler& scheduler_;
   ByteSink& sink_;
   DfmocoProfile profile_;
+  DfmocoFaults faults_;
+  bool mute_ = false;  // DfmocoFaults::silent_word: the command being handled gets no reply
   dfmoco::Dialect dialect_;
   sim::Rig rig_;
   dfmoco::LineFramer framer_;
