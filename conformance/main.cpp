@@ -1,6 +1,7 @@
-// mococheck: the DMC v2 conformance runner (dmc-v2-protocol.txt; ERRATA dmc;
-// docs/rules.md). Drives Dragonframe-style traffic at a device and checks
-// every byte against the rule catalogue. Exit: 0 every MUST rule passed,
+// mococheck: the conformance runner for DMC v2, DFMoco and StackShot 3X
+// devices (the three vendor specs; ERRATA; docs/rules.md). Drives
+// Dragonframe-style traffic at a device and checks every byte against the
+// rule catalogue. Exit: 0 every MUST rule passed,
 // 1 a MUST rule failed, 2 usage or target error.
 #include <algorithm>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include "conformance/runner/runner.h"
 #include "conformance/suites/suites.h"
 #include "conformance/targets/target.h"
+#include "devices/registry.h"
 
 namespace {
 
@@ -47,8 +49,9 @@ bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
 int main(int argc, char** argv) {
   CLI::App app{
       "mococheck: conformance runner for motion-control devices.\n"
-      "Plays Dragonframe-style DMC v2 traffic at a device and checks every byte against the\n"
-      "rules in docs/rules.md. Exit status: 0 when every MUST rule passed, 1 when one failed,\n"
+      "Plays Dragonframe-style traffic (DMC v2, DFMoco or StackShot 3X) at a device and checks\n"
+      "every byte against the rules in docs/rules.md. Exit status: 0 when every MUST rule passed, "
+      "1 when one failed,\n"
       "2 on a usage or target error.\n\n"
       "Examples:\n"
       "  mococheck run --target in-process:dmc16\n"
@@ -60,8 +63,8 @@ int main(int argc, char** argv) {
 
   // --- run ---
   CLI::App* run = app.add_subcommand("run", "Run the conformance suites against a device");
-  std::string target_text, protocol = "dmc", profile, rules_glob, cases_glob, junit, json_path,
-                           shard = "1/1", session_path;
+  std::string target_text, protocol, profile, rules_glob, cases_glob, junit, json_path,
+      shard = "1/1", session_path;
   uint64_t seed = 1;
   int steps = 40;
   uint32_t baud = 115200;
@@ -72,8 +75,8 @@ int main(int argc, char** argv) {
                   "(raw 8N1 at --baud), or tcp:HOST:PORT")
       ->required();
   run->add_option("--protocol", protocol,
-                  "Protocol spoken by the target; only 'dmc' (DMC v2) so far")
-      ->capture_default_str();
+                  "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "
+                  "in-process model's protocol, else dmc");
   run->add_option("--profile", profile, "Device profile (JSON) for an in-process target");
   run->add_option("--rules", rules_glob,
                   "Only check rules whose id matches: globs separated by commas, e.g. 'DMC-HI-*'");
@@ -117,6 +120,9 @@ int main(int argc, char** argv) {
   // --- cases ---
   CLI::App* cases =
       app.add_subcommand("cases", "List the scenario cases (suite/name) and what they need");
+  std::string cases_protocol = "dmc";
+  cases->add_option("--protocol", cases_protocol, "dmc, dfmoco or stackshot")
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -130,11 +136,17 @@ int main(int argc, char** argv) {
   }
 
   if (*cases) {
-    for (const Case& k : DmcCases()) {
+    const auto p = ParseProtocol(cases_protocol);
+    if (!p) return Fail("--protocol " + cases_protocol + ": give dmc, dfmoco or stackshot");
+    const ProtocolRunner* runner = FindRunner(*p);
+    if (runner == nullptr) {
+      return Fail("no suites for " + std::string(ProtocolTitle(*p)) + " yet");
+    }
+    for (const CaseInfo& k : runner->cases()) {
       std::string name = k.suite + "/" + k.name;
       name.resize(std::max<size_t>(name.size() + 2, 26), ' ');
       std::cout << name << k.summary;
-      if (k.needs != Needs::kNothing) std::cout << " [needs " << NeedsText(k.needs) << "]";
+      if (!k.needs.empty()) std::cout << " [needs " << k.needs << "]";
       std::cout << "\n";
     }
     return 0;
@@ -144,9 +156,33 @@ int main(int argc, char** argv) {
     return 0;
   }
 
-  if (protocol != "dmc") {
-    return Fail("--protocol " + protocol +
-                ": only 'dmc' (DMC v2) has rules so far; DFMoco and StackShot are not covered yet");
+  const auto spec = ParseTargetSpec(target_text);
+  if (const auto* err = std::get_if<std::string>(&spec)) return Fail(*err);
+  const TargetSpec& ts = std::get<TargetSpec>(spec);
+  // The protocol: as given, else the in-process model's, else DMC v2.
+  Protocol proto = Protocol::kDmc;
+  std::optional<Protocol> model_proto;
+  if (ts.kind == TargetSpec::Kind::kInProcess) {
+    if (const auto* m = moco::devices::FindDeviceModel(ts.address)) {
+      model_proto = ParseProtocol(moco::wire::ProtocolName(m->protocol));
+    }
+  }
+  if (!protocol.empty()) {
+    const auto p = ParseProtocol(protocol);
+    if (!p) return Fail("--protocol " + protocol + ": give dmc, dfmoco or stackshot");
+    if (model_proto && *model_proto != *p) {
+      return Fail("--protocol " + protocol + " does not match in-process:" + ts.address +
+                  ", which speaks " + std::string(ProtocolName(*model_proto)) +
+                  "; drop --protocol or pick the matching model");
+    }
+    proto = *p;
+  } else if (model_proto) {
+    proto = *model_proto;
+  }
+  const ProtocolRunner* runner = FindRunner(proto);
+  if (runner == nullptr) {
+    return Fail(std::string(ProtocolTitle(proto)) +
+                " has no conformance suites in this build; use a DMC v2 target");
   }
   RunOptions options;
   if (!ParseShard(shard, options.shard_index, options.shard_count)) {
@@ -154,8 +190,11 @@ int main(int argc, char** argv) {
   }
   if (!rules_glob.empty()) {
     bool any = false;
-    for (const Rule& r : DmcRules()) any = any || GlobMatch(rules_glob, r.id);
-    if (!any) return Fail("--rules " + rules_glob + " matches no rule; see 'mococheck rules'");
+    for (const Rule& r : RulesFor(proto)) any = any || GlobMatch(rules_glob, r.id);
+    if (!any) {
+      return Fail("--rules " + rules_glob + " matches no " + std::string(ProtocolTitle(proto)) +
+                  " rule; see 'mococheck rules'");
+    }
   }
   options.rules = rules_glob;
   options.cases = cases_glob;
@@ -184,9 +223,6 @@ int main(int argc, char** argv) {
   options.random.steps = steps;
   options.random.session_path = session_path;
 
-  const auto spec = ParseTargetSpec(target_text);
-  if (const auto* err = std::get_if<std::string>(&spec)) return Fail(*err);
-  const TargetSpec& ts = std::get<TargetSpec>(spec);
   if (!profile.empty() && ts.kind != TargetSpec::Kind::kInProcess) {
     return Fail("--profile applies to in-process targets only; an external device has its own");
   }
@@ -195,10 +231,10 @@ int main(int argc, char** argv) {
   std::unique_ptr<Target> target = std::move(std::get<std::unique_ptr<Target>>(made));
   if (auto err = target->Open()) return Fail(*err);
 
-  const RunReport report = RunDmc(*target, options);
-  if (!report.hi && !target->VirtualClock()) {
-    std::cerr << "mococheck: " << target->Name()
-              << " gave no HI answer; is a DMC v2 device there, at this baud rate?\n";
+  const RunReport report = runner->run(*target, options);
+  if (report.device.empty() && !target->VirtualClock()) {
+    std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a "
+              << ProtocolTitle(proto) << " device there, at this baud rate?\n";
   }
   if (quiet) {
     const std::string text = ConsoleReport(report, false);

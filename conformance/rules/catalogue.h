@@ -1,9 +1,12 @@
-// The catalogue of DMC v2 conformance rules (dmc-v2-protocol.txt, ERRATA dmc
-// 1-11, FACTS "DMC v2"): each rule names the spec clause it enforces, its
-// level and what the device must advertise for it to apply.
+// The catalogue of conformance rules for the three device protocols (DMC v2:
+// dmc-v2-protocol.txt, ERRATA dmc 1-11, FACTS "DMC v2"; DFMoco; StackShot 3X):
+// each rule names the spec clause it enforces, its level and what the device
+// must advertise for it to apply. Rule ids carry the protocol's prefix
+// ("DMC-", "DFM-", "SS-").
 #ifndef MOCO_CONFORMANCE_RULES_CATALOGUE_H_
 #define MOCO_CONFORMANCE_RULES_CATALOGUE_H_
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -11,6 +14,16 @@
 #include "wire/dmc.h"
 
 namespace moco::conformance {
+
+// The protocols mococheck checks.
+enum class Protocol { kDmc, kDfmoco, kStackshot };
+inline constexpr Protocol kAllProtocols[] = {Protocol::kDmc, Protocol::kDfmoco,
+                                             Protocol::kStackshot};
+std::string_view ProtocolName(Protocol p);   // "dmc", "dfmoco", "stackshot"
+std::string_view ProtocolTitle(Protocol p);  // "DMC v2", "DFMoco", "StackShot 3X"
+std::string_view RuleIdPrefix(Protocol p);   // "DMC-", "DFM-", "SS-"
+// Accepts the names above (and "dmc2", "stackshot3x"); nullopt otherwise.
+std::optional<Protocol> ParseProtocol(std::string_view text);
 
 // MUST failures fail the run (exit 1); SHOULD failures are reported only;
 // NOTE marks a reading the spec leaves open (ERRATA) and never fails.
@@ -31,6 +44,8 @@ enum class Needs {
   kLooping,    // capability 0x0200
   kVirtual,    // any of 0x0004, 0x0008, 0x0010, 0x0020
   kNoVirtual,  // none of the virtual capabilities
+  // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
+  // StackShot 3X: what the device reports (stackshot_rules.cpp).
 };
 std::string_view NeedsText(Needs needs);
 
@@ -45,10 +60,18 @@ struct Rule {
 
 // Every DMC v2 rule, ordered by id family as the catalogue lists them.
 const std::vector<Rule>& DmcRules();
-// nullptr for an unknown id.
+// Every DFMoco rule (conformance/rules/dfmoco_rules.cpp).
+const std::vector<Rule>& DfmocoRules();
+// Every StackShot 3X rule (conformance/rules/stackshot_rules.cpp).
+const std::vector<Rule>& StackshotRules();
+// The rules of one protocol.
+const std::vector<Rule>& RulesFor(Protocol p);
+// Total number of rules over every protocol.
+size_t RuleCount();
+// Searches every protocol's rules; nullptr for an unknown id.
 const Rule* FindRule(std::string_view id);
 
-// Whether `rule` applies to a device that answered HI with `hi`.
+// Whether DMC `rule` applies to a device that answered HI with `hi`.
 bool Applies(const Rule& rule, const dmc::HiResponse& hi);
 
 // Shell-style match: '*' any run, '?' one character; a comma separates

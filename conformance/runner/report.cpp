@@ -48,21 +48,14 @@ std::string EvidenceText(const Evidence& e) {
   return s;
 }
 
-std::string HiLine(const dmc::HiResponse& hi) {
-  char caps[16];
-  std::snprintf(caps, sizeof caps, "0x%04x", hi.capabilities);
-  return "\"" + hi.NameText() + "\" fw " + std::to_string(hi.fw_major) + "." +
-         std::to_string(hi.fw_minor) + "." + std::to_string(hi.fw_rev) + ", " +
-         std::to_string(hi.motor_count) + " motors, " + std::to_string(hi.dmx_count) +
-         " DMX, GIO " + std::to_string(hi.gio_out_count) + " out / " +
-         std::to_string(hi.gio_in_count) + " in, capabilities " + caps;
-}
-
 }  // namespace
 
 std::string ConsoleReport(const RunReport& report, bool verbose) {
-  std::string s = "mococheck: " + report.target + " (DMC v2)\n";
-  s += report.hi ? "device: " + HiLine(*report.hi) + "\n" : "device: no HI answer\n";
+  const auto protocol = ParseProtocol(report.protocol);
+  std::string s = "mococheck: " + report.target + " (" +
+                  std::string(protocol ? ProtocolTitle(*protocol) : report.protocol) + ")\n";
+  s += report.device.empty() ? "device: no answer to the introduction\n"
+                             : "device: " + report.device + "\n";
   s += "\n";
   for (const CaseResult& c : report.cases) {
     const std::string full = c.suite + "/" + c.name;
@@ -157,21 +150,7 @@ nlohmann::json JsonReport(const RunReport& report) {
   j["rules_filter"] = report.options.rules;
   j["shard"] = std::to_string(report.options.shard_index + 1) + "/" +
                std::to_string(report.options.shard_count);
-  if (report.hi) {
-    const auto& hi = *report.hi;
-    j["device"] = {{"name", hi.NameText()},
-                   {"firmware", std::to_string(hi.fw_major) + "." + std::to_string(hi.fw_minor) +
-                                    "." + std::to_string(hi.fw_rev)},
-                   {"motor_count", hi.motor_count},
-                   {"dmx_count", hi.dmx_count},
-                   {"gio_out_count", hi.gio_out_count},
-                   {"gio_in_count", hi.gio_in_count},
-                   {"hw_limit_count", hi.hw_limit_count},
-                   {"upload_frame_count", hi.upload_frame_count},
-                   {"capabilities", hi.capabilities}};
-  } else {
-    j["device"] = nullptr;
-  }
+  j["device"] = report.device.empty() ? json(nullptr) : report.device_info;
   auto evidence = [](const RuleOutcome& o) {
     json a = json::array();
     for (const Evidence& e : o.evidence) {
@@ -224,7 +203,7 @@ std::string JunitReport(const RunReport& report) {
   size_t tests = 0, failures = 0, skipped = 0;
   std::string body;
   for (const CaseResult& c : report.cases) {
-    const std::string cls = "mococheck.dmc." + c.suite + "." + c.name;
+    const std::string cls = "mococheck." + report.protocol + "." + c.suite + "." + c.name;
     if (!c.applicable) {
       body += "    <testcase classname=\"" + Xml(cls) + "\" name=\"(case)\" time=\"0\">\n";
       body +=
@@ -257,9 +236,9 @@ std::string JunitReport(const RunReport& report) {
   std::string s = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   s += "<testsuites name=\"mococheck\" tests=\"" + std::to_string(tests) + "\" failures=\"" +
        std::to_string(failures) + "\">\n";
-  s += "  <testsuite name=\"mococheck.dmc\" tests=\"" + std::to_string(tests) + "\" failures=\"" +
-       std::to_string(failures) + "\" skipped=\"" + std::to_string(skipped) + "\" time=\"" +
-       std::to_string(report.wall_s) + "\">\n";
+  s += "  <testsuite name=\"mococheck." + report.protocol + "\" tests=\"" + std::to_string(tests) +
+       "\" failures=\"" + std::to_string(failures) + "\" skipped=\"" + std::to_string(skipped) +
+       "\" time=\"" + std::to_string(report.wall_s) + "\">\n";
   s += "    <properties><property name=\"target\" value=\"" + Xml(report.target) +
        "\"/><property name=\"seed\" value=\"" + std::to_string(report.options.random.seed) +
        "\"/></properties>\n";

@@ -4,6 +4,7 @@
 #include "conformance/runner/runner.h"
 
 #include <chrono>
+#include <cstdio>
 
 namespace moco::conformance {
 
@@ -43,6 +44,26 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     DmcHost host(target, probe, options.host);
     if (const auto* hi = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}))) report.hi = *hi;
     host.Close();
+  }
+  if (report.hi) {
+    const dmc::HiResponse& h = *report.hi;
+    char caps[16];
+    std::snprintf(caps, sizeof caps, "0x%04x", h.capabilities);
+    const std::string fw = std::to_string(h.fw_major) + "." + std::to_string(h.fw_minor) + "." +
+                           std::to_string(h.fw_rev);
+    report.device = "\"" + h.NameText() + "\" fw " + fw + ", " + std::to_string(h.motor_count) +
+                    " motors, " + std::to_string(h.dmx_count) + " DMX, GIO " +
+                    std::to_string(h.gio_out_count) + " out / " + std::to_string(h.gio_in_count) +
+                    " in, capabilities " + caps;
+    report.device_info = {{"name", h.NameText()},
+                          {"firmware", fw},
+                          {"motor_count", h.motor_count},
+                          {"dmx_count", h.dmx_count},
+                          {"gio_out_count", h.gio_out_count},
+                          {"gio_in_count", h.gio_in_count},
+                          {"hw_limit_count", h.hw_limit_count},
+                          {"upload_frame_count", h.upload_frame_count},
+                          {"capabilities", h.capabilities}};
   }
   const dmc::HiResponse hi = report.hi.value_or(dmc::HiResponse{});
 
@@ -86,10 +107,18 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     report.cases.push_back(std::move(result));
   }
 
-  for (const Rule& rule : DmcRules()) {
+  SummarizeRules(report, DmcRules(), [&](const Rule& rule) { return Applies(rule, hi); });
+  report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return report;
+}
+
+void SummarizeRules(RunReport& report, const std::vector<Rule>& rules,
+                    const std::function<bool(const Rule&)>& applies) {
+  const RunOptions& options = report.options;
+  for (const Rule& rule : rules) {
     if (!options.rules.empty() && !GlobMatch(options.rules, rule.id)) continue;
     RuleSummary s;
-    if (!Applies(rule, hi)) {
+    if (!applies(rule)) {
       s.status = Status::kNotApplicable;
     } else {
       bool noted = false;
@@ -110,8 +139,31 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     }
     report.rules.emplace(std::string(rule.id), s);
   }
-  report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  return report;
+}
+
+namespace {
+
+std::vector<CaseInfo> DmcCaseInfos() {
+  std::vector<CaseInfo> out;
+  for (const Case& k : DmcCases()) {
+    out.push_back({k.suite, k.name, k.summary,
+                   k.needs == Needs::kNothing ? std::string() : std::string(NeedsText(k.needs))});
+  }
+  return out;
+}
+
+// One entry per protocol with suites.
+const ProtocolRunner kRunners[] = {
+    {Protocol::kDmc, &RunDmc, &DmcCaseInfos},
+};
+
+}  // namespace
+
+const ProtocolRunner* FindRunner(Protocol p) {
+  for (const ProtocolRunner& r : kRunners) {
+    if (r.protocol == p) return &r;
+  }
+  return nullptr;
 }
 
 }  // namespace moco::conformance

@@ -1,14 +1,17 @@
-// The mococheck runner (ARCHITECTURE "conformance"): reads the device's HI,
-// runs the applicable cases of every suite on the target and gathers the rule
-// outcomes per case and over the run.
+// The mococheck runner (ARCHITECTURE "conformance"): reads how the device
+// introduces itself, runs the applicable cases of every suite of its protocol
+// on the target and gathers the rule outcomes per case and over the run.
 #ifndef MOCO_CONFORMANCE_RUNNER_RUNNER_H_
 #define MOCO_CONFORMANCE_RUNNER_RUNNER_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "conformance/runner/host.h"
 #include "conformance/runner/verdicts.h"
@@ -47,9 +50,13 @@ struct RuleSummary {
 
 struct RunReport {
   std::string target;
-  std::string protocol = "dmc";
+  std::string protocol = "dmc";  // ProtocolName()
   RunOptions options;
-  std::optional<dmc::HiResponse> hi;
+  std::optional<dmc::HiResponse> hi;  // DMC v2 only
+  // How the device introduced itself: one line for the console ("" when it
+  // did not answer) and the same as fields for the JSON report.
+  std::string device;
+  nlohmann::json device_info;
   std::vector<CaseResult> cases;
   std::map<std::string, RuleSummary, std::less<>> rules;  // every rule within the filter
   double wall_s = 0;
@@ -61,6 +68,29 @@ struct RunReport {
 
 // Runs the DMC v2 suites against an open `target`.
 RunReport RunDmc(Target& target, const RunOptions& options);
+
+// Fills report.rules for every rule of `rules` within options.rules: not
+// applicable when `applies` says so, else failed / noted / passed / not
+// exercised from the case outcomes. Every protocol's runner ends with it.
+void SummarizeRules(RunReport& report, const std::vector<Rule>& rules,
+                    const std::function<bool(const Rule&)>& applies);
+
+// One line of `mococheck cases`.
+struct CaseInfo {
+  std::string suite;
+  std::string name;
+  std::string summary;
+  std::string needs;  // "" when the case needs nothing
+};
+
+// What mococheck can run for one protocol.
+struct ProtocolRunner {
+  Protocol protocol;
+  RunReport (*run)(Target& target, const RunOptions& options);
+  std::vector<CaseInfo> (*cases)();
+};
+// nullptr when the protocol has no runner.
+const ProtocolRunner* FindRunner(Protocol p);
 
 // 0 when every MUST rule passed, 1 when one failed.
 int ExitCode(const RunReport& report);

@@ -276,11 +276,6 @@ std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& 
   switch (spec.kind) {
     case TargetSpec::Kind::kInProcess: {
       const devices::DeviceModel* model = devices::FindDeviceModel(spec.address);
-      if (model != nullptr && model->protocol != wire::Protocol::kDmc) {
-        return "in-process model \"" + spec.address + "\" speaks " +
-               std::string(wire::ProtocolName(model->protocol)) +
-               "; mococheck has rules for DMC v2 only so far: use in-process:dmc16";
-      }
       if (model == nullptr) {
         std::string known;
         for (const auto& m : devices::DeviceModels())
