@@ -479,21 +479,22 @@ void VirtualAxes::OnJogTick() {
 // --- reports --------------------------------------------------------------------------------
 
 std::variant<dmc::VirtPositionReport, AckCode> VirtualAxes::Position() const {
-  if (!config_) return AckCode::kErrGeneral;
+  dmc::VirtPositionReport r;
+  // "This and below are only if device supports aim point".
+  if ((advertised_ & dmc::kCapAimPoint) != 0) {
+    r.aim = dmc::VirtAim{aim_.enable, aim_.x_x1000, aim_.y_x1000, aim_.z_x1000};
+  }
+  // Without a rig every virtual axis reads 0.
+  if (!config_) return r;
   const auto v = physics::Forward(config_->geometry, Joints(false), AimWorking());
   if (!v) return AckCode::kErrNotInPosition;
   const Wire6 w = ToWire(*v);
-  dmc::VirtPositionReport r;
   r.track_x100000 = ToWireInt(w[0] * kPositionScale);
   r.ew_x100000 = ToWireInt(w[1] * kPositionScale);
   r.ns_x100000 = ToWireInt(w[2] * kPositionScale);
   r.pan_x100000 = ToWireInt(w[3] * kPositionScale);
   r.tilt_x100000 = ToWireInt(w[4] * kPositionScale);
   r.roll_x100000 = ToWireInt(w[5] * kPositionScale);
-  // "This and below are only if device supports aim point".
-  if ((advertised_ & dmc::kCapAimPoint) != 0) {
-    r.aim = dmc::VirtAim{aim_.enable, aim_.x_x1000, aim_.y_x1000, aim_.z_x1000};
-  }
   return r;
 }
 

@@ -54,7 +54,8 @@ class VirtualAxes {
   dmc::AckCode Stop(const dmc::VirtStop& m);
   dmc::AckCode Jog(const dmc::VirtJog& m);
   dmc::AckCode JogOnLine(const dmc::VirtJogOnLine& m);
-  // MSG_VIRT_GET_POSITION's response, or the error code.
+  // MSG_VIRT_GET_POSITION's response (zeros before VIRT_CONFIG), or
+  // ERR_NOT_IN_POSITION when the boom sits outside its compensation table.
   std::variant<dmc::VirtPositionReport, dmc::AckCode> Position() const;
   // MSG_VIRT_AIM_POINT: the configuration now in force (echoed), or the error.
   std::variant<dmc::VirtAimPoint, dmc::AckCode> SetAimPoint(const dmc::VirtAimPoint& m);

@@ -84,14 +84,17 @@ TEST(Dmc16Virtual, WithoutTheAimBitAimPointIsUnsupportedAndPositionsAre24Bytes) 
 
 // --- VIRT_CONFIG ----------------------------------------------------------------------------
 
-TEST(Dmc16VirtConfig, PositionsNeedAConfigurationAndTypeZeroDropsIt) {
+TEST(Dmc16VirtConfig, MotionNeedsAConfigurationAndTypeZeroDropsIt) {
   Host h(VirtualProfile());
-  EXPECT_EQ(h.Request(dmc::VirtGetPositionRequest{}), AckCode::kErrGeneral);
+  // Before VIRT_CONFIG every axis reads 0 and nothing can move.
+  EXPECT_EQ(Positions(h), (dmc::VirtPositionReport{0, 0, 0, 0, 0, 0, dmc::VirtAim{}}));
   EXPECT_EQ(h.Request(dmc::VirtMove{1, 0}), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::VirtJogOnLine{2, 100}), AckCode::kErrGeneral);
   ASSERT_EQ(h.Request(Config(BoomRig())), kOk);
-  EXPECT_EQ(h.Request(dmc::VirtGetPositionRequest{}), std::nullopt);  // the specific response
+  EXPECT_EQ(Positions(h).track_x100000, 250000);
   ASSERT_EQ(h.Request(dmc::VirtConfig{dmc::VirtRigNone{}}), kOk);
-  EXPECT_EQ(h.Request(dmc::VirtGetPositionRequest{}), AckCode::kErrGeneral);
+  EXPECT_EQ(Positions(h).track_x100000, 0);
+  EXPECT_EQ(h.Request(dmc::VirtMove{1, 0}), AckCode::kErrGeneral);
 }
 
 TEST(Dmc16VirtConfig, BadMotorsScalesGeometryAndTablesAreOutOfRange) {
