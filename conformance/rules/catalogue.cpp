@@ -432,6 +432,61 @@ const std::vector<Rule> kRules = {
      "vTrack POS ... vRoll POS DWORD ... Aim pt enabled BYTE This and below are only if device "
      "supports aim point",
      "MSG_VIRT_GET_POSITION"},
+    {"DMC-VIRT-002", L::kMust, N::kVirtualBoomRig,
+     "VIRT_CONFIG boom-swing-track (TYPE 1) is acknowledged OK in each length form (93, 97, 577, "
+     "581 data bytes)",
+     "TYPE = 1 (Boom-Swing-Track) ... Boom Compensation Table DWORD * 121 Optional ... SAFE "
+     "DISTANCE DWORD Safe distance * 1000 (optional)",
+     "MSG_VIRT_CONFIG; ERRATA 1.7"},
+    {"DMC-VIRT-003", L::kMust, N::kVirtualBoomRig,
+     "VIRT_MOVE to a reachable target is acknowledged OK and VIRT_GET_POSITION then reports the "
+     "target on that axis (within 0.002)",
+     "Send the virtual motor to a new position. POSITION DWORD Target position * 100000",
+     "MSG_VIRT_MOVE; MSG_VIRT_GET_POSITION"},
+    {"DMC-VIRT-004", L::kMust, N::kVirtualBoomRig,
+     "VIRT_MOVE to a target the rig cannot reach is refused and moves nothing",
+     "Inverse: P = target - R o; b = asin(P.z / L) ... |P.z| > L or |P.x| > h is unreachable "
+     "(ERR_RANGE).",
+     "FACTS \"Boom rig virtual axes\""},
+    {"DMC-VIRT-005", L::kShould, N::kVirtualBoomRig,
+     "An unreachable VIRT_MOVE target is refused with ERR_RANGE",
+     "ERR_RANGE 0x0014 A parameter was out of range; |P.z| > L or |P.x| > h is unreachable "
+     "(ERR_RANGE).",
+     "MSG_FLAG_ACK; FACTS \"Boom rig virtual axes\""},
+    {"DMC-VIRT-006", L::kShould, N::kVirtual,
+     "VIRT_MOVE and VIRT_STOP with virtual motor 0 or 7 are refused with ERR_RANGE",
+     "Virtual axis numbers: TRACK=1, EW=2, NS=3, PAN=4, TILT=5, ROLL=6.",
+     "FACTS \"Boom rig virtual axes\"; ERRATA 1.11"},
+    {"DMC-VIRT-007", L::kMust, N::kVirtualBoomRig,
+     "VIRT_STOP during a virtual move is acknowledged OK and the rig comes to rest short of the "
+     "target",
+     "Stop the virtual motor.", "MSG_VIRT_STOP"},
+    {"DMC-VIRT-008", L::kMust, N::kVirtualBoomRig,
+     "VIRT_JOG is acknowledged OK and reaches its destination; VIRT_JOG_ON_LINE is acknowledged OK "
+     "and speed 0 or VIRT_STOP brings the rig to rest",
+     "Instruct the device to jog/inch a virtual motor. ... Instruct the device to jog along the "
+     "direction of the camera.",
+     "MSG_VIRT_JOG; MSG_VIRT_JOG_ON_LINE; ERRATA 1.10"},
+    {"DMC-VIRT-009", L::kMust, N::kAimPoint,
+     "VIRT_AIM_POINT is answered with the same data (13 bytes: ENABLE, AIM-X, AIM-Y, AIM-Z)",
+     "The response contains the same data.", "MSG_VIRT_AIM_POINT"},
+    {"DMC-VIRT-010", L::kShould, N::kAimPoint,
+     "VIRT_GET_POSITION's aim fields report the aim point in force",
+     "Aim pt enabled BYTE This and below are only if device supports aim point; aim-x DWORD X * "
+     "1000",
+     "MSG_VIRT_GET_POSITION"},
+    {"DMC-VIRT-011", L::kShould, N::kVirtual,
+     "The four virtual mode capabilities (0x0004, 0x0008, 0x0010, 0x0020) are advertised together",
+     "Dragonframe reportedly refused a device that advertised only the boom-swing-track "
+     "capability bit; that firmware advertises all four virtual bits.",
+     "FACTS \"Boom rig virtual axes\""},
+    {"DMC-VIRT-012", L::kNote, N::kVirtual,
+     "VIRT_CONFIG TYPE numbers the rigs 0..4 as the spec does; a device accepting TYPE 8 as x-y-z "
+     "takes a dmc-lite-derived firmware's bit-flag numbering",
+     "TYPE BYTE 0=none 1=boom-swing-track 2=swing-pan, 3=y-swing-track 4=x-y-z; a "
+     "dmc-lite-derived header instead uses bit flags (0x01 BST, 0x02 swing-pan, 0x04 "
+     "y-swing-track, 0x08 x-y-z)",
+     "MSG_VIRT_CONFIG; FACTS \"Boom rig virtual axes\""},
 };
 
 }  // namespace
@@ -474,6 +529,10 @@ std::string_view NeedsText(Needs needs) {
       return "a virtual capability (0x0004-0x0020)";
     case Needs::kNoVirtual:
       return "no virtual capability";
+    case Needs::kVirtualBoomRig:
+      return "capability 0x0004 (boom-swing-track), MOTOR COUNT >= 6";
+    case Needs::kAimPoint:
+      return "capability 0x0040 (aim point)";
     case Needs::kSsThreeAxes:
       return "axes X, Y and Z (StackShot 3X)";
     case Needs::kDfmMotors:
@@ -591,6 +650,10 @@ bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
       return (hi.capabilities & kVirtualCaps) != 0;
     case Needs::kNoVirtual:
       return (hi.capabilities & kVirtualCaps) == 0;
+    case Needs::kVirtualBoomRig:
+      return (hi.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && hi.motor_count >= 6;
+    case Needs::kAimPoint:
+      return (hi.capabilities & dmc::kCapAimPoint) != 0;
     case Needs::kSsThreeAxes:
       return false;  // a StackShot need: no DMC v2 device has it
     default:         // another protocol's needs

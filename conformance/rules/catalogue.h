@@ -33,17 +33,19 @@ std::string_view LevelName(Level level);  // "MUST", "SHOULD", "NOTE"
 // What the device's MSG_HI must advertise for a rule to apply.
 enum class Needs {
   kNothing,
-  kMotors,     // MOTOR COUNT >= 1
-  kTwoMotors,  // MOTOR COUNT >= 2
-  kDmx,        // DMX COUNT >= 1
-  kGioOut,     // GIO OUT COUNT >= 1
-  kGioIn,      // GIO INPUT COUNT >= 1
-  kRealTime,   // capability 0x0001
-  kGoMotion,   // capability 0x0002
-  kGoMotion2,  // capability 0x0080
-  kLooping,    // capability 0x0200
-  kVirtual,    // any of 0x0004, 0x0008, 0x0010, 0x0020
-  kNoVirtual,  // none of the virtual capabilities
+  kMotors,          // MOTOR COUNT >= 1
+  kTwoMotors,       // MOTOR COUNT >= 2
+  kDmx,             // DMX COUNT >= 1
+  kGioOut,          // GIO OUT COUNT >= 1
+  kGioIn,           // GIO INPUT COUNT >= 1
+  kRealTime,        // capability 0x0001
+  kGoMotion,        // capability 0x0002
+  kGoMotion2,       // capability 0x0080
+  kLooping,         // capability 0x0200
+  kVirtual,         // any of 0x0004, 0x0008, 0x0010, 0x0020
+  kNoVirtual,       // none of the virtual capabilities
+  kVirtualBoomRig,  // capability 0x0004 (boom-swing-track) and MOTOR COUNT >= 6
+  kAimPoint,        // capability 0x0040
   // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
   kDfmMotors,       // `hi` number of axes >= 1
   kDfmTwoMotors,    // `hi` number of axes >= 2

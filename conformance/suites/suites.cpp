@@ -6,7 +6,9 @@
 #include "conformance/suites/suites.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace moco::conformance {
 namespace {
@@ -741,6 +743,190 @@ void VirtPosition(CaseContext& c) {
          Show(r));
 }
 
+// A boom-swing-track rig on motors 1..6 (boom 2.0 + level extension 0.5,
+// angles 1000 steps per degree, track 10000 steps per unit), every POSITION 0.
+constexpr int32_t kVirtAngleSpu = 1000;
+constexpr int32_t kVirtTrackSpu = 10000;
+constexpr int32_t kVirtTolerance = 200;  // 0.002 units or degrees, x100000
+
+dmc::VirtRigBoomSwingTrack TestBoomRig() {
+  dmc::VirtRigBoomSwingTrack b;
+  b.boom = {1, kVirtAngleSpu, 0};
+  b.swing = {2, kVirtAngleSpu, 0};
+  b.track = {3, kVirtTrackSpu, 0};
+  b.pan = {4, kVirtAngleSpu, 0};
+  b.tilt = {5, kVirtAngleSpu, 0};
+  b.roll = {6, kVirtAngleSpu, 0};
+  b.boom_length_x1000 = 2000;
+  b.boom_ext_x1000 = 500;
+  return b;
+}
+
+bool ConfigureBoomRig(CaseContext& c) {
+  return ExpectOk(c, "DMC-VIRT-002", c.host.Call(dmc::VirtConfig{TestBoomRig()}));
+}
+
+void Unconfigure(CaseContext& c) { c.host.Call(dmc::VirtConfig{dmc::VirtRigNone{}}); }
+
+std::optional<dmc::VirtPositionReport> VirtPositions(DmcHost& h) {
+  const auto* p = As<dmc::VirtPositionReport>(h.Call(dmc::VirtGetPositionRequest{}));
+  if (p == nullptr) return std::nullopt;
+  return *p;
+}
+
+void ExpectVirtAt(CaseContext& c, std::string_view rule, const char* axis, int32_t got,
+                  int32_t want) {
+  c.v.Check(rule, std::abs(int64_t{got} - want) <= kVirtTolerance, [&] {
+    return EvOf(c.host, nullptr, std::string(axis) + " " + std::to_string(want) + " (x100000)",
+                std::to_string(got));
+  });
+}
+
+void VirtConfigForms(CaseContext& c) {
+  DmcHost& h = c.host;
+  constexpr uint32_t kModes = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                              dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
+  char caps[16];
+  std::snprintf(caps, sizeof caps, "0x%04x", c.hi.capabilities);
+  Expect(c, "DMC-VIRT-011", (c.hi.capabilities & kModes) == kModes,
+         "capabilities with 0x003c all set", caps);
+  if ((c.hi.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && c.hi.motor_count >= 6) {
+    // ERRATA 1.7: the table and SAFE DISTANCE are each optional.
+    dmc::VirtRigBoomSwingTrack b = TestBoomRig();
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 93 bytes
+    b.safe_distance_x1000 = 500;
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 97
+    // A table in which the boom's present position is geometric 0 degrees,
+    // one degree of axis per degree of angle.
+    const auto p = GetPositions(h);
+    const double boom_deg =
+        static_cast<double>(At(p.value_or(std::vector<int32_t>{}), 0)) / kVirtAngleSpu;
+    b.compensation.emplace();
+    for (size_t i = 0; i < b.compensation->size(); ++i) {
+      (*b.compensation)[i] = static_cast<int32_t>(
+          std::lround((boom_deg + static_cast<double>(i) - 60.0) * dmc::kVirtPositionScale));
+    }
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 581
+    b.safe_distance_x1000.reset();
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 577
+  }
+  if ((c.hi.capabilities & dmc::kCapVirtXyz) != 0 && c.hi.motor_count >= 6) {
+    // TYPE 8 with TYPE 1's layout: x-y-z in the bit-flag numbering.
+    wire::Bytes data;
+    dmc::EncodeData(dmc::HostMessage{dmc::VirtConfig{TestBoomRig()}}, data);
+    dmc::VirtRigRaw raw;
+    raw.type = static_cast<uint8_t>(dmc::RigType::kXyzFlag);
+    raw.data.assign(data.begin() + 1, data.end());
+    const DeviceRecord* r = h.Call(dmc::VirtConfig{raw});
+    const std::optional<uint32_t> code = AckCodeOf(r);
+    c.v.Check("DMC-VIRT-012", code && *code != ToWire(AckCode::kOk), [&] {
+      return EvOf(h, r, "TYPE 8 refused (the spec numbers the rigs 0..4)",
+                  CodeText(r) + ": TYPE 8 taken as x-y-z (bit-flag numbering)");
+    });
+  }
+  Unconfigure(c);
+}
+
+void VirtMoveReadBack(CaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  // 0.1 units along the track, then 0.1 units up.
+  ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{1, p0->track_x100000 + 10000}));
+  WaitRest(h, kRestTimeout);
+  const auto p1 = VirtPositions(h);
+  if (!p1) return;
+  ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p1->track_x100000, p0->track_x100000 + 10000);
+  ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{3, p1->ns_x100000 + 10000}));
+  WaitRest(h, kRestTimeout);
+  const auto p2 = VirtPositions(h);
+  if (!p2) return;
+  ExpectVirtAt(c, "DMC-VIRT-003", "vNS", p2->ns_x100000, p1->ns_x100000 + 10000);
+  ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p2->track_x100000, p1->track_x100000);
+  // 6 units above a boom of 2: out of reach.
+  const auto steps = GetPositions(h);
+  const DeviceRecord* r = h.Call(dmc::VirtMove{3, p2->ns_x100000 + 600000});
+  ExpectRefused(c, "DMC-VIRT-004", r);
+  ExpectCode(c, "DMC-VIRT-005", r, AckCode::kErrRange);
+  h.Idle(100 * kMs);
+  const auto after = GetPositions(h);
+  Expect(c, "DMC-VIRT-004", steps && after && *steps == *after,
+         "motor positions unchanged: " + (steps ? Vec(*steps) : std::string("?")),
+         after ? Vec(*after) : std::string("no MOTOR_GET_POSITION answer"));
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtMove{0, 0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtMove{7, 0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtStop{0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtStop{7}), AckCode::kErrRange);
+  Unconfigure(c);
+}
+
+void VirtStopShort(CaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  const int32_t far = p0->track_x100000 + 2'000'000;  // 20 units: far enough to stop short of
+  ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtMove{1, far}));
+  h.Idle(200 * kMs);
+  ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtStop{1}));
+  Expect(c, "DMC-VIRT-007", WaitRest(h, 10'000 * kMs), "the rig at rest within 10 s of VIRT_STOP",
+         "still moving");
+  const auto p1 = VirtPositions(h);
+  if (!p1) return;
+  Expect(c, "DMC-VIRT-007", p1->track_x100000 < far - kVirtTolerance,
+         "vTrack short of " + std::to_string(far), std::to_string(p1->track_x100000));
+  h.Call(dmc::VirtMove{1, p0->track_x100000});
+  WaitRest(h, kRestTimeout);
+  Unconfigure(c);
+}
+
+void VirtJogs(CaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJog{1, dmc::kJogSpeedMax, p0->track_x100000 + 5000}));
+  WaitRest(h, kRestTimeout);
+  if (const auto p1 = VirtPositions(h)) {
+    ExpectVirtAt(c, "DMC-VIRT-008", "vTrack", p1->track_x100000, p0->track_x100000 + 5000);
+  }
+  // Along the camera line, then speed 0; the pan, then VIRT_STOP.
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 5000}));
+  h.Idle(300 * kMs);
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 0}));
+  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of speed 0",
+         "still moving");
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{3, -3000}));
+  h.Idle(300 * kMs);
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtStop{4}));
+  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of VIRT_STOP",
+         "still moving");
+  Unconfigure(c);
+}
+
+void VirtAim(CaseContext& c) {
+  DmcHost& h = c.host;
+  for (const dmc::VirtAimPoint& a :
+       {dmc::VirtAimPoint{1, 1500, -250, 9000}, dmc::VirtAimPoint{0, 1500, -250, 9000}}) {
+    const DeviceRecord* r = h.Call(a);
+    const auto* echo = As<dmc::VirtAimPoint>(r);
+    c.v.Check("DMC-VIRT-009", echo != nullptr && *echo == a, [&] {
+      return EvOf(h, r, "VIRT_AIM_POINT enable=" + std::to_string(a.enable) + " 1500,-250,9000",
+                  Show(r));
+    });
+    const auto p = VirtPositions(h);
+    const bool same = p && p->aim && p->aim->enabled == a.enable && p->aim->x_x1000 == a.x_x1000 &&
+                      p->aim->y_x1000 == a.y_x1000 && p->aim->z_x1000 == a.z_x1000;
+    Expect(c, "DMC-VIRT-010", same,
+           "aim fields enabled=" + std::to_string(a.enable) + " 1500,-250,9000",
+           p && p->aim ? "enabled=" + std::to_string(p->aim->enabled) + " " +
+                             std::to_string(p->aim->x_x1000) + "," +
+                             std::to_string(p->aim->y_x1000) + "," + std::to_string(p->aim->z_x1000)
+                       : std::string("no aim fields"));
+  }
+}
+
 std::vector<Case> MakeCases() {
   using N = Needs;
   return {
@@ -783,6 +969,16 @@ std::vector<Case> MakeCases() {
       {"gomotion", "shoot2", N::kGoMotion2, "SHOOT_FRAME2, GO, RT_END",
        [](CaseContext& c) { Shoot(c, true); }},
       {"virtual", "get-position", N::kVirtual, "VIRT_GET_POSITION layout", VirtPosition},
+      {"virtual", "config", N::kVirtual,
+       "VIRT_CONFIG forms, the capability bits together, the TYPE 8 reading", VirtConfigForms},
+      {"virtual", "move", N::kVirtualBoomRig,
+       "VIRT_MOVE reached and read back, unreachable, virtual motor 0 and 7", VirtMoveReadBack},
+      {"virtual", "stop", N::kVirtualBoomRig, "VIRT_STOP during a long virtual move",
+       VirtStopShort},
+      {"virtual", "jog", N::kVirtualBoomRig, "VIRT_JOG, VIRT_JOG_ON_LINE and their stops",
+       VirtJogs},
+      {"virtual", "aim-point", N::kAimPoint, "VIRT_AIM_POINT echo and the position's aim fields",
+       VirtAim},
       {"random", "sequence", N::kMotors, "a seeded sequence of valid motor requests (--seed)",
        RandomSequence},
   };

@@ -184,12 +184,12 @@ TEST_F(PtyPortTest, ReopenDeliversEveryByteExactlyOnceInOrder) {
   host.Close();
   ASSERT_TRUE(RunUntil(io_, [&] { return !link_->host_open(); }));
   device_->Send(b);  // written while no host has the port open
-  // Let the link settle (reclaim passes run) before the host comes back.
-  bool settled = false;
-  scheduler_.After(50 * sim::kNsPerMs, [&] { settled = true; });
+  // Let the link reclaim what the kernel held for the closed port before the
+  // host comes back (a reclaim pass runs on the link's own schedule, later on
+  // a loaded machine, so wait for it rather than for a fixed time).
   driver_.Kick();
-  ASSERT_TRUE(RunUntil(io_, [&] { return settled; }));
-  EXPECT_GT(link_->stats().reclaimed, 0u) << "the kernel-buffer path was not exercised";
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().reclaimed > 0; }))
+      << "the kernel-buffer path was not exercised";
 
   host.Open(path_);
   ASSERT_TRUE(host.is_open());

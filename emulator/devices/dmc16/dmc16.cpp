@@ -48,6 +48,8 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
       dmx_(scheduler, profile_.dmx_ramp_rate_per_s),
       camera_(scheduler),
       upload_(profile_.upload_frame_count, profile_.motor_count, profile_.dmx_channels),
+      virtual_(scheduler, rig_, planners_, profile_.virtual_axes, profile_.Advertised(),
+               &Dmc16::FromMoveStatus),
       decoder_(std::make_unique<dmc::FrameDecoder>()) {
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     auto planner = std::make_unique<ScriptPlanner>();
@@ -94,6 +96,7 @@ void Dmc16::ResetState() {
   camera_.SetFlags(0);
   for (int ch = 1; ch <= sim::DmxUniverse::kChannels; ++ch) dmx_.Set(ch, 0);
   upload_.Clear();
+  virtual_.Reset();
   decoder_ = std::make_unique<dmc::FrameDecoder>();
   mode_ = Mode::kIdle;
   run_.reset();
@@ -125,6 +128,7 @@ void Dmc16::PowerOff() {
   rig_.SetObserver(nullptr);
   gio_.SetListener(nullptr);
   CancelAllTimers();
+  virtual_.CancelJog();
   for (int m = 1; m <= rig_.motor_count(); ++m) rig_.motor(m).EmergencyHalt();
   camera_.SetFlags(0);
   decoder_ = std::make_unique<dmc::FrameDecoder>();
@@ -241,10 +245,11 @@ bool Dmc16::Advertised(uint16_t type) const {
     case MsgType::kVirtJog:
     case MsgType::kVirtJogOnLine:
     case MsgType::kVirtGetPosition:
+      // "If the device advertises virtuals" (any of the four mode bits).
+      return profile_.Has(dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                          dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz);
     case MsgType::kVirtAimPoint:
-      // The virtual modes need the rig kinematics; this device advertises none
-      // (Dmc16ProfileFromJson refuses profiles that do).
-      return false;
+      return profile_.Has(dmc::kCapAimPoint);
     case MsgType::kRtEnd:
       // A device-to-host message; a host sending it plainly is not a request
       // this device knows.
@@ -328,10 +333,49 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           [&](const dmc::RtGo&) { Ack(id, type, OnGo()); },
           [&](const dmc::RtStopLoop&) { Ack(id, type, OnStopLoop()); },
           [&](const dmc::RtJogAll& m) { Ack(id, type, OnJogAll(m)); },
+          [&](const dmc::VirtConfig& m) {
+            Ack(id, type, Playing() ? AckCode::kErrMoving : virtual_.Configure(m));
+          },
+          [&](const dmc::VirtMove& m) {
+            Ack(id, type, Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Move(m)));
+          },
+          [&](const dmc::VirtJog& m) {
+            Ack(id, type, Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Jog(m)));
+          },
+          [&](const dmc::VirtJogOnLine& m) {
+            Ack(id, type,
+                Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.JogOnLine(m)));
+          },
+          [&](const dmc::VirtStop& m) {
+            // Stopping during playback ends the run, as MOTOR_STOP does.
+            if (Playing() && m.axis >= 1 && m.axis <= 6) {
+              Abort(true);
+              rig_.StopAll();
+            }
+            Ack(id, type, virtual_.Stop(m));
+          },
+          [&](const dmc::VirtGetPositionRequest&) {
+            const auto r = virtual_.Position();
+            if (const auto* p = std::get_if<dmc::VirtPositionReport>(&r)) {
+              Send(id, *p);
+            } else {
+              Ack(id, type, std::get<AckCode>(r));
+            }
+          },
+          [&](const dmc::VirtAimPoint& m) {
+            const auto r = virtual_.SetAimPoint(m);
+            if (const auto* a = std::get_if<dmc::VirtAimPoint>(&r)) {
+              // "The response contains the same data."
+              Send(id, *a);
+            } else {
+              Ack(id, type, std::get<AckCode>(r));
+            }
+          },
           [&](const dmc::Unknown& m) {
             if (m.type == dmc::ToWire(MsgType::kMotorHardStop)) {
               // Listed among the motor commands a device must handle, with no
               // request data: read as "hard stop everything now".
+              virtual_.CancelJog();
               Abort(true);
               rig_.HardStopAll();
               Ack(id, type, AckCode::kOk);
@@ -342,6 +386,14 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           [&](const auto&) { Ack(id, type, AckCode::kErrUnsupported); },
       },
       msg);
+}
+
+AckCode Dmc16::AfterVirtualMotion(AckCode code) {
+  if (code != AckCode::kOk) return code;
+  if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
+  on_frame_.reset();
+  EnsurePositionReports();
+  return code;
 }
 
 // --- output -----------------------------------------------------------------------------
@@ -458,12 +510,14 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
   }
   if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
   on_frame_.reset();
+  virtual_.CancelJog();  // a motor commanded directly leaves the line
   Send(id, dmc::MotorMoveResponse{static_cast<uint8_t>(rig_.motor(m.motor).IsMoving() ? 1 : 0)});
   EnsurePositionReports();
 }
 
 AckCode Dmc16::OnMotorStop(const dmc::MotorStop& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
+  virtual_.CancelJog();
   if (Playing()) {
     // Stopping one motor of a synchronised run ends the run.
     Abort(true);
@@ -479,6 +533,7 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
   const bool second = last_stop_all_ns_ >= 0 &&
                       now - last_stop_all_ns_ <= TimeNs{profile_.hard_stop_window_ms} * kNsPerMs;
   last_stop_all_ns_ = now;
+  virtual_.CancelJog();
   silent_stop_ = m.flags.has_value() && (*m.flags & dmc::kStopAllSilent) != 0;
   Abort(true);
   if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
@@ -509,6 +564,7 @@ AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   if (code == AckCode::kOk) {
     if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
     on_frame_.reset();
+    virtual_.CancelJog();
     EnsurePositionReports();
   }
   return code;
@@ -1152,6 +1208,7 @@ void Dmc16::OnMotionFinished(int, TimeNs, int64_t) {
 void Dmc16::OnLimitTripped(int motor_id, sim::LimitEnd end, int, sim::SwitchInput, TimeNs,
                            int64_t) {
   // MSG_MOTOR_HARD_STOP: REASON 1 upper / 2 lower limit, with the motor.
+  virtual_.CancelJog();
   Abort(true);
   const auto reason = end == sim::LimitEnd::kUpper ? dmc::HardStopReason::kUpperLimit
                                                    : dmc::HardStopReason::kLowerLimit;
@@ -1160,6 +1217,7 @@ void Dmc16::OnLimitTripped(int motor_id, sim::LimitEnd end, int, sim::SwitchInpu
 
 void Dmc16::OnEStop(bool engaged, TimeNs) {
   if (!engaged) return;
+  virtual_.CancelJog();
   Abort(true);
   // REASON 0 = E-Stop/General, without a MOTOR byte.
   SendUnsolicited(dmc::MotorHardStop{static_cast<uint8_t>(dmc::HardStopReason::kEStop), {}});
@@ -1244,6 +1302,7 @@ nlohmann::json Dmc16::State() const {
         {"exposures", camera_.exposures()}}},
       {"dmx", {{"adjusting", dmx_.Adjusting()}, {"nonzero", dmx}}},
       {"upload", upload},
+      {"virtual", virtual_.State()},
       {"stats",
        {{"requests", stats_.requests},
         {"checksum_errors", stats_.checksum_errors},

@@ -16,6 +16,7 @@
 #include "devices/dmc16/dmc16_profile.h"
 #include "devices/dmc16/rt_move.h"
 #include "devices/dmc16/script_planner.h"
+#include "devices/dmc16/virtual_axes.h"
 #include "sim/callback.h"
 #include "sim/io.h"
 #include "sim/rig.h"
@@ -66,6 +67,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
   const sim::CameraPort& camera() const { return camera_; }
   const sim::GioPort& gio_ref() const { return gio_; }
   const RtMove& upload() const { return upload_; }
+  const VirtualAxes& virtual_axes() const { return virtual_; }
   // "idle", "armed-run", "armed-shoot", "running", "shooting", "jogging-all".
   std::string_view ModeName() const;
   // MOVE TIME the device reports now (thousandths of a frame).
@@ -172,6 +174,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
                       sim::TimeNs time_ns, int64_t steps) override;
   void OnEStop(bool engaged, sim::TimeNs time_ns) override;
   void OnGioInputs(uint32_t inputs);
+  // After a virtual motion request: what any motion command does when it starts.
+  dmc::AckCode AfterVirtualMotion(dmc::AckCode code);
 
   sim::Scheduler& scheduler_;
   ByteSink& out_;
@@ -182,6 +186,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
   sim::CameraPort camera_;
   RtMove upload_;
   std::vector<ScriptPlanner*> planners_;  // owned by the motors, index motor-1
+  VirtualAxes virtual_;
   std::unique_ptr<dmc::FrameDecoder> decoder_;
   bool powered_ = false;
   uint32_t next_id_ = 1;  // device-side IDs of unsolicited messages (ERRATA 1.9)

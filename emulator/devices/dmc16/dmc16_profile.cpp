@@ -22,7 +22,7 @@ dmc::HiResponse Dmc16Profile::Hi() const {
   hi.gio_in_count = gio_inputs;
   hi.hw_limit_count = hw_limit_sets;
   hi.upload_frame_count = upload_frame_count;
-  hi.capabilities = capabilities;
+  hi.capabilities = Advertised();
   hi.protocol_version = protocol_version;
   return hi;
 }
@@ -56,8 +56,27 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
   constexpr uint32_t kVirtual = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
                                 dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz | dmc::kCapAimPoint;
   if ((p.capabilities & kVirtual) != 0) {
-    r.Fail("capabilities", "advertises virtual modes or the aim point (bits 0x007c)",
-           "clear those bits: this DMC-16 model has no rig kinematics to honour them");
+    r.Fail("capabilities", "carries virtual-mode or aim-point bits (0x007c)",
+           "clear them and write \"virtual_axes\": {\"enabled\": true} (it advertises 0x007c)");
+  }
+  {
+    ProfileReader v = r.Child("virtual_axes");
+    p.virtual_axes.enabled = v.GetBool("enabled", p.virtual_axes.enabled);
+    p.virtual_axes.capabilities = v.GetFlags("capabilities", p.virtual_axes.capabilities);
+    if ((p.virtual_axes.capabilities & ~kVirtual) != 0) {
+      v.Fail("capabilities", "has bits outside the virtual modes and the aim point",
+             "keep to 0x0004, 0x0008, 0x0010, 0x0020 and 0x0040");
+    }
+    if ((p.virtual_axes.capabilities & dmc::kCapAimPoint) != 0 &&
+        (p.virtual_axes.capabilities & (kVirtual & ~dmc::kCapAimPoint)) == 0) {
+      v.Fail("capabilities", "advertises the aim point without a virtual mode",
+             "add the mode bits (0x003c, all four as the real firmware does)");
+    }
+    p.virtual_axes.jog_line_units_per_s =
+        v.GetNumber("jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s, 1e-6, 1e6);
+    p.virtual_axes.jog_angle_deg_per_s =
+        v.GetNumber("jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s, 1e-6, 1e6);
+    v.Finish();
   }
   const int64_t version = r.GetInt("protocol_version", 2, 0, 0xffff);
   p.protocol_version = version == 0 ? std::nullopt : std::optional<uint16_t>(version);
@@ -121,6 +140,8 @@ Dmc16Profile LoadDmc16Profile(const std::string& path) {
 nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
   char caps[16];
   std::snprintf(caps, sizeof caps, "0x%04x", p.capabilities);
+  char virt_caps[16];
+  std::snprintf(virt_caps, sizeof virt_caps, "0x%04x", p.virtual_axes.capabilities);
   nlohmann::json sets = nlohmann::json::array();
   for (const Dmc16LimitSet& s : p.limit_sets) {
     nlohmann::json e = {{"set", s.set}};
@@ -152,6 +173,11 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"hard_stop_multiple", p.hard_stop_multiple},
         {"motors_enabled", p.motors_enabled}}},
       {"limit_sets", sets},
+      {"virtual_axes",
+       {{"enabled", p.virtual_axes.enabled},
+        {"capabilities", virt_caps},
+        {"jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s},
+        {"jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s}}},
   };
 }
 

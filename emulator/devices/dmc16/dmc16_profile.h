@@ -21,6 +21,18 @@ struct Dmc16LimitSet {
   std::optional<int64_t> high_steps;
 };
 
+// The virtual axes (MSG_VIRT_*; FACTS "Boom rig virtual axes").
+struct Dmc16Virtual {
+  bool enabled = false;
+  // Advertised in HI when enabled: FACTS: Dragonframe refused a device with
+  // the boom-swing-track bit alone, so all four modes, plus the aim point.
+  uint32_t capabilities = 0x007c;  // within 0x007c
+  // VIRT_JOG_ON_LINE at SPEED 10000: along X/Y/Z in user units per second,
+  // PAN/TILT in degrees per second (SPEED scales linearly).
+  double jog_line_units_per_s = 1.0;
+  double jog_angle_deg_per_s = 30.0;
+};
+
 struct Dmc16Profile {
   std::string name = "DMC-16";  // <= 32 bytes UTF-8 (HI NAME)
   uint8_t fw_major = 2;
@@ -33,9 +45,10 @@ struct Dmc16Profile {
   uint8_t hw_limit_sets = 16;   // 0..32
   uint32_t upload_frame_count = 10000;
   // Real-time moves, go-motion 1 and 2, couple motors, looping, camera
-  // trigger; the virtual modes (0x003c) and aim point (0x0040) stay off until
-  // the device models a rig.
+  // trigger. The virtual modes (0x003c) and the aim point (0x0040) come from
+  // `virtual_axes` instead.
   uint32_t capabilities = 0x0783;
+  Dmc16Virtual virtual_axes;
   // HI PROTOCOL VERSION; nullopt sends the 49-byte HI of older devices (FACTS).
   std::optional<uint16_t> protocol_version = 2;
   dmc::AckWidth ack_width = dmc::AckWidth::k16;
@@ -59,7 +72,11 @@ struct Dmc16Profile {
 
   // The HI response this profile advertises.
   dmc::HiResponse Hi() const;
-  bool Has(uint32_t capability) const { return (capabilities & capability) != 0; }
+  // CAPABILITIES as advertised: `capabilities` plus the virtual bits when enabled.
+  uint32_t Advertised() const {
+    return capabilities | (virtual_axes.enabled ? virtual_axes.capabilities : 0u);
+  }
+  bool Has(uint32_t capability) const { return (Advertised() & capability) != 0; }
 };
 
 // Reads a profile object; absent fields keep the defaults above. Throws

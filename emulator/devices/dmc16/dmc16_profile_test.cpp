@@ -47,7 +47,13 @@ TEST(Dmc16Profile, RoundTripsThroughJson) {
 TEST(Dmc16Profile, ErrorsNameTheFieldAndTheFix) {
   EXPECT_NE(ErrorOf({{"motor_count", 40}}).find("\"motor_count\" is 40, outside 0..32"),
             std::string::npos);
-  EXPECT_NE(ErrorOf({{"capabilities", "0x0004"}}).find("virtual modes"), std::string::npos);
+  EXPECT_NE(ErrorOf({{"capabilities", "0x0004"}}).find("virtual_axes"), std::string::npos);
+  EXPECT_NE(ErrorOf({{"virtual_axes", {{"capabilities", "0x0080"}}}})
+                .find("\"virtual_axes.capabilities\""),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf({{"virtual_axes", {{"capabilities", "0x0040"}}}}).find("without a virtual mode"),
+      std::string::npos);
   EXPECT_NE(ErrorOf({{"model", "dfmoco"}}).find("\"model\""), std::string::npos);
   EXPECT_NE(ErrorOf({{"ack_width_bits", 24}}).find("use 16"), std::string::npos);
   EXPECT_NE(ErrorOf({{"motion", {{"max_velocity_steps_per_s", -1}}}})
@@ -58,6 +64,17 @@ TEST(Dmc16Profile, ErrorsNameTheFieldAndTheFix) {
             std::string::npos);
   EXPECT_NE(ErrorOf({{"nmae", "x"}}).find("\"nmae\" is not a known field"), std::string::npos);
   EXPECT_NE(ErrorOf({{"name", std::string(33, 'x')}}).find("at most 32 bytes"), std::string::npos);
+}
+
+TEST(Dmc16Profile, VirtualProfileAdvertisesAllFourModesAndTheAimPoint) {
+  // FACTS: the four virtual mode bits go together; 0x0040 is the aim point.
+  const Dmc16Profile p = LoadDmc16Profile(SourceDir() + "/fixtures/profiles/dmc16-virtual.json");
+  EXPECT_TRUE(p.virtual_axes.enabled);
+  EXPECT_EQ(p.Hi().capabilities, 0x0783u | 0x007cu);
+  Dmc16Profile off;
+  EXPECT_EQ(off.Hi().capabilities & 0x007cu, 0u);
+  const Dmc16Profile back = Dmc16ProfileFromJson(Dmc16ProfileToJson(p), "x");
+  EXPECT_EQ(back.Hi(), p.Hi());
 }
 
 TEST(Dmc16Profile, MissingFileNamesThePath) {
