@@ -236,8 +236,11 @@ struct BoomRigDynamics::Impl {
   double DriveTorque(size_t j, double q, double qd) {
     const JointSpec& spec = profile.joints[j];
     const double spu = steps_per_unit[j];
+    // The torque over the step is evaluated at its start (explicit in the
+    // drive, as Bullet is in applied torques): the driver's count at the
+    // start against the joint at the start, and the count's rate over the step.
     const double commanded_velocity = (commanded[j] - previous_commanded[j]) / kStepS;
-    double error = commanded[j] - static_cast<double>(offset_steps[j]) / spu - q;
+    double error = previous_commanded[j] - static_cast<double>(offset_steps[j]) / spu - q;
     const double error_rate = commanded_velocity - qd;
     double demand = spec.kp * error + spec.kd * error_rate;
     const double motor_rev_s = qd * motor_rad_per_unit[j] / (2.0 * std::numbers::pi);

@@ -197,8 +197,10 @@ class BoomRigDynamics {
   // no contact; time is kept.
   void Reset(const JointVector& q);
 
-  // Advances one fixed 1 ms step towards `commanded` (SI). The commanded
-  // velocity is the difference to the previous command over the step.
+  // Advances one fixed 1 ms step; `commanded` (SI) is the drivers' position
+  // at the end of the step. Over the step each driver moves at a constant rate
+  // from the previous command to this one; the torque is computed at the
+  // step's start from the previous command and that rate.
   const StepEvents& Step(const JointVector& commanded);
 
   int64_t time_ns() const;
