@@ -40,11 +40,17 @@ btVector3 V(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
 Vec3 V(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 btVector3 Inertia(const BodySpec& b) { return V(b.inertia_kg_m2); }
 
+// The floor and up to 63 obstacles, one bit each in a contact mask.
+constexpr int kMaxEnvironmentObjects = 64;
+// A contact that bounces (the head springing back on its drives after a
+// stop) is one collision: a new one is reported only after the head has
+// been clear of that object for this many steps.
+constexpr int kContactReleaseSteps = 100;
+
 // Half extents of a link's (non-colliding) collider: a box around its COM.
 constexpr double kLinkColliderHalf_m = 0.05;
 
 struct ContactCollector : btCollisionWorld::ContactResultCallback {
-  int first = -1;  // lowest user index touched this step
   uint64_t touched = 0;
   btScalar addSingleResult(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int,
                            const btCollisionObjectWrapper* w1, int, int) override {
@@ -53,9 +59,8 @@ struct ContactCollector : btCollisionWorld::ContactResultCallback {
     const int a = w0->getCollisionObject()->getUserIndex();
     const int b = w1->getCollisionObject()->getUserIndex();
     const int hit = a >= 0 ? a : b;
-    if (hit < 0 || hit >= 64) return 0;
+    if (hit < 0 || hit >= kMaxEnvironmentObjects) return 0;
     touched |= uint64_t{1} << hit;
-    if (first < 0 || hit < first) first = hit;
     return 0;
   }
 };
@@ -85,7 +90,9 @@ struct BoomRigDynamics::Impl {
   std::unique_ptr<btBoxShape> head_shape;
   btCollisionObject head;
   btTransform head_in_camera;  // head box pose in the camera link's COM frame
-  uint64_t touching = 0;
+  uint64_t touching = 0;       // geometric contact this step
+  uint64_t in_contact = 0;     // contact episodes (released after kContactReleaseSteps clear)
+  std::array<int, kMaxEnvironmentObjects> clear_steps{};
 
   // Drive state.
   int64_t time_ns = 0;
@@ -229,6 +236,7 @@ struct BoomRigDynamics::Impl {
     stalled = {};
     episode_lost = {};
     touching = 0;
+    in_contact = 0;
     CheckContacts(/*report=*/false);
   }
 
@@ -277,13 +285,20 @@ struct BoomRigDynamics::Impl {
     head.setWorldTransform(camera * head_in_camera);
     ContactCollector collector;
     env.contactTest(&head, collector);
-    if (report) {
-      const uint64_t began = collector.touched & ~touching;
-      for (int i = 0; i < 64; ++i) {
-        if ((began >> i) & 1U) events.collisions.push_back(CollisionEvent{Name(i), time_ns});
+    touching = collector.touched;
+    for (int i = 0; i < static_cast<int>(env_objects.size()); ++i) {
+      const uint64_t bit = uint64_t{1} << i;
+      if ((touching & bit) != 0) {
+        clear_steps[static_cast<size_t>(i)] = 0;
+        if ((in_contact & bit) == 0 && report) {
+          events.collisions.push_back(CollisionEvent{Name(i), time_ns});
+        }
+        in_contact |= bit;
+      } else if ((in_contact & bit) != 0 &&
+                 ++clear_steps[static_cast<size_t>(i)] >= kContactReleaseSteps) {
+        in_contact &= ~bit;
       }
     }
-    touching = collector.touched;
   }
 
   std::string Name(int user_index) const {
@@ -373,7 +388,7 @@ bool BoomRigDynamics::Stalled(Joint j) const { return impl_->stalled[Index(j)]; 
 HeadPose BoomRigDynamics::Pose() const { return impl_->Pose(); }
 
 std::optional<std::string> BoomRigDynamics::Contact() const {
-  for (int i = 0; i < 64; ++i) {
+  for (int i = 0; i < kMaxEnvironmentObjects; ++i) {
     if ((impl_->touching >> i) & 1U) return impl_->Name(i);
   }
   return std::nullopt;

@@ -74,6 +74,8 @@ struct Box {
   Vec3 max_m = {0, 0, 0};
 };
 
+inline constexpr size_t kMaxObstacles = 63;
+
 // Everything the model needs, read from a rig profile (fixtures/rigs/*.json,
 // fields in docs/rig-dynamics.md). The world frame's origin is the swing pivot
 // with the cart at track position 0.
@@ -86,7 +88,7 @@ struct RigProfile {
   double floor_z_m = -1.0;             // floor height in the world frame
   Vec3 head_box_center_m = {0, 0, 0};  // head collision box, head frame
   Vec3 head_box_half_m = {0.1, 0.1, 0.1};
-  std::vector<Box> obstacles;
+  std::vector<Box> obstacles;  // at most kMaxObstacles
   // Bodies: cart (pivot = swing pivot), swing, boom (pivot = swing pivot),
   // extension (pivot = boom tip), pan, tilt, camera (pivot = head point).
   BodySpec cart, swing, boom, extension, pan, tilt, camera;
@@ -164,7 +166,9 @@ struct StallEvent {
   int64_t lost_steps = 0;
 };
 
-// The camera head box began to touch the floor or an obstacle.
+// The camera head box began to touch the floor or an obstacle. A contact
+// that bounces is one event: the same object is reported again only after
+// the head has been clear of it for 100 ms.
 struct CollisionEvent {
   std::string what;  // "floor" or the obstacle's name
   int64_t time_ns = 0;

@@ -314,6 +314,10 @@ RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view wh
   head.Finish();
 
   if (const json* obstacles = root.Array("obstacles"); obstacles != nullptr) {
+    if (obstacles->size() > kMaxObstacles) {
+      root.Fail("obstacles", "has " + std::to_string(obstacles->size()) + " boxes",
+                "give at most " + std::to_string(kMaxObstacles));
+    }
     for (size_t i = 0; i < obstacles->size() && !error; ++i) {
       Reader o(&(*obstacles)[i], "obstacles[" + std::to_string(i) + "]", &error);
       Box b;
