@@ -12,6 +12,11 @@ namespace moco::physics {
 namespace {
 
 constexpr size_t kMaxPoints = 2000;
+// Coordinates beyond this (metres, millimetres, seconds) are not plotted.
+constexpr double kMaxMagnitude = 1e6;
+constexpr int kMaxTicks = 20;
+
+bool Plottable(double v) { return std::isfinite(v) && std::abs(v) <= kMaxMagnitude; }
 constexpr const char* kCommandedColour = "#1f77b4";
 constexpr const char* kPhysicalColour = "#d62728";
 
@@ -59,7 +64,7 @@ struct Range {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
   void Add(double v) {
-    if (!std::isfinite(v)) return;
+    if (!Plottable(v)) return;
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
@@ -120,7 +125,9 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
   out += "<rect x=\"" + Num(left) + "\" y=\"" + Num(top) + "\" width=\"" + Num(width) +
          "\" height=\"" + Num(height) + "\" fill=\"none\" stroke=\"#888\"/>\n";
   const double step_x = NiceStep(rx.hi - rx.lo);
-  for (double t = std::ceil(rx.lo / step_x) * step_x; t <= rx.hi; t += step_x) {
+  const double first_x = std::ceil(rx.lo / step_x) * step_x;
+  for (int k = 0; k < kMaxTicks && first_x + k * step_x <= rx.hi; ++k) {
+    const double t = first_x + k * step_x;
     const double x = px(t);
     out += "<line x1=\"" + Num(x) + "\" y1=\"" + Num(top + height) + "\" x2=\"" + Num(x) +
            "\" y2=\"" + Num(top + height + 5) + "\" stroke=\"#888\"/>\n";
@@ -129,7 +136,9 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
            "</text>\n";
   }
   const double step_y = NiceStep(ry.hi - ry.lo);
-  for (double t = std::ceil(ry.lo / step_y) * step_y; t <= ry.hi; t += step_y) {
+  const double first_y = std::ceil(ry.lo / step_y) * step_y;
+  for (int k = 0; k < kMaxTicks && first_y + k * step_y <= ry.hi; ++k) {
+    const double t = first_y + k * step_y;
     const double y = py(t);
     out += "<line x1=\"" + Num(left - 5) + "\" y1=\"" + Num(y) + "\" x2=\"" + Num(left) +
            "\" y2=\"" + Num(y) + "\" stroke=\"#888\"/>\n";
@@ -148,7 +157,7 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
     const size_t stride = n > kMaxPoints ? (n + kMaxPoints - 1) / kMaxPoints : 1;
     for (size_t i = 0; i < n; i += stride) {
       const size_t k = (i + stride >= n) ? n - 1 : i;  // always end on the last point
-      if (!std::isfinite(s.xs[k]) || !std::isfinite(s.ys[k])) continue;
+      if (!Plottable(s.xs[k]) || !Plottable(s.ys[k])) continue;
       d += (d.empty() ? "M" : " L") + Num(px(s.xs[k])) + " " + Num(py(s.ys[k]));
     }
     // An empty series still gets its element (a path with no data draws nothing).

@@ -24,7 +24,8 @@ struct RigPathSample {
 // axes, tick labels in metres, axis titles, and two paths: commanded (dashed)
 // and physical (solid), with ids "top-commanded", "top-physical",
 // "side-commanded", "side-physical". Equal scale on both axes of a panel.
-// Long paths are thinned to at most 2000 points each. Any `samples`
+// Long paths are thinned to at most 2000 points each; non-finite points and
+// points beyond 1e6 are left out. Any `samples`
 // (including none) give a well-formed document; `title` is escaped.
 std::string RigPathSvg(const std::vector<RigPathSample>& samples,
                        std::string_view title = "camera head path");
