@@ -18,9 +18,9 @@ namespace {
 using sim::kNsPerMs;
 using sim::kNsPerSecond;
 using sim::TimeNs;
-using testing::BoomJib;
-using testing::kDeg;
-using testing::Trapezoid;
+using test_support::BoomJib;
+using test_support::kDeg;
+using test_support::Trapezoid;
 
 // A stand-in for a device's motors: each joint's step count follows a
 // trapezoid in steps started at a scheduler time, or holds.

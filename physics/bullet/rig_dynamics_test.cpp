@@ -15,9 +15,9 @@
 namespace moco::physics {
 namespace {
 
-using testing::BoomJib;
-using testing::kDeg;
-using testing::Trapezoid;
+using test_support::BoomJib;
+using test_support::kDeg;
+using test_support::Trapezoid;
 
 // FACTS "Boom rig virtual axes" forward kinematics, written out here from the
 // text: tip = (L cos b sin s, T + L cos b cos s, L sin b); head = tip +

@@ -19,8 +19,8 @@ namespace moco::physics {
 namespace {
 
 using nlohmann::json;
-using testing::kDeg;
-using testing::SourcePath;
+using test_support::kDeg;
+using test_support::SourcePath;
 
 json Fixture() {
   std::ifstream in(SourcePath("fixtures/rigs/boom-jib.json"));
@@ -57,7 +57,7 @@ TEST(RigProfileTest, TheBoomJibFixtureLoadsInSiUnits) {
 }
 
 TEST(RigProfileTest, PullOutTorqueInterpolatesLinearlyAndHoldsItsLastValue) {
-  const RigProfile p = testing::BoomJib();
+  const RigProfile p = test_support::BoomJib();
   const JointSpec& boom = p.joint(Joint::kBoom);  // [0,1,3,6,10] -> [3.0,2.8,2.2,1.3,0.5]
   EXPECT_DOUBLE_EQ(boom.PullOutTorque(0), 3.0);
   EXPECT_DOUBLE_EQ(boom.PullOutTorque(1), 2.8);

@@ -12,7 +12,7 @@
 
 #include "physics/bullet/rig_dynamics.h"
 
-namespace moco::physics::testing {
+namespace moco::physics::test_support {
 
 inline std::string SourcePath(const std::string& relative) {
   const char* dir = std::getenv("MOCO_SOURCE_DIR");
@@ -57,6 +57,6 @@ struct Trapezoid {
 
 inline constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-}  // namespace moco::physics::testing
+}  // namespace moco::physics::test_support
 
 #endif  // MOCO_PHYSICS_BULLET_RIG_TEST_SUPPORT_H_
