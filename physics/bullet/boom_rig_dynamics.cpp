@@ -4,6 +4,7 @@
 // Every Bullet type of the project lives in this file.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
@@ -310,7 +311,15 @@ struct BoomRigDynamics::Impl {
     events.stalls.clear();
     events.collisions.clear();
     previous_commanded = commanded;
-    commanded = command;
+    for (size_t j = 0; j < kJointCount; ++j) {
+      // A non-finite command holds the last one; a command far beyond the
+      // end stops is clamped (the drive would only push into the stop).
+      if (std::isfinite(command[j])) {
+        const JointSpec& spec = profile.joints[j];
+        const double span = spec.max - spec.min;
+        commanded[j] = std::clamp(command[j], spec.min - span, spec.max + span);
+      }
+    }
     for (size_t j = 0; j < kJointCount; ++j) {
       const int link = kLinkOfJoint[j];
       const JointSpec& spec = profile.joints[j];

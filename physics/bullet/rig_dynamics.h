@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace moco::physics {
@@ -185,7 +186,8 @@ struct StepEvents {
 // extension, pan, tilt and camera under gravity, each joint pulled towards its
 // commanded position by a torque-limited stepper. Deterministic: the same
 // profile and the same command sequence give bit-identical states.
-// Not thread-safe; movable, not copyable.
+// Not thread-safe; movable (a moved-from rig may only be destroyed or
+// assigned), not copyable.
 class BoomRigDynamics {
  public:
   // Starts at rest at the home positions. REQUIRES: a profile that
@@ -202,9 +204,10 @@ class BoomRigDynamics {
   void Reset(const JointVector& q);
 
   // Advances one fixed 1 ms step; `commanded` (SI) is the drivers' position
-  // at the end of the step. Over the step each driver moves at a constant rate
-  // from the previous command to this one; the torque is computed at the
-  // step's start from the previous command and that rate.
+  // at the end of the step (a non-finite value holds the previous command, a
+  // value more than the joint's travel beyond an end stop is clamped there). Over the step each
+  // driver moves at a constant rate from the previous command to this one; the torque is computed
+  // at the step's start from the previous command and that rate.
   const StepEvents& Step(const JointVector& commanded);
 
   int64_t time_ns() const;

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "physics/bullet/rig_test_support.h"
@@ -300,6 +301,23 @@ TEST(RigDynamicsTest, ASensibleMoveTouchesNothing) {
   EXPECT_TRUE(more.collisions.empty());
   EXPECT_TRUE(pan.collisions.empty());
   EXPECT_FALSE(rig.Contact().has_value());
+}
+
+TEST(RigDynamicsTest, NonFiniteOrAbsurdCommandsNeitherCrashNorPoisonTheState) {
+  const RigProfile p = BoomJib();
+  BoomRigDynamics rig(p);
+  JointVector cmd{};
+  cmd[Index(Joint::kBoom)] = std::nan("");
+  cmd[Index(Joint::kPan)] = std::numeric_limits<double>::infinity();
+  Hold(rig, cmd, 100);
+  EXPECT_EQ(rig.CommandedJoints()[Index(Joint::kBoom)], 0.0);  // held the last command
+  EXPECT_EQ(rig.CommandedJoints()[Index(Joint::kPan)], 0.0);
+  cmd = {1e300, 0, 0, 0, 0, 0};
+  const StepEvents events = Hold(rig, cmd, 2000);
+  for (double q : rig.PhysicalJoints()) EXPECT_TRUE(std::isfinite(q));
+  for (double v : rig.Pose().nodal_m) EXPECT_TRUE(std::isfinite(v));
+  EXPECT_FALSE(events.stalls.empty());  // the jump is lost, as any jump that size
+  EXPECT_LE(rig.PhysicalJoints()[0], p.joint(Joint::kTrack).max + 0.01);
 }
 
 // Law: whatever the track is commanded to do (jumps included), once it is

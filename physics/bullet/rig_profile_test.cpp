@@ -76,6 +76,8 @@ struct BadField {
   const char* says;
 };
 
+void PrintTo(const BadField& bad, std::ostream* os) { *os << bad.name; }
+
 class RigProfileRefusalTest : public ::testing::TestWithParam<BadField> {};
 
 TEST_P(RigProfileRefusalTest, NamesTheFieldAndTheFix) {
