@@ -1,0 +1,446 @@
+// Rig profiles for the boom-swing-track dynamics (docs/rig-dynamics.md), the
+// ideal forward kinematics (FACTS "Boom rig virtual axes") and the boom
+// compensation table (FACTS "Boom compensation table"). Pure math, no Bullet.
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "physics/bullet/rig_dynamics.h"
+
+namespace moco::physics {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+std::string Shown(const json& v) {
+  std::string s = v.dump();
+  if (s.size() > 40) s = s.substr(0, 37) + "...";
+  return s;
+}
+
+const char* TypeName(const json& v) {
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_array()) return "an array";
+  if (v.is_object()) return "an object";
+  return "null";
+}
+
+// Reads one JSON object. The first problem is kept (with its field path);
+// later reads return defaults, so parsing code needs no error checks between
+// fields. Finish() reports keys nobody read.
+class Reader {
+ public:
+  Reader(const json* object, std::string path, std::optional<RigProfileError>* error)
+      : object_(object), path_(std::move(path)), error_(error) {
+    if (object_ != nullptr && !object_->is_object()) {
+      Fail("", std::string("expected an object, found ") + TypeName(*object_),
+           "write a JSON object { ... }");
+      object_ = nullptr;
+    }
+  }
+
+  std::string Field(std::string_view key) const {
+    if (key.empty()) return path_.empty() ? "(root)" : path_;
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+
+  void Fail(std::string_view key, const std::string& problem, const std::string& fix) {
+    if (error_->has_value()) return;
+    const std::string field = Field(key);
+    *error_ = RigProfileError{field, field + ": " + problem + "; " + fix};
+  }
+
+  bool failed() const { return error_->has_value(); }
+
+  const json* Find(std::string_view key) {
+    read_.insert(std::string(key));
+    if (object_ == nullptr) return nullptr;
+    auto it = object_->find(key);
+    return it == object_->end() ? nullptr : &*it;
+  }
+
+  // `required`: absence is an error; otherwise `def` is returned.
+  double Number(std::string_view key, double def, double min, double max, bool required,
+                std::string_view unit) {
+    const json* v = Find(key);
+    if (v == nullptr) {
+      if (required && object_ != nullptr) {
+        Fail(key, "missing", "add a number in " + std::string(unit) + " (" + Range(min, max) + ")");
+      }
+      return def;
+    }
+    if (!v->is_number()) {
+      Fail(key, std::string("expected a number, found ") + TypeName(*v),
+           "write a number in " + std::string(unit));
+      return def;
+    }
+    const double d = v->get<double>();
+    if (!std::isfinite(d) || d < min || d > max) {
+      Fail(key, Shown(*v) + " is out of range", "use a value in " + Range(min, max));
+      return def;
+    }
+    return d;
+  }
+
+  int64_t Integer(std::string_view key, int64_t def, int64_t min, int64_t max, bool required) {
+    const json* v = Find(key);
+    if (v == nullptr) {
+      if (required && object_ != nullptr) Fail(key, "missing", "add an integer");
+      return def;
+    }
+    if (!v->is_number_integer()) {
+      Fail(key, std::string("expected an integer, found ") + Shown(*v), "write a whole number");
+      return def;
+    }
+    const int64_t i = v->get<int64_t>();
+    if (i < min || i > max) {
+      Fail(key, Shown(*v) + " is out of range",
+           "use a value in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+      return def;
+    }
+    return i;
+  }
+
+  std::string String(std::string_view key, std::string def) {
+    const json* v = Find(key);
+    if (v == nullptr) return def;
+    if (!v->is_string()) {
+      Fail(key, std::string("expected a string, found ") + TypeName(*v), "write a \"string\"");
+      return def;
+    }
+    return v->get<std::string>();
+  }
+
+  Vec3 Vector(std::string_view key, Vec3 def, bool required, bool positive) {
+    const json* v = Find(key);
+    if (v == nullptr) {
+      if (required && object_ != nullptr) Fail(key, "missing", "add [x, y, z] in metres");
+      return def;
+    }
+    if (!v->is_array() || v->size() != 3) {
+      Fail(key, "expected [x, y, z], found " + Shown(*v), "write three numbers in metres");
+      return def;
+    }
+    Vec3 out{};
+    for (size_t i = 0; i < 3; ++i) {
+      const json& e = (*v)[i];
+      if (!e.is_number() || !std::isfinite(e.get<double>()) || std::abs(e.get<double>()) > 1e3 ||
+          (positive && e.get<double>() <= 0)) {
+        Fail(key, "element " + std::to_string(i) + " is " + Shown(e),
+             positive ? "write three positive numbers" : "write three numbers within +-1000");
+        return def;
+      }
+      out[i] = e.get<double>();
+    }
+    return out;
+  }
+
+  std::vector<double> Numbers(std::string_view key, double min, double max) {
+    const json* v = Find(key);
+    if (v == nullptr) {
+      if (object_ != nullptr) Fail(key, "missing", "add an array of numbers");
+      return {};
+    }
+    if (!v->is_array() || v->empty() || v->size() > 64) {
+      Fail(key, "expected an array of 1..64 numbers, found " + Shown(*v), "write e.g. [0, 5, 10]");
+      return {};
+    }
+    std::vector<double> out;
+    for (size_t i = 0; i < v->size(); ++i) {
+      const json& e = (*v)[i];
+      if (!e.is_number() || !std::isfinite(e.get<double>()) || e.get<double>() < min ||
+          e.get<double>() > max) {
+        Fail(key, "element " + std::to_string(i) + " is " + Shown(e),
+             "use numbers in " + Range(min, max));
+        return {};
+      }
+      out.push_back(e.get<double>());
+    }
+    return out;
+  }
+
+  Reader Child(std::string_view key, bool required) {
+    const json* v = Find(key);
+    if (v == nullptr && required && object_ != nullptr) Fail(key, "missing", "add the object");
+    return Reader(v, Field(key), error_);
+  }
+
+  const json* Array(std::string_view key) {
+    const json* v = Find(key);
+    if (v != nullptr && !v->is_array()) {
+      Fail(key, std::string("expected an array, found ") + TypeName(*v), "write [ ... ]");
+      return nullptr;
+    }
+    return v;
+  }
+
+  void Finish() {
+    if (object_ == nullptr) return;
+    for (auto it = object_->begin(); it != object_->end(); ++it) {
+      if (read_.count(it.key()) == 0) {
+        std::string known;
+        for (const std::string& k : read_) known += (known.empty() ? "" : ", ") + k;
+        Fail(it.key(), "unknown field", "check the spelling (known here: " + known + ")");
+        return;
+      }
+    }
+  }
+
+ private:
+  static std::string Range(double min, double max) {
+    std::ostringstream s;
+    s << "[" << min << ", " << max << "]";
+    return s.str();
+  }
+
+  const json* object_;
+  std::string path_;
+  std::optional<RigProfileError>* error_;
+  std::set<std::string> read_;
+};
+
+BodySpec ReadBody(Reader& bodies, std::string_view name) {
+  Reader r = bodies.Child(name, true);
+  BodySpec b;
+  b.mass_kg = r.Number("mass_kg", 1.0, 1e-3, 1e4, true, "kg");
+  b.com_m = r.Vector("com_m", {0, 0, 0}, false, false);
+  b.inertia_kg_m2 = r.Vector("inertia_kg_m2", {0.01, 0.01, 0.01}, true, true);
+  r.Finish();
+  return b;
+}
+
+JointSpec ReadJoint(Reader& joints, Joint j) {
+  const bool prismatic = RigProfile::Prismatic(j);
+  const double scale = prismatic ? 1.0 : kDegToRad;
+  const std::string_view unit = prismatic ? "m" : "deg";
+  const double span = prismatic ? 100.0 : 720.0;
+  Reader r = joints.Child(kJointNames[Index(j)], true);
+  JointSpec s;
+  s.min = r.Number("min", 0, -span, span, true, unit) * scale;
+  s.max = r.Number("max", 0, -span, span, true, unit) * scale;
+  if (!r.failed() && !(s.min < s.max)) r.Fail("max", "must be above min", "swap min and max");
+  s.home = r.Number("home", 0, -span, span, false, unit) * scale;
+  if (!r.failed() && (s.home < s.min || s.home > s.max)) {
+    r.Fail("home", "lies outside [min, max]", "move home inside the end stops");
+  }
+  s.motor_steps_per_rev = r.Integer("motor_steps_per_rev", 3200, 1, 1'000'000, true);
+  s.gear_ratio = r.Number("gear_ratio", 1, 1e-3, 1e5, true,
+                          prismatic ? "motor rev per metre" : "motor rev per joint rev");
+  Reader curve = r.Child("pull_out", true);
+  s.pull_out_speed_rev_s = curve.Numbers("speed_rev_s", 0, 1e4);
+  s.pull_out_torque_n_m = curve.Numbers("torque_n_m", 0, 1e4);
+  if (!curve.failed()) {
+    if (s.pull_out_speed_rev_s.size() != s.pull_out_torque_n_m.size()) {
+      curve.Fail("torque_n_m", "has a different length than speed_rev_s",
+                 "give one torque per speed");
+    } else if (s.pull_out_speed_rev_s.front() != 0) {
+      curve.Fail("speed_rev_s", "must start at 0", "add the holding torque at speed 0");
+    } else if (s.pull_out_torque_n_m.front() <= 0) {
+      curve.Fail("torque_n_m", "the torque at speed 0 must be positive",
+                 "give the motor's holding torque");
+    } else {
+      for (size_t i = 1; i < s.pull_out_speed_rev_s.size(); ++i) {
+        if (!(s.pull_out_speed_rev_s[i] > s.pull_out_speed_rev_s[i - 1])) {
+          curve.Fail("speed_rev_s", "must be strictly increasing", "sort the speeds");
+          break;
+        }
+      }
+    }
+  }
+  curve.Finish();
+  const std::string_view k_unit = prismatic ? "N/m" : "N m/rad";
+  const std::string_view d_unit = prismatic ? "N s/m" : "N m s/rad";
+  s.kp = r.Number("kp", 0, 1e-3, 1e9, true, k_unit);
+  s.kd = r.Number("kd", 0, 0, 1e8, true, d_unit);
+  s.damping = r.Number("damping", 0, 0, 1e8, false, d_unit);
+  r.Finish();
+  return s;
+}
+
+}  // namespace
+
+double JointSpec::StepsPerUnit(bool prismatic) const {
+  const double steps = static_cast<double>(motor_steps_per_rev) * gear_ratio;
+  return prismatic ? steps : steps / (2.0 * std::numbers::pi);
+}
+
+double JointSpec::MotorRadPerUnit(bool prismatic) const {
+  return prismatic ? 2.0 * std::numbers::pi * gear_ratio : gear_ratio;
+}
+
+double JointSpec::PullOutTorque(double speed_rev_s) const {
+  const double v = std::abs(speed_rev_s);
+  const std::vector<double>& xs = pull_out_speed_rev_s;
+  const std::vector<double>& ys = pull_out_torque_n_m;
+  if (xs.empty()) return 0;
+  if (v >= xs.back()) return ys.back();
+  const size_t i = static_cast<size_t>(std::upper_bound(xs.begin(), xs.end(), v) - xs.begin());
+  // xs[0] == 0 <= v < xs.back(), so 1 <= i < size.
+  const double f = (v - xs[i - 1]) / (xs[i] - xs[i - 1]);
+  return ys[i - 1] + f * (ys[i] - ys[i - 1]);
+}
+
+RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view where) {
+  json doc = json::parse(json_text, nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) {
+    return RigProfileError{
+        "(root)", std::string(where) + ": not valid JSON; check brackets, commas and quotes"};
+  }
+  std::optional<RigProfileError> error;
+  Reader root(&doc, "", &error);
+  RigProfile p;
+  p.name = root.String("name", "rig");
+  p.gravity_m_s2 = root.Number("gravity_m_s2", 9.81, 0, 100, false, "m/s^2");
+
+  Reader geo = root.Child("geometry", true);
+  p.boom_length_m = geo.Number("boom_length_m", 1.5, 0.05, 50, true, "m");
+  p.level_extension_m = geo.Number("level_extension_m", 0, 0, 10, false, "m");
+  p.nodal_offset_m = geo.Vector("nodal_offset_m", {0, 0, 0}, false, false);
+  p.floor_z_m = geo.Number("floor_z_m", -1, -100, 0, true, "m (below the swing pivot)");
+  geo.Finish();
+
+  Reader head = root.Child("head_box", true);
+  p.head_box_center_m = head.Vector("center_m", {0, 0, 0}, false, false);
+  p.head_box_half_m = head.Vector("half_extents_m", {0.1, 0.1, 0.1}, true, true);
+  head.Finish();
+
+  if (const json* obstacles = root.Array("obstacles"); obstacles != nullptr) {
+    if (obstacles->size() > kMaxObstacles) {
+      root.Fail("obstacles", "has " + std::to_string(obstacles->size()) + " boxes",
+                "give at most " + std::to_string(kMaxObstacles));
+    }
+    for (size_t i = 0; i < obstacles->size() && !error; ++i) {
+      Reader o(&(*obstacles)[i], "obstacles[" + std::to_string(i) + "]", &error);
+      Box b;
+      b.name = o.String("name", "obstacle " + std::to_string(i + 1));
+      b.min_m = o.Vector("min_m", {0, 0, 0}, true, false);
+      b.max_m = o.Vector("max_m", {0, 0, 0}, true, false);
+      if (!error &&
+          !(b.min_m[0] < b.max_m[0] && b.min_m[1] < b.max_m[1] && b.min_m[2] < b.max_m[2])) {
+        o.Fail("max_m", "must exceed min_m on every axis", "give the box's two opposite corners");
+      }
+      if (!error && b.name == "floor") o.Fail("name", "\"floor\" is reserved", "rename it");
+      o.Finish();
+      p.obstacles.push_back(std::move(b));
+    }
+  }
+
+  Reader bodies = root.Child("bodies", true);
+  p.cart = ReadBody(bodies, "cart");
+  p.swing = ReadBody(bodies, "swing");
+  p.boom = ReadBody(bodies, "boom");
+  p.extension = ReadBody(bodies, "extension");
+  p.pan = ReadBody(bodies, "pan");
+  p.tilt = ReadBody(bodies, "tilt");
+  p.camera = ReadBody(bodies, "camera");
+  bodies.Finish();
+
+  Reader joints = root.Child("joints", true);
+  for (size_t i = 0; i < kJointCount; ++i) p.joints[i] = ReadJoint(joints, static_cast<Joint>(i));
+  joints.Finish();
+
+  Reader level = root.Child("parallelogram", false);
+  p.level_kp_n_m_rad = level.Number("kp_n_m_rad", 5e4, 1, 1e9, false, "N m/rad");
+  p.level_kd_n_m_s_rad = level.Number("kd_n_m_s_rad", 2e2, 0, 1e8, false, "N m s/rad");
+  level.Finish();
+  root.Finish();
+
+  if (!error) {
+    // The boom drive must hold the boom level at rest, or it stalls at once.
+    const JointSpec& boom = p.joint(Joint::kBoom);
+    const double holding = boom.PullOutTorque(0) * boom.MotorRadPerUnit(/*prismatic=*/false);
+    const double load = BoomSagRad(p, 0) * boom.kp;
+    if (load >= holding) {
+      std::ostringstream m;
+      m << "joints.boom.pull_out: holding torque " << holding << " N m at the joint cannot hold "
+        << "the boom's static load " << load
+        << " N m; raise joints.boom.gear_ratio or the torque at speed 0";
+      error = RigProfileError{"joints.boom.pull_out", m.str()};
+    }
+  }
+  if (error) {
+    error->message = std::string(where) + ": " + error->message;
+    return *error;
+  }
+  return p;
+}
+
+RigProfileResult ReadRigProfile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    return RigProfileError{"(file)", "rig profile " + path +
+                                         ": cannot be read; check the path (e.g. "
+                                         "fixtures/rigs/boom-jib.json)"};
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseRigProfile(text.str(), "rig profile " + path);
+}
+
+Vec3 IdealNodal(const RigProfile& p, const JointVector& q) {
+  const double t = q[Index(Joint::kTrack)];
+  const double s = q[Index(Joint::kSwing)];
+  const double b = q[Index(Joint::kBoom)];
+  const double heading = s + q[Index(Joint::kPan)];
+  const double tilt = q[Index(Joint::kTilt)];
+  const double roll = q[Index(Joint::kRoll)];
+  const double l = p.boom_length_m;
+  const double e = p.level_extension_m;
+  // head = tip + E (sin s, cos s, 0), tip = (L cos b sin s, T + L cos b cos s, L sin b).
+  const Vec3 head = {(l * std::cos(b) + e) * std::sin(s), t + (l * std::cos(b) + e) * std::cos(s),
+                     l * std::sin(b)};
+  // R = Rz(-heading) Rx(tilt) Ry(roll) applied to the nodal offset.
+  const Vec3& o = p.nodal_offset_m;
+  const Vec3 a = {o[0] * std::cos(roll) + o[2] * std::sin(roll), o[1],
+                  -o[0] * std::sin(roll) + o[2] * std::cos(roll)};
+  const Vec3 c = {a[0], a[1] * std::cos(tilt) - a[2] * std::sin(tilt),
+                  a[1] * std::sin(tilt) + a[2] * std::cos(tilt)};
+  const Vec3 d = {c[0] * std::cos(heading) + c[1] * std::sin(heading),
+                  -c[0] * std::sin(heading) + c[1] * std::cos(heading), c[2]};
+  return {head[0] + d[0], head[1] + d[1], head[2] + d[2]};
+}
+
+double BoomSagRad(const RigProfile& p, double boom_rad) {
+  // The parallelogram carries the head's moment to the swing, so the boom
+  // drive sees the boom's own weight and the head's weight at the boom tip.
+  const double head_kg = p.extension.mass_kg + p.pan.mass_kg + p.tilt.mass_kg + p.camera.mass_kg;
+  const double boom_arm_m =
+      p.boom.com_m[1] * std::cos(boom_rad) - p.boom.com_m[2] * std::sin(boom_rad);
+  const double torque_n_m = p.gravity_m_s2 * (p.boom.mass_kg * boom_arm_m +
+                                              head_kg * p.boom_length_m * std::cos(boom_rad));
+  return torque_n_m / p.joint(Joint::kBoom).kp;
+}
+
+std::vector<int64_t> BoomCompensationTable(const RigProfile& p) {
+  const JointSpec& boom = p.joint(Joint::kBoom);
+  const double spu = boom.StepsPerUnit(false);
+  std::vector<int64_t> table;
+  table.reserve(121);
+  for (int deg = -60; deg <= 60; ++deg) {
+    const double angle = deg * kDegToRad;
+    const double motor = angle + BoomSagRad(p, angle) - boom.home;
+    table.push_back(static_cast<int64_t>(std::llround(motor * spu)));
+  }
+  return table;
+}
+
+double BoomCompensatedSteps(const std::vector<int64_t>& table, double boom_rad) {
+  if (table.empty()) return 0;
+  const double x =
+      std::clamp(boom_rad / kDegToRad + 60.0, 0.0, static_cast<double>(table.size() - 1));
+  const size_t i = std::min(static_cast<size_t>(x), table.size() - 1);
+  if (i + 1 >= table.size()) return static_cast<double>(table.back());
+  const double f = x - static_cast<double>(i);
+  return static_cast<double>(table[i]) + f * static_cast<double>(table[i + 1] - table[i]);
+}
+
+}  // namespace moco::physics
