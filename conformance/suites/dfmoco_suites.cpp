@@ -545,6 +545,13 @@ void BadMotor(DfmCaseContext& c) {
 void TooMany(DfmCaseContext& c) {
   std::string forty = "mm";
   for (int i = 0; i < 40; ++i) forty += " 1";
+  // `bf` is a command word only where the sketch has go-motion; elsewhere it
+  // is unknown, and unknown words are never answered (their arguments are
+  // not counted), so the second line is sent only to a go-motion sketch.
+  if (!DfmocoApplies(Needs::kDfmGoMotion, c.hello)) {
+    Refused(c, {forty});
+    return;
+  }
   std::string many = "bf";
   for (int i = 0; i < 45; ++i) many += " 1";
   Refused(c, {forty, many});
@@ -839,6 +846,13 @@ RunReport RunDfmoco(Target& target, const RunOptions& options) {
     Verdicts verdicts(options.rules);
     DfmHost host(target, verdicts, options.host);
     const TimeNs t0 = host.Now();
+    // A freshly powered device may still be starting (a UART not yet enabled
+    // loses what arrives): wait for its boot greeting, up to 1 s, before
+    // greeting it, so the boot `hi` is not taken for the answer.
+    if (target.CanRestart()) {
+      host.WaitFor(0, 1000 * kMs,
+                   [](const DfmLine& l) { return As<dfmoco::HelloReply>(&l) != nullptr; });
+    }
     const auto* seen = As<dfmoco::HelloReply>(host.Call("hi"));
     if (seen != nullptr && !host.link_lost()) {
       const dfmoco::HelloReply device_hello = *seen;

@@ -24,7 +24,7 @@ namespace {
 
 constexpr TimeNs kMs = 1'000'000;
 constexpr TimeNs kSecond = 1'000'000'000;
-constexpr const char* kHello = "hi 1 4 1.2.7";  // fixtures/firmware/dfmoco_avr/README.md
+constexpr const char* kHello = "hi 1 4 1.1.0";  // fixtures/firmware/dfmoco_avr/README.md
 
 // 8N1 at UBRR 34 with U2X (57143 baud): 10 bits of 8 * 35 cycles at 16 MHz.
 constexpr TimeNs kFrameNs = 10 * 8 * 35 * 1000 / 16;  // 175 us
