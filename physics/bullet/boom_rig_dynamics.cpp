@@ -37,8 +37,8 @@ constexpr double kShapeMargin_m = 0.002;
 // link colliders to act, but the rig's own bodies never touch).
 constexpr int kLinkGroup = 0x40;
 
-btVector3 V(const Vec3& v) { return btVector3(v[0], v[1], v[2]); }
-Vec3 V(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+btVector3 V(const Point3& v) { return btVector3(v[0], v[1], v[2]); }
+Point3 V(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
 btVector3 Inertia(const BodySpec& b) { return V(b.inertia_kg_m2); }
 
 // The floor and up to 63 obstacles, one bit each in a contact mask.
@@ -185,7 +185,7 @@ struct BoomRigDynamics::Impl {
     }
   }
 
-  void AddEnvironmentBox(const Vec3& min_m, const Vec3& max_m, int user_index) {
+  void AddEnvironmentBox(const Point3& min_m, const Point3& max_m, int user_index) {
     const btVector3 lo = V(min_m);
     const btVector3 hi = V(max_m);
     auto shape = std::make_unique<btBoxShape>((hi - lo) * 0.5);

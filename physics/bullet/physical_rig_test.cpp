@@ -182,7 +182,7 @@ TEST_F(PhysicalRigTest, StateReportsPoseAndRevoluteJointsInDegrees) {
   EXPECT_NEAR(boom["following_error"].get<double>(),
               boom["commanded"].get<double>() - boom["physical"].get<double>(), 1e-9);
   ASSERT_EQ(state["pose"]["nodal_m"].size(), 3u);
-  const Vec3 nodal = rig.dynamics().Pose().nodal_m;
+  const Point3 nodal = rig.dynamics().Pose().nodal_m;
   EXPECT_EQ(state["pose"]["nodal_m"][2].get<double>(), nodal[2]);
   EXPECT_TRUE(state["contact"].is_null());
   EXPECT_EQ(state["awake"], false);

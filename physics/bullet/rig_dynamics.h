@@ -27,7 +27,7 @@ inline constexpr size_t Index(Joint j) { return static_cast<size_t>(j); }
 // Joint positions (or velocities, errors) in SI units: metres for the track,
 // radians for the five revolute joints. Indexed by Index(Joint).
 using JointVector = std::array<double, kJointCount>;
-using Vec3 = std::array<double, 3>;
+using Point3 = std::array<double, 3>;
 
 // The fixed simulation step: 1 ms (1 kHz).
 inline constexpr int64_t kStepNs = 1'000'000;
@@ -38,8 +38,8 @@ inline constexpr double kStepS = 1e-3;
 // parallel to the world frame: x east-west, y along the track, z up).
 struct BodySpec {
   double mass_kg = 1.0;
-  Vec3 com_m = {0, 0, 0};
-  Vec3 inertia_kg_m2 = {0.01, 0.01, 0.01};  // principal moments about the COM
+  Point3 com_m = {0, 0, 0};
+  Point3 inertia_kg_m2 = {0.01, 0.01, 0.01};  // principal moments about the COM
 };
 
 // One stepper-driven joint. Profile units ("joint units"): metres for the
@@ -71,8 +71,8 @@ struct JointSpec {
 // An axis-aligned box in the world frame.
 struct Box {
   std::string name;
-  Vec3 min_m = {0, 0, 0};
-  Vec3 max_m = {0, 0, 0};
+  Point3 min_m = {0, 0, 0};
+  Point3 max_m = {0, 0, 0};
 };
 
 inline constexpr size_t kMaxObstacles = 63;
@@ -84,11 +84,11 @@ struct RigProfile {
   std::string name;
   double gravity_m_s2 = 9.81;
   double boom_length_m = 1.5;
-  double level_extension_m = 0.0;      // level arm from boom tip to head point
-  Vec3 nodal_offset_m = {0, 0, 0};     // head point -> nodal point, head frame
-  double floor_z_m = -1.0;             // floor height in the world frame
-  Vec3 head_box_center_m = {0, 0, 0};  // head collision box, head frame
-  Vec3 head_box_half_m = {0.1, 0.1, 0.1};
+  double level_extension_m = 0.0;        // level arm from boom tip to head point
+  Point3 nodal_offset_m = {0, 0, 0};     // head point -> nodal point, head frame
+  double floor_z_m = -1.0;               // floor height in the world frame
+  Point3 head_box_center_m = {0, 0, 0};  // head collision box, head frame
+  Point3 head_box_half_m = {0.1, 0.1, 0.1};
   std::vector<Box> obstacles;  // at most kMaxObstacles
   // Bodies: cart (pivot = swing pivot), swing, boom (pivot = swing pivot),
   // extension (pivot = boom tip), pan, tilt, camera (pivot = head point).
@@ -132,7 +132,7 @@ RigProfileResult ReadRigProfile(const std::string& path);
 
 // The geometric ideal (FACTS forward kinematics with the conventions of
 // docs/rig-dynamics.md): nodal point for joint positions `q`, rigid links.
-Vec3 IdealNodal(const RigProfile& profile, const JointVector& q);
+Point3 IdealNodal(const RigProfile& profile, const JointVector& q);
 
 // Static sag of the boom (rad, positive = below the commanded angle) at boom
 // angle `boom_rad` from gravity on a rigid boom and head against the boom
@@ -150,10 +150,10 @@ double BoomCompensatedSteps(const std::vector<int64_t>& table, double boom_rad);
 // The head's pose: nodal point and orientation (columns of the rotation from
 // head frame to world: x right, y through the lens, z up of the image).
 struct HeadPose {
-  Vec3 nodal_m = {0, 0, 0};
-  Vec3 right = {1, 0, 0};
-  Vec3 view = {0, 1, 0};
-  Vec3 up = {0, 0, 1};
+  Point3 nodal_m = {0, 0, 0};
+  Point3 right = {1, 0, 0};
+  Point3 view = {0, 1, 0};
+  Point3 up = {0, 0, 1};
 };
 
 // A stepper lost synchronism (demanded torque above its pull-out torque at the

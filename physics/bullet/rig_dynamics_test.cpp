@@ -24,7 +24,7 @@ using test_support::Trapezoid;
 // text: tip = (L cos b sin s, T + L cos b cos s, L sin b); head = tip +
 // E (sin s, cos s, 0); nodal = head + R o, R turning the head by heading s + p
 // (clockwise from +y seen from above, as the swing), then tilt, then roll.
-Vec3 FactsNodal(const RigProfile& p, const JointVector& q) {
+Point3 FactsNodal(const RigProfile& p, const JointVector& q) {
   const double t = q[0], s = q[1], b = q[2], h = q[1] + q[3], ti = q[4], r = q[5];
   const double l = p.boom_length_m, e = p.level_extension_m;
   const double hx = l * std::cos(b) * std::sin(s) + e * std::sin(s);
@@ -38,13 +38,13 @@ Vec3 FactsNodal(const RigProfile& p, const JointVector& q) {
   const double up[3] = {std::cos(h) * std::sin(r) - std::sin(h) * std::sin(ti) * std::cos(r),
                         -std::sin(h) * std::sin(r) - std::cos(h) * std::sin(ti) * std::cos(r),
                         std::cos(ti) * std::cos(r)};
-  const Vec3& o = p.nodal_offset_m;
+  const Point3& o = p.nodal_offset_m;
   return {hx + right[0] * o[0] + view[0] * o[1] + up[0] * o[2],
           hy + right[1] * o[0] + view[1] * o[1] + up[1] * o[2],
           hz + right[2] * o[0] + view[2] * o[1] + up[2] * o[2]};
 }
 
-double Distance(const Vec3& a, const Vec3& b) {
+double Distance(const Point3& a, const Point3& b) {
   return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
                    (a[2] - b[2]) * (a[2] - b[2]));
 }

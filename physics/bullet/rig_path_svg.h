@@ -16,8 +16,8 @@ namespace moco::physics {
 // and where the simulated rig has it.
 struct RigPathSample {
   double time_s = 0;
-  Vec3 commanded_m = {0, 0, 0};
-  Vec3 physical_m = {0, 0, 0};
+  Point3 commanded_m = {0, 0, 0};
+  Point3 physical_m = {0, 0, 0};
 };
 
 // A standalone SVG document with two panels (top view, side view), each with

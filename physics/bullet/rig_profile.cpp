@@ -120,7 +120,7 @@ class Reader {
     return v->get<std::string>();
   }
 
-  Vec3 Vector(std::string_view key, Vec3 def, bool required, bool positive) {
+  Point3 Vector(std::string_view key, Point3 def, bool required, bool positive) {
     const json* v = Find(key);
     if (v == nullptr) {
       if (required && object_ != nullptr) Fail(key, "missing", "add [x, y, z] in metres");
@@ -130,7 +130,7 @@ class Reader {
       Fail(key, "expected [x, y, z], found " + Shown(*v), "write three numbers in metres");
       return def;
     }
-    Vec3 out{};
+    Point3 out{};
     for (size_t i = 0; i < 3; ++i) {
       const json& e = (*v)[i];
       if (!e.is_number() || !std::isfinite(e.get<double>()) || std::abs(e.get<double>()) > 1e3 ||
@@ -386,7 +386,7 @@ RigProfileResult ReadRigProfile(const std::string& path) {
   return ParseRigProfile(text.str(), "rig profile " + path);
 }
 
-Vec3 IdealNodal(const RigProfile& p, const JointVector& q) {
+Point3 IdealNodal(const RigProfile& p, const JointVector& q) {
   const double t = q[Index(Joint::kTrack)];
   const double s = q[Index(Joint::kSwing)];
   const double b = q[Index(Joint::kBoom)];
@@ -396,16 +396,16 @@ Vec3 IdealNodal(const RigProfile& p, const JointVector& q) {
   const double l = p.boom_length_m;
   const double e = p.level_extension_m;
   // head = tip + E (sin s, cos s, 0), tip = (L cos b sin s, T + L cos b cos s, L sin b).
-  const Vec3 head = {(l * std::cos(b) + e) * std::sin(s), t + (l * std::cos(b) + e) * std::cos(s),
-                     l * std::sin(b)};
+  const Point3 head = {(l * std::cos(b) + e) * std::sin(s), t + (l * std::cos(b) + e) * std::cos(s),
+                       l * std::sin(b)};
   // R = Rz(-heading) Rx(tilt) Ry(roll) applied to the nodal offset.
-  const Vec3& o = p.nodal_offset_m;
-  const Vec3 a = {o[0] * std::cos(roll) + o[2] * std::sin(roll), o[1],
-                  -o[0] * std::sin(roll) + o[2] * std::cos(roll)};
-  const Vec3 c = {a[0], a[1] * std::cos(tilt) - a[2] * std::sin(tilt),
-                  a[1] * std::sin(tilt) + a[2] * std::cos(tilt)};
-  const Vec3 d = {c[0] * std::cos(heading) + c[1] * std::sin(heading),
-                  -c[0] * std::sin(heading) + c[1] * std::cos(heading), c[2]};
+  const Point3& o = p.nodal_offset_m;
+  const Point3 a = {o[0] * std::cos(roll) + o[2] * std::sin(roll), o[1],
+                    -o[0] * std::sin(roll) + o[2] * std::cos(roll)};
+  const Point3 c = {a[0], a[1] * std::cos(tilt) - a[2] * std::sin(tilt),
+                    a[1] * std::sin(tilt) + a[2] * std::cos(tilt)};
+  const Point3 d = {c[0] * std::cos(heading) + c[1] * std::sin(heading),
+                    -c[0] * std::sin(heading) + c[1] * std::cos(heading), c[2]};
   return {head[0] + d[0], head[1] + d[1], head[2] + d[2]};
 }
 

@@ -64,6 +64,7 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
 Dmc16::~Dmc16() {
   rig_.SetObserver(nullptr);
   gio_.SetListener(nullptr);
+  physical_.reset();
   CancelAllTimers();
 }
 
@@ -118,8 +119,40 @@ void Dmc16::PowerOn() {
   ResetState();
   rig_.SetObserver(this);
   gio_.SetListener([this](uint32_t inputs, uint32_t, TimeNs) { OnGioInputs(inputs); });
+  StartPhysicalRig();
   // MSG_HI: "the device should issue a MSG_HI whenever it starts up".
   SendUnsolicited(profile_.Hi());
+}
+
+void Dmc16::StartPhysicalRig() {
+  physical_.reset();
+  if (!profile_.physical_rig.enabled) return;
+  physics::PhysicalRig::Callbacks callbacks;
+  callbacks.on_collision = [this](const physics::CollisionEvent& e) {
+    // The camera head hit the floor or an obstacle: the rig's e-stop chain
+    // trips (every motor halts, MOTOR_HARD_STOP with REASON 0 goes out) and
+    // re-arms, as a bumper switch on a real rig would.
+    // A head already at rest against it (a renewed contact while settling)
+    // has nothing left to stop.
+    ++stats_.collisions;
+    last_collision_ = e.what;
+    bool moving = false;
+    for (int m = 1; m <= rig_.motor_count(); ++m) moving = moving || rig_.motor(m).IsMoving();
+    if (!moving) return;
+    rig_.EngageEStop();
+    rig_.ReleaseEStop();
+  };
+  physical_ = std::make_unique<physics::PhysicalRig>(
+      scheduler_, profile_.physical_rig.rig,
+      [this] {
+        physics::StepCounts counts{};
+        for (size_t j = 0; j < physics::kJointCount; ++j) {
+          const int m = profile_.physical_rig.motors[j];
+          counts[j] = m == 0 ? 0 : rig_.motor(m).Position();
+        }
+        return counts;
+      },
+      std::move(callbacks));
 }
 
 void Dmc16::PowerOff() {
@@ -177,6 +210,9 @@ void Dmc16::OnHostBytes(wire::ByteView bytes) {
       ++stats_.framing_errors;
     }
   });
+  // A request may have started a move: the physical rig samples the motors
+  // again (it sleeps while nothing changes).
+  if (physical_) physical_->Wake();
 }
 
 void Dmc16::OnFrame(const dmc::FrameRef& f) {
@@ -1286,8 +1322,15 @@ nlohmann::json Dmc16::State() const {
     upload["motors"] = upload_.Motors();
     upload["dmx_channels"] = upload_.Channels();
   }
+  nlohmann::json physical = nullptr;
+  if (physical_) {
+    physical = physical_->StateJson();
+    physical["collisions"] = stats_.collisions;
+    physical["last_collision"] = last_collision_;
+  }
   return {
       {"model", "dmc16"},
+      {"physical_rig", physical},
       {"powered", powered_},
       {"time_ns", scheduler_.Now()},
       {"mode", ModeName()},

@@ -17,6 +17,7 @@
 #include "devices/dmc16/rt_move.h"
 #include "devices/dmc16/script_planner.h"
 #include "devices/dmc16/virtual_axes.h"
+#include "physics/bullet/physical_rig.h"
 #include "sim/callback.h"
 #include "sim/io.h"
 #include "sim/rig.h"
@@ -33,6 +34,7 @@ struct Dmc16Stats {
   uint64_t host_acks = 0;        // host ACKs of unsolicited messages (ignored)
   uint64_t unsolicited = 0;      // messages the device sent unprompted
   uint64_t error_replies = 0;    // ACKs with a code other than OK
+  uint64_t collisions = 0;       // physical rig: head collisions (each an e-stop)
 };
 
 class Dmc16 final : public Device, private sim::RigObserver {
@@ -67,6 +69,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
   const sim::CameraPort& camera() const { return camera_; }
   const sim::GioPort& gio_ref() const { return gio_; }
   const RtMove& upload() const { return upload_; }
+  // The physical rig (profile `physical_rig`), or null.
+  const physics::PhysicalRig* physical_rig() const { return physical_.get(); }
   const VirtualAxes& virtual_axes() const { return virtual_; }
   // "idle", "armed-run", "armed-shoot", "running", "shooting", "jogging-all".
   std::string_view ModeName() const;
@@ -166,6 +170,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
   void CancelTimer(sim::Scheduler::TimerId& id);
   void AddIoTimer(sim::TimeNs at_ns, sim::Callback cb);
   void CancelAllTimers();
+  // Builds the physical rig from the profile (none when not enabled).
+  void StartPhysicalRig();
   void ResetState();
 
   // --- RigObserver ---
@@ -187,6 +193,9 @@ class Dmc16 final : public Device, private sim::RigObserver {
   RtMove upload_;
   std::vector<ScriptPlanner*> planners_;  // owned by the motors, index motor-1
   VirtualAxes virtual_;
+  // The Bullet-modelled rig driven by the motors (profile `physical_rig`), or null.
+  std::unique_ptr<physics::PhysicalRig> physical_;
+  std::string last_collision_;
   std::unique_ptr<dmc::FrameDecoder> decoder_;
   bool powered_ = false;
   uint32_t next_id_ = 1;  // device-side IDs of unsolicited messages (ERRATA 1.9)

@@ -1,6 +1,8 @@
 // Reading and writing the DMC-16 profile (see dmc16_profile.h).
 #include "devices/dmc16/dmc16_profile.h"
 
+#include <filesystem>
+
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -27,7 +29,8 @@ dmc::HiResponse Dmc16Profile::Hi() const {
   return hi;
 }
 
-Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where) {
+Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where,
+                                  const std::string& base_dir) {
   Dmc16Profile p;
   ProfileReader r(j, where);
   const std::string model = r.GetString("model", "dmc16");
@@ -76,6 +79,45 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
         v.GetNumber("jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s, 1e-6, 1e6);
     p.virtual_axes.jog_angle_deg_per_s =
         v.GetNumber("jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s, 1e-6, 1e6);
+    v.Finish();
+  }
+  if (r.Has("physical_rig")) {
+    ProfileReader v = r.Child("physical_rig");
+    p.physical_rig.enabled = v.GetBool("enabled", true);
+    p.physical_rig.rig_path = v.GetString("rig", "", 4096);
+    if (p.physical_rig.rig_path.empty()) {
+      v.Fail("rig", "is missing", "name a rig profile, e.g. \"rig\": \"../rigs/boom-jib.json\"");
+    }
+    if (v.Has("motors")) {
+      ProfileReader m = v.Child("motors");
+      for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
+        p.physical_rig.motors[joint] = static_cast<int>(
+            m.GetInt(physics::kJointNames[joint], p.physical_rig.motors[joint], 0, p.motor_count));
+      }
+      m.Finish();
+    }
+    for (int motor : p.physical_rig.motors) {
+      if (motor > p.motor_count) {
+        v.Fail("motors", "names a motor beyond motor_count",
+               "use motors 1.." + std::to_string(p.motor_count) + " or 0 for a fixed joint");
+      }
+    }
+    // The rig file is read with the device profile, relative to its folder.
+    std::filesystem::path rig = p.physical_rig.rig_path;
+    if (rig.is_relative() && !base_dir.empty()) {
+      std::error_code ec;
+      if (std::filesystem::exists(std::filesystem::path(base_dir) / rig, ec)) {
+        rig = std::filesystem::path(base_dir) / rig;
+      }
+    }
+    const physics::RigProfileResult loaded = physics::ReadRigProfile(rig.string());
+    if (!loaded.ok()) {
+      v.Fail("rig",
+             "(" + rig.string() + ") is not a usable rig profile: " + loaded.error().field + ": " +
+                 loaded.error().message,
+             "fix the rig profile (docs/rig-dynamics.md)");
+    }
+    p.physical_rig.rig = loaded.value();
     v.Finish();
   }
   const int64_t version = r.GetInt("protocol_version", 2, 0, 0xffff);
@@ -134,7 +176,7 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
 Dmc16Profile LoadDmc16Profile(const std::string& path) {
   std::string where;
   const nlohmann::json j = ReadProfileFile(path, &where);
-  return Dmc16ProfileFromJson(j, where);
+  return Dmc16ProfileFromJson(j, where, std::filesystem::path(path).parent_path().string());
 }
 
 nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
@@ -149,7 +191,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
     if (s.high_steps) e["high_steps"] = *s.high_steps;
     sets.push_back(e);
   }
-  return {
+  nlohmann::json out = {
       {"model", "dmc16"},
       {"name", p.name},
       {"firmware", {{"major", p.fw_major}, {"minor", p.fw_minor}, {"rev", p.fw_rev}}},
@@ -179,6 +221,14 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s},
         {"jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s}}},
   };
+  if (p.physical_rig.enabled) {
+    nlohmann::json motors;
+    for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
+      motors[std::string(physics::kJointNames[joint])] = p.physical_rig.motors[joint];
+    }
+    out["physical_rig"] = {{"rig", p.physical_rig.rig_path}, {"motors", motors}};
+  }
+  return out;
 }
 
 }  // namespace moco::devices

@@ -4,6 +4,7 @@
 #ifndef MOCO_DEVICES_DMC16_DMC16_PROFILE_H_
 #define MOCO_DEVICES_DMC16_DMC16_PROFILE_H_
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "physics/bullet/rig_dynamics.h"
 #include "wire/dmc.h"
 
 namespace moco::devices {
@@ -33,6 +35,18 @@ struct Dmc16Virtual {
   double jog_angle_deg_per_s = 30.0;
 };
 
+// The physical boom rig the motors drive (physics/bullet, docs/rig-dynamics.md):
+// when enabled the device steps a Bullet model of the rig from its motors'
+// step counts and treats a collision of the camera head as an e-stop.
+struct Dmc16PhysicalRig {
+  bool enabled = false;
+  std::string rig_path;  // the rig profile file, as written (relative to the device profile)
+  physics::RigProfile rig;
+  // The DMC motor (1..motor_count) driving each joint in physics::Joint order
+  // (track, swing, boom, pan, tilt, roll); 0 holds the joint at its home.
+  std::array<int, physics::kJointCount> motors{1, 2, 3, 4, 5, 6};
+};
+
 struct Dmc16Profile {
   std::string name = "DMC-16";  // <= 32 bytes UTF-8 (HI NAME)
   uint8_t fw_major = 2;
@@ -49,6 +63,7 @@ struct Dmc16Profile {
   // `virtual_axes` instead.
   uint32_t capabilities = 0x0783;
   Dmc16Virtual virtual_axes;
+  Dmc16PhysicalRig physical_rig;
   // HI PROTOCOL VERSION; nullopt sends the 49-byte HI of older devices (FACTS).
   std::optional<uint16_t> protocol_version = 2;
   dmc::AckWidth ack_width = dmc::AckWidth::k16;
@@ -81,7 +96,10 @@ struct Dmc16Profile {
 
 // Reads a profile object; absent fields keep the defaults above. Throws
 // ProfileError naming the field and the fix. `where` prefixes messages.
-Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where);
+// `base_dir` is where relative file names in the profile (physical_rig.rig)
+// are looked up first; the working directory comes next.
+Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where,
+                                  const std::string& base_dir = "");
 // Reads a profile file. Throws ProfileError (unreadable file, bad JSON, bad field).
 Dmc16Profile LoadDmc16Profile(const std::string& path);
 // The profile as JSON (every field), for State() and for writing a template.
