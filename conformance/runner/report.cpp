@@ -15,33 +15,6 @@ std::string Ms(TimeNs ns) {
   return buf;
 }
 
-std::string Xml(std::string_view s) {
-  std::string out;
-  for (char ch : s) {
-    switch (ch) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20 && ch != '\n' && ch != '\t') {
-          out += '?';
-        } else {
-          out += ch;
-        }
-    }
-  }
-  return out;
-}
-
 std::string EvidenceText(const Evidence& e) {
   std::string s = "expected: " + e.expected + "\nobserved: " + e.observed + "\nat: " + Ms(e.t_ns);
   if (!e.hex.empty()) s += "\nbytes: " + e.hex;
@@ -205,9 +178,9 @@ std::string JunitReport(const RunReport& report) {
   for (const CaseResult& c : report.cases) {
     const std::string cls = "mococheck." + report.protocol + "." + c.suite + "." + c.name;
     if (!c.applicable) {
-      body += "    <testcase classname=\"" + Xml(cls) + "\" name=\"(case)\" time=\"0\">\n";
-      body +=
-          "      <skipped message=\"not applicable: " + Xml(c.not_applicable_because) + "\"/>\n";
+      body += "    <testcase classname=\"" + XmlEscape(cls) + "\" name=\"(case)\" time=\"0\">\n";
+      body += "      <skipped message=\"not applicable: " + XmlEscape(c.not_applicable_because) +
+              "\"/>\n";
       body += "    </testcase>\n";
       ++tests;
       ++skipped;
@@ -217,17 +190,18 @@ std::string JunitReport(const RunReport& report) {
       ++tests;
       const Rule* r = FindRule(id);
       const std::string level(r ? LevelName(r->level) : "?");
-      body += "    <testcase classname=\"" + Xml(cls) + "\" name=\"" + Xml(id) + "\" time=\"" +
-              std::to_string(c.wall_s) + "\">\n";
+      body += "    <testcase classname=\"" + XmlEscape(cls) + "\" name=\"" + XmlEscape(id) +
+              "\" time=\"" + std::to_string(c.wall_s) + "\">\n";
       if (o.status == Status::kFail && r && r->level == Level::kMust) {
         ++failures;
-        body += "      <failure message=\"" + Xml(level + " " + std::string(r->title)) + "\">";
-        for (const Evidence& e : o.evidence) body += Xml(EvidenceText(e)) + "\n";
+        body +=
+            "      <failure message=\"" + XmlEscape(level + " " + std::string(r->title)) + "\">";
+        for (const Evidence& e : o.evidence) body += XmlEscape(EvidenceText(e)) + "\n";
         body += "</failure>\n";
       } else if (o.status != Status::kPass) {
-        body +=
-            "      <system-out>" + Xml(std::string(StatusName(o.status)) + " (" + level + "): ");
-        for (const Evidence& e : o.evidence) body += Xml(EvidenceText(e)) + "\n";
+        body += "      <system-out>" +
+                XmlEscape(std::string(StatusName(o.status)) + " (" + level + "): ");
+        for (const Evidence& e : o.evidence) body += XmlEscape(EvidenceText(e)) + "\n";
         body += "</system-out>\n";
       }
       body += "    </testcase>\n";
@@ -239,12 +213,36 @@ std::string JunitReport(const RunReport& report) {
   s += "  <testsuite name=\"mococheck." + report.protocol + "\" tests=\"" + std::to_string(tests) +
        "\" failures=\"" + std::to_string(failures) + "\" skipped=\"" + std::to_string(skipped) +
        "\" time=\"" + std::to_string(report.wall_s) + "\">\n";
-  s += "    <properties><property name=\"target\" value=\"" + Xml(report.target) +
+  s += "    <properties><property name=\"target\" value=\"" + XmlEscape(report.target) +
        "\"/><property name=\"seed\" value=\"" + std::to_string(report.options.random.seed) +
        "\"/></properties>\n";
   s += body;
   s += "  </testsuite>\n</testsuites>\n";
   return s;
+}
+
+std::string XmlEscape(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char ch : s) {
+    switch (ch) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += static_cast<unsigned char>(ch) < 0x20 && ch != '\n' && ch != '\t' ? '?' : ch;
+    }
+  }
+  return out;
 }
 
 std::string WriteAtomically(const std::string& path, const std::string& text) {

@@ -21,6 +21,10 @@ std::string JunitReport(const RunReport& report);
 // failure, and a plot of reported motor positions.
 std::string HtmlReport(const RunReport& report);
 
+// `s` with & < > " escaped for XML/HTML text and attributes; control
+// characters other than newline and tab become '?'.
+std::string XmlEscape(std::string_view s);
+
 // Writes `text` to "<path>.partial" and renames it to `path`. Returns an
 // error message, or an empty string.
 std::string WriteAtomically(const std::string& path, const std::string& text);

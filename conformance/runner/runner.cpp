@@ -31,6 +31,11 @@ std::map<Status, size_t> RunReport::RuleCounts() const {
   return n;
 }
 
+void CaseResult::KeepTraffic(const std::vector<Chunk>& all) {
+  traffic.assign(all.begin(),
+                 all.begin() + static_cast<ptrdiff_t>(std::min(all.size(), kMaxTrafficChunks)));
+}
+
 int ExitCode(const RunReport& report) { return report.MustFailed() ? 1 : 0; }
 
 RunReport RunDmc(Target& target, const RunOptions& options) {
@@ -105,10 +110,7 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
     result.target_ns = host.Now() - t0;
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
     result.outcomes = verdicts.outcomes();
-    const auto& traffic = host.traffic();
-    result.traffic.assign(traffic.begin(),
-                          traffic.begin() + static_cast<ptrdiff_t>(std::min(
-                                                traffic.size(), CaseResult::kMaxTrafficChunks)));
+    result.KeepTraffic(host.traffic());
     report.cases.push_back(std::move(result));
   }
 

@@ -44,6 +44,8 @@ struct CaseResult {
   static constexpr size_t kMaxTrafficChunks = 20000;
   std::vector<Chunk> traffic;
   bool MustFailed() const;
+  // Keeps the first kMaxTrafficChunks chunks of a case's traffic.
+  void KeepTraffic(const std::vector<Chunk>& all);
 };
 
 struct RuleSummary {

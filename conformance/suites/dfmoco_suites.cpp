@@ -868,10 +868,7 @@ RunReport RunDfmoco(Target& target, const RunOptions& options) {
     result.target_ns = host.Now() - t0;
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
     result.outcomes = verdicts.outcomes();
-    const auto& traffic = host.traffic();
-    result.traffic.assign(traffic.begin(),
-                          traffic.begin() + static_cast<ptrdiff_t>(std::min(
-                                                traffic.size(), CaseResult::kMaxTrafficChunks)));
+    result.KeepTraffic(host.traffic());
     report.cases.push_back(std::move(result));
   }
 
