@@ -15,10 +15,6 @@
 #include <utility>
 #include <vector>
 
-// libsimavr 1.6 never frees a core's IRQs (avr_terminate leaves them; a bare
-// avr_make_mcu_by_name + avr_init + avr_terminate leaks the same): not this code's leak.
-extern "C" const char* __lsan_default_suppressions() { return "leak:libsimavr.so\n"; }
-
 namespace moco::conformance {
 namespace {
 
