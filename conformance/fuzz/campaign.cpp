@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include "conformance/suites/sequence.h"
 #include "control/session.h"
 
 namespace moco::conformance {
@@ -36,26 +37,15 @@ control::Protocol ToWire(Protocol p) {
   return control::Protocol::kDmc;
 }
 
-// Drops messages while the mutant still fails (one pass, largest chunks first).
+// Drops messages while the mutant still fails, keeping at least one.
 Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violation) {
-  for (size_t chunk = messages.size() / 2; chunk >= 1; chunk /= 2) {
-    size_t at = 0;
-    while (at < messages.size() && messages.size() > 1) {
-      Messages fewer = messages;
-      const size_t n = std::min(chunk, fewer.size() - at);
-      fewer.erase(fewer.begin() + static_cast<ptrdiff_t>(at),
-                  fewer.begin() + static_cast<ptrdiff_t>(at + n));
-      const FuzzVerdict v = executor.Run(fewer);
-      if (!v.ok) {
-        messages = std::move(fewer);
-        violation = v.violation;
-      } else {
-        at += n;
-      }
-    }
-    if (chunk == 1) break;
-  }
-  return messages;
+  constexpr int kNoBudget = 1 << 30;
+  return ShrinkSequence(std::move(messages), kNoBudget, [&](const Messages& fewer) {
+    if (fewer.empty()) return false;
+    const FuzzVerdict v = executor.Run(fewer);
+    if (!v.ok) violation = v.violation;
+    return !v.ok;
+  });
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "conformance/suites/dfmoco_suites.h"
+#include "conformance/suites/sequence.h"
 #include "control/session.h"
 
 namespace moco::conformance {
@@ -207,21 +208,9 @@ void DfmRandomSequence(DfmCaseContext& c) {
   // Shrink: drop chunks of steps while the sequence still fails afresh. A
   // shorter sequence stays valid: np and zm need a motor at rest, and a
   // dropped move only leaves it at rest sooner.
-  int budget = 200;
-  for (size_t chunk = std::max<size_t>(steps.size() / 2, 1); chunk >= 1 && budget > 0; chunk /= 2) {
-    for (size_t at = 0; at < steps.size() && budget > 0;) {
-      std::vector<Step> fewer = steps;
-      fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(at),
-                  fewer.begin() + static_cast<std::ptrdiff_t>(std::min(at + chunk, fewer.size())));
-      --budget;
-      if (FailsAfresh(c.target, c.host_options, fewer, motors)) {
-        steps = std::move(fewer);
-      } else {
-        at += chunk;
-      }
-    }
-    if (chunk == 1) break;
-  }
+  steps = ShrinkSequence(std::move(steps), 200, [&](const std::vector<Step>& fewer) {
+    return FailsAfresh(c.target, c.host_options, fewer, motors);
+  });
   // Replay the shortest failing sequence once more for its transcript.
   c.target.Restart();
   Verdicts v;
@@ -234,30 +223,10 @@ void DfmRandomSequence(DfmCaseContext& c) {
   c.log.push_back("transcript:");
   c.log.push_back(DfmTranscript(h));
   if (c.random.session_path.empty()) return;
-  control::SessionHeader header;
-  header.protocol = wire::Protocol::kDfmoco;
-  header.device = c.target.Name();
-  header.clock = c.target.VirtualClock() ? "virtual" : "real";
-  header.note = "mococheck dfmoco random sequence, seed " + std::to_string(c.random.seed) +
-                ", shrunk to " + std::to_string(steps.size()) + " step(s)";
-  try {
-    control::SessionWriter w(c.random.session_path, header);
-    for (const Chunk& ch : h.traffic()) {
-      control::SessionEntry e;
-      e.t_ns = ch.t_ns;
-      e.from = ch.from_host ? control::Origin::kHost : control::Origin::kDevice;
-      e.bytes = ch.bytes;
-      w.Append(e);
-    }
-    std::string error;
-    if (w.Finish(&error)) {
-      c.log.push_back("saved the failing session to " + c.random.session_path);
-    } else {
-      c.log.push_back("could not save the session: " + error);
-    }
-  } catch (const std::exception& e) {
-    c.log.push_back(std::string("could not save the session: ") + e.what());
-  }
+  SaveFailingSession(c.random.session_path, wire::Protocol::kDfmoco, c.target,
+                     "mococheck dfmoco random sequence, seed " + std::to_string(c.random.seed) +
+                         ", shrunk to " + std::to_string(steps.size()) + " step(s)",
+                     h.traffic(), c.log);
 }
 
 }  // namespace moco::conformance
