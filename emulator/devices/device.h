@@ -6,7 +6,9 @@
 #define MOCO_DEVICES_DEVICE_H_
 
 #include <cstdint>
+#include <functional>
 #include <string_view>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -41,6 +43,11 @@ struct LineSettings {
   }
 };
 
+// Something the simulated hardware did by itself, not in answer to the host: a
+// JSON object whose "event" names it ("stall", "collision", ...) with its own
+// fields. The listener stamps it with the scheduler's time.
+using DeviceEventListener = std::function<void(const nlohmann::json& event)>;
+
 // An emulated device. Lifecycle: constructed powered off; PowerOn() boots it
 // (a device may announce itself then, e.g. DMC HI or DFMoco `hi`); PowerOff()
 // drops all volatile state and cancels its timers. All calls come from the
@@ -70,6 +77,19 @@ class Device {
   // A snapshot of the device's state (positions, motion, I/O, mode) for the
   // control channel's "state" query and for logs. An object; {} when none.
   virtual nlohmann::json State() const { return nlohmann::json::object(); }
+
+  // Where the device reports its events (docs/control.md "Device events");
+  // replaces the previous listener, null for none. Called back from the
+  // scheduler's thread, never re-entrantly from inside this call.
+  void SetEventListener(DeviceEventListener listener) { event_listener_ = std::move(listener); }
+
+ protected:
+  void EmitEvent(const nlohmann::json& event) const {
+    if (event_listener_) event_listener_(event);
+  }
+
+ private:
+  DeviceEventListener event_listener_;
 };
 
 }  // namespace moco::devices

@@ -28,12 +28,20 @@ void PhysicalRig::Wake() {
   }
 }
 
+void PhysicalRig::Rebase() {
+  const StepCounts counts = source_();
+  for (size_t j = 0; j < kJointCount; ++j) shift_[j] += last_counts_[j] - counts[j];
+  last_counts_ = counts;
+  Wake();
+}
+
 JointVector PhysicalRig::ToJoints(const StepCounts& counts) const {
   const RigProfile& p = dynamics_.profile();
   JointVector q{};
   for (size_t j = 0; j < kJointCount; ++j) {
     const bool prismatic = RigProfile::Prismatic(static_cast<Joint>(j));
-    q[j] = p.joints[j].home + static_cast<double>(counts[j]) / p.joints[j].StepsPerUnit(prismatic);
+    q[j] = p.joints[j].home +
+           static_cast<double>(counts[j] + shift_[j]) / p.joints[j].StepsPerUnit(prismatic);
   }
   return q;
 }

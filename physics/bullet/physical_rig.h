@@ -53,7 +53,14 @@ class PhysicalRig {
   void Wake();
   bool awake() const { return timer_ != sim::Scheduler::kNoTimer; }
 
-  // Step counts -> SI joint positions (home + steps / steps per unit).
+  // The device relabelled its step counts without moving a motor (a
+  // position reset, the counts restarting at 0 on power-on): the joints stay
+  // where they are and the counts sampled now name the present command from
+  // here on. A rig that followed the old counts does not lurch to the new ones.
+  void Rebase();
+
+  // Step counts -> SI joint positions (home + (steps + rebase shift) / steps
+  // per unit; the shift is 0 until the first Rebase).
   JointVector ToJoints(const StepCounts& counts) const;
 
   const BoomRigDynamics& dynamics() const { return dynamics_; }
@@ -74,6 +81,7 @@ class PhysicalRig {
   Callbacks callbacks_;
   sim::Scheduler::TimerId timer_ = sim::Scheduler::kNoTimer;
   StepCounts last_counts_{};
+  StepCounts shift_{};  // added to sampled counts (Rebase)
   int rest_ticks_ = 0;
   int64_t steps_taken_ = 0;
   int64_t collision_count_ = 0;

@@ -169,6 +169,35 @@ TEST_F(PhysicalRigTest, AStallCallsBackWithTheEpisodeOnTheSchedulersClock) {
   EXPECT_FALSE(state["joints"]["track"]["stalled"].get<bool>());
 }
 
+TEST_F(PhysicalRigTest, ARebasedCountJumpMovesNothingAndLaterMovesAreRelativeToIt) {
+  std::vector<StallEvent> stalls;
+  PhysicalRig rig = MakeRig(
+      {.on_stall = [&](const StallEvent& s) { stalls.push_back(s); }, .on_collision = nullptr});
+  motors_.Move(Joint::kTrack, 0.5, 0.2, 0.5);
+  rig.Wake();
+  scheduler_.RunUntilIdle(100'000);
+  const double before = rig.dynamics().PhysicalJoints()[0];
+  ASSERT_NEAR(before, 0.5, 1e-3);
+  // The host zeroes the track's count where it stands (MOTOR_RESET_POSITION).
+  motors_.Jump(Joint::kTrack, profile_.joint(Joint::kTrack).home);
+  rig.Rebase();
+  scheduler_.RunUntilIdle(100'000);
+  EXPECT_TRUE(stalls.empty());
+  EXPECT_NEAR(rig.dynamics().PhysicalJoints()[0], before, 1e-6);
+  EXPECT_NEAR(rig.dynamics().CommandedJoints()[0], 0.5, 1e-9);
+  // Counts from the new zero: +0.3 m of count is 0.8 m of track.
+  motors_.Move(Joint::kTrack, profile_.joint(Joint::kTrack).home + 0.3, 0.2, 0.5);
+  rig.Wake();
+  scheduler_.RunUntilIdle(100'000);
+  EXPECT_NEAR(rig.dynamics().PhysicalJoints()[0], 0.8, 1e-3);
+  EXPECT_TRUE(stalls.empty());
+  // Without Rebase the same jump is a lurch the stepper cannot follow.
+  motors_.Jump(Joint::kTrack, profile_.joint(Joint::kTrack).home);
+  rig.Wake();
+  scheduler_.RunUntilIdle(100'000);
+  EXPECT_FALSE(stalls.empty());
+}
+
 TEST_F(PhysicalRigTest, StateReportsPoseAndRevoluteJointsInDegrees) {
   motors_.Jump(Joint::kBoom, 20 * kDeg);  // where the rig starts
   PhysicalRig rig = MakeRig();

@@ -125,8 +125,13 @@ void Dmc16::PowerOn() {
 }
 
 void Dmc16::StartPhysicalRig() {
-  physical_.reset();
   if (!profile_.physical_rig.enabled) return;
+  if (physical_) {
+    // A power cycle restarts the step counts at 0 but the rig stands where
+    // it stopped (open loop: the device no longer knows where that is).
+    physical_->Rebase();
+    return;
+  }
   physics::PhysicalRig::Callbacks callbacks;
   callbacks.on_collision = [this](const physics::CollisionEvent& e) {
     // The camera head hit the floor or an obstacle: the rig's e-stop chain
@@ -138,9 +143,25 @@ void Dmc16::StartPhysicalRig() {
     last_collision_ = e.what;
     bool moving = false;
     for (int m = 1; m <= rig_.motor_count(); ++m) moving = moving || rig_.motor(m).IsMoving();
+    EmitEvent({{"event", "collision"},
+               {"with", e.what},
+               {"began_ns", e.time_ns},
+               {"halted_motors", moving}});
     if (!moving) return;
     rig_.EngageEStop();
     rig_.ReleaseEStop();
+  };
+  callbacks.on_stall = [this](const physics::StallEvent& e) {
+    // An open-loop stepper slipped: the device's count and the joint differ
+    // by `lost_steps` from now on, and nothing on the wire says so.
+    ++stats_.stalls;
+    const size_t j = static_cast<size_t>(e.joint);
+    EmitEvent({{"event", "stall"},
+               {"joint", std::string(physics::kJointNames[j])},
+               {"motor", profile_.physical_rig.motors[j]},
+               {"lost_steps", e.lost_steps},
+               {"began_ns", e.time_ns},
+               {"ended_ns", e.end_ns}});
   };
   physical_ = std::make_unique<physics::PhysicalRig>(
       scheduler_, profile_.physical_rig.rig,
@@ -586,7 +607,11 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
 AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
   const AckCode code = FromMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
-  if (code == AckCode::kOk) on_frame_.reset();
+  if (code == AckCode::kOk) {
+    on_frame_.reset();
+    // The count is renamed, nothing moves: the physical joint stays put.
+    if (physical_) physical_->Rebase();
+  }
   return code;
 }
 
@@ -1326,6 +1351,7 @@ nlohmann::json Dmc16::State() const {
   if (physical_) {
     physical = physical_->StateJson();
     physical["collisions"] = stats_.collisions;
+    physical["stalls"] = stats_.stalls;
     physical["last_collision"] = last_collision_;
   }
   return {

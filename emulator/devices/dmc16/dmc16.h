@@ -35,6 +35,7 @@ struct Dmc16Stats {
   uint64_t unsolicited = 0;      // messages the device sent unprompted
   uint64_t error_replies = 0;    // ACKs with a code other than OK
   uint64_t collisions = 0;       // physical rig: head collisions (each an e-stop)
+  uint64_t stalls = 0;           // physical rig: stall episodes (steps lost)
 };
 
 class Dmc16 final : public Device, private sim::RigObserver {

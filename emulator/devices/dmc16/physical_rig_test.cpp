@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <vector>
 
 #include "devices/dmc16/dmc16_test_support.h"
 
@@ -77,6 +78,82 @@ TEST(Dmc16PhysicalRig, DrivingTheHeadIntoTheFloorHardStopsEveryMotor) {
   // The e-stop chain re-armed: the device accepts a move away again.
   EXPECT_FALSE(s["estop"].get<bool>());
   EXPECT_TRUE(Moves(h, 3, 0));
+}
+
+TEST(Dmc16PhysicalRig, ACollisionIsReportedAsADeviceEvent) {
+  Host h(BoomProfile());
+  std::vector<nlohmann::json> events;
+  h.device().SetEventListener([&](const nlohmann::json& e) { events.push_back(e); });
+  ASSERT_TRUE(Moves(h, 3, static_cast<int32_t>(-59 * kBoomStepsPerDeg)));
+  h.RunMs(15000);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events[0]["event"], "collision");
+  EXPECT_EQ(events[0]["with"], "floor");
+  EXPECT_EQ(events[0]["halted_motors"], true);
+  EXPECT_GT(events[0]["began_ns"].get<int64_t>(), 0);
+  for (const auto& e : events) EXPECT_NE(e["event"], "stall") << e.dump();
+}
+
+TEST(Dmc16PhysicalRig, RaisingTheBoomFasterThanItsMotorCarriesReportsAStall) {
+  Host h(BoomProfile());
+  std::vector<nlohmann::json> events;
+  h.device().SetEventListener([&](const nlohmann::json& e) { events.push_back(e); });
+  // 40 deg/s: the boom motor turns at 11 rev/s, where its pull-out torque
+  // (0.5 N m, boom-jib.json) is far below what the boom's weight needs.
+  ASSERT_EQ(h.Request(dmc::MotorSetSpeed{3, static_cast<uint32_t>(40 * kBoomStepsPerDeg),
+                                         static_cast<uint32_t>(400 * kBoomStepsPerDeg)}),
+            dmc::AckCode::kOk);
+  const int32_t target = static_cast<int32_t>(40 * kBoomStepsPerDeg);
+  ASSERT_TRUE(Moves(h, 3, target));
+  h.RunMs(5000);
+  ASSERT_EQ(h.Pos(3), target);  // the device counted every step
+  int64_t lost = 0;
+  size_t stalls = 0;
+  for (const auto& e : events) {
+    if (e["event"] != "stall") continue;
+    ++stalls;
+    EXPECT_EQ(e["joint"], "boom");
+    EXPECT_EQ(e["motor"], 3);
+    EXPECT_GE(e["ended_ns"].get<int64_t>(), e["began_ns"].get<int64_t>());
+    lost += e["lost_steps"].get<int64_t>();
+  }
+  ASSERT_GT(stalls, 0u);
+  EXPECT_GT(lost, 0);  // fell behind going up
+  const nlohmann::json s = h.device().State()["physical_rig"];
+  EXPECT_EQ(s["stalls"], stalls);
+  EXPECT_EQ(s["joints"]["boom"]["lost_steps"], lost);
+  // ... and the joint is that many steps short of where the count says.
+  const auto& dyn = h.device().physical_rig()->dynamics();
+  const double boom_deg =
+      dyn.PhysicalJoints()[static_cast<size_t>(physics::Joint::kBoom)] * 180.0 / 3.14159265358979;
+  EXPECT_LT(boom_deg, 40.0 - static_cast<double>(lost) / kBoomStepsPerDeg + 1.0);
+}
+
+TEST(Dmc16PhysicalRig, ResettingAPositionOrPowerCyclingDoesNotMoveTheRig) {
+  Host h(BoomProfile());
+  std::vector<nlohmann::json> events;
+  h.device().SetEventListener([&](const nlohmann::json& e) { events.push_back(e); });
+  ASSERT_TRUE(Moves(h, 1, 16000));  // 0.1 m of track (3200 x 50 steps per metre)
+  h.RunMs(6000);
+  const auto& dyn = h.device().physical_rig()->dynamics();
+  const double track_m = dyn.PhysicalJoints()[0];
+  ASSERT_NEAR(track_m, 0.1, 1e-3);
+  // Zero the track where it stands: the count changes, the cart does not.
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{1, 0}), dmc::AckCode::kOk);
+  h.RunMs(2000);
+  EXPECT_EQ(h.Pos(1), 0);
+  EXPECT_NEAR(h.device().physical_rig()->dynamics().PhysicalJoints()[0], track_m, 1e-6);
+  // A power cycle restarts every count at 0; the rig stays where it stood.
+  h.device().PowerOff();
+  h.RunMs(500);
+  h.device().PowerOn();
+  h.RunMs(2000);
+  EXPECT_NEAR(h.device().physical_rig()->dynamics().PhysicalJoints()[0], track_m, 1e-6);
+  EXPECT_TRUE(events.empty()) << events.front().dump();
+  // Moves now count from the new zero.
+  ASSERT_TRUE(Moves(h, 1, 16000));
+  h.RunMs(6000);
+  EXPECT_NEAR(h.device().physical_rig()->dynamics().PhysicalJoints()[0], 0.2, 1e-3);
 }
 
 }  // namespace
