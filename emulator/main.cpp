@@ -83,22 +83,13 @@ int Decode(const std::string& path, bool show_time, bool strict) {
 // device, the field and the fix).
 int Serve(moco::transport::EmulatorConfig config) {
   using moco::control::ControlChannel;
-  using moco::control::ControlEvent;
   try {
     moco::transport::Emulator emulator(std::move(config));
     ControlChannel channel(emulator.scheduler());
     for (size_t i = 0; i < emulator.size(); ++i) {
       channel.AddDevice(emulator.name(i), emulator.device(i), &emulator.server(i));
     }
-    channel.SetActionListener([&](const ControlEvent& e) {
-      emulator.Log(moco::transport::LogLevel::kInfo, "control: " + e.SessionLine().dump());
-      // Link cuts and power cycles are recorded by the link itself.
-      const std::string cmd = e.request.value("cmd", "");
-      if (cmd == "power_cycle" || cmd == "cut_link") return;
-      std::string device = e.request.value("device", "");
-      if (device.empty() && emulator.size() == 1) device = emulator.name(0);
-      emulator.RecordEvent(device, e.ToSessionEntry());
-    });
+    emulator.AttachControl(channel);
     const auto& cfg = emulator.config();
     std::unique_ptr<moco::control::ScenarioRun> scenario_run;
     if (!cfg.scenario_path.empty()) {

@@ -77,6 +77,11 @@ const std::vector<CommandSpec>& Specs() {
        "the device's state with its rig, GIO, link statistics and the scheduler time",
        {},
        R"({"cmd":"state"})"},
+      {"events",
+       "what the device did by itself (stepper stalls, head collisions of a physical rig), "
+       "numbered from 1; the last 256 are kept",
+       {{"after", "only events numbered above this (default 0: all kept)"}},
+       R"({"cmd":"events","after":0})"},
       {"devices", "the devices served", {}, R"({"cmd":"devices"})"},
       {"help", "this vocabulary", {}, R"({"cmd":"help"})"},
   };
@@ -414,6 +419,7 @@ std::string_view CommandName(const CommandBody& body) {
                         [](const CutLinkCommand&) { return std::string_view("cut_link"); },
                         [](const FaultsCommand&) { return std::string_view("faults"); },
                         [](const StateCommand&) { return std::string_view("state"); },
+                        [](const EventsCommand&) { return std::string_view("events"); },
                         [](const DevicesCommand&) { return std::string_view("devices"); },
                         [](const HelpCommand&) { return std::string_view("help"); },
                     },
@@ -422,6 +428,7 @@ std::string_view CommandName(const CommandBody& body) {
 
 bool IsAction(const CommandBody& body) {
   return !std::holds_alternative<StateCommand>(body) &&
+         !std::holds_alternative<EventsCommand>(body) &&
          !std::holds_alternative<DevicesCommand>(body) &&
          !std::holds_alternative<HelpCommand>(body);
 }
@@ -454,6 +461,9 @@ json ToJson(const Command& command) {
                  [&](const CutLinkCommand& c) { j["ms"] = c.ms; },
                  [&](const FaultsCommand& c) { j["config"] = c.spec; },
                  [](const StateCommand&) {},
+                 [&](const EventsCommand& c) {
+                   if (c.after > 0) j["after"] = c.after;
+                 },
                  [](const DevicesCommand&) {},
                  [](const HelpCommand&) {},
              },
@@ -530,6 +540,9 @@ std::variant<Command, std::string> ParseCommand(const json& request,
     if (auto c = ParseFaults(f)) out.body = std::move(*c);
   } else if (n == "state") {
     out.body = StateCommand{};
+  } else if (n == "events") {
+    const auto after = f.Int("after", 0, std::numeric_limits<int64_t>::max(), false);
+    out.body = EventsCommand{static_cast<uint64_t>(after.value_or(0))};
   } else if (n == "devices") {
     out.body = DevicesCommand{};
   } else {
@@ -574,6 +587,26 @@ json ControlEvent::SessionLine() const {
   return line;
 }
 
+json DeviceEvent::SessionLine() const {
+  json line = json::object();
+  line["t_ns"] = t_ns;
+  if (event.is_object()) {
+    for (const auto& [key, value] : event.items()) line[key] = value;
+  }
+  line["source"] = "device";
+  line["seq"] = seq;
+  return line;
+}
+
+SessionEntry DeviceEvent::ToSessionEntry() const {
+  SessionEntry e;
+  e.t_ns = t_ns;
+  e.is_event = true;
+  e.event = SessionLine();
+  e.event.erase("t_ns");
+  return e;
+}
+
 SessionEntry ControlEvent::ToSessionEntry() const {
   SessionEntry e;
   e.t_ns = t_ns;
@@ -589,6 +622,7 @@ ControlChannel::ControlChannel(sim::Scheduler& scheduler) : scheduler_(scheduler
 
 ControlChannel::~ControlChannel() {
   for (auto& t : targets_) {
+    t->device->SetEventListener(nullptr);
     if (t->power_on_timer != sim::Scheduler::kNoTimer) scheduler_.Cancel(t->power_on_timer);
   }
 }
@@ -609,7 +643,33 @@ void ControlChannel::AddDevice(std::string name, devices::Device& device,
   t->name = std::move(name);
   t->device = &device;
   t->server = server;
+  Target* target = t.get();
+  device.SetEventListener([this, target](const json& e) { OnDeviceEvent(*target, e); });
   targets_.push_back(std::move(t));
+}
+
+void ControlChannel::OnDeviceEvent(Target& target, const json& event) {
+  DeviceEvent ev;
+  ev.t_ns = scheduler_.Now();
+  ev.device = target.name;
+  ev.seq = ++target.events_seen;
+  ev.event = event;
+  target.events.push_back(ev);
+  while (target.events.size() > kEventsKept) target.events.pop_front();
+  if (device_event_listener_) device_event_listener_(target.events.back());
+}
+
+json ControlChannel::EventsOf(const Target& target, uint64_t after) const {
+  json list = json::array();
+  for (const DeviceEvent& e : target.events) {
+    if (e.seq > after) list.push_back(e.SessionLine());
+  }
+  // Events numbered (after, first kept) were dropped before anyone asked.
+  const uint64_t first_kept =
+      target.events.empty() ? target.events_seen + 1 : target.events.front().seq;
+  return {{"events", std::move(list)},
+          {"last_seq", target.events_seen},
+          {"missed", first_kept > after + 1 ? first_kept - after - 1 : 0}};
 }
 
 std::vector<std::string> ControlChannel::DeviceNames() const {
@@ -849,6 +909,10 @@ json ControlChannel::Run(Target& target, const CommandBody& body) {
           },
           [&](const StateCommand&) {
             json s = StateOf(target);
+            for (auto& [key, value] : s.items()) r[key] = value;
+          },
+          [&](const EventsCommand& c) {
+            json s = EventsOf(target, c.after);
             for (auto& [key, value] : s.items()) r[key] = value;
           },
           [](const DevicesCommand&) {},

@@ -6,6 +6,7 @@
 #define MOCO_CONTROL_CONTROL_CHANNEL_H_
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -66,12 +67,17 @@ struct FaultsCommand {
   transport::FaultConfig config;
 };
 struct StateCommand {};
+// {"cmd":"events","after":12}: the device's own events (stalls, collisions)
+// with a sequence number above `after` (default 0: every one still kept).
+struct EventsCommand {
+  uint64_t after = 0;
+};
 struct DevicesCommand {};
 struct HelpCommand {};
 
 using CommandBody =
     std::variant<EStopCommand, LimitCommand, GioInCommand, PowerCycleCommand, CutLinkCommand,
-                 FaultsCommand, StateCommand, DevicesCommand, HelpCommand>;
+                 FaultsCommand, StateCommand, EventsCommand, DevicesCommand, HelpCommand>;
 
 struct Command {
   std::string device;  // empty: the only device served
@@ -110,6 +116,20 @@ struct ControlEvent {
   SessionEntry ToSessionEntry() const;
 };
 
+// Something a device did by itself (devices::DeviceEventListener), stamped
+// with the time and the device's name and numbered per device from 1.
+struct DeviceEvent {
+  sim::TimeNs t_ns = 0;
+  std::string device;
+  uint64_t seq = 0;
+  nlohmann::json event;  // {"event":"stall", ...} as the device reported it
+
+  // The session-file event line (docs/sessions.md):
+  // {"t_ns":..., "event":"stall", <the device's fields>, "source":"device", "seq":...}
+  nlohmann::json SessionLine() const;
+  SessionEntry ToSessionEntry() const;
+};
+
 // ---- The channel ------------------------------------------------------------
 
 // Executes commands against named devices. Each device is a devices::Device
@@ -130,14 +150,19 @@ class ControlChannel {
  public:
   // Called after each executed action (not after queries), whatever its source.
   using ActionListener = std::function<void(const ControlEvent&)>;
+  // Called for every event a device reports by itself.
+  using DeviceEventListener = std::function<void(const DeviceEvent&)>;
+  // Device events kept per device for the "events" query (older ones are dropped).
+  static constexpr size_t kEventsKept = 256;
 
   explicit ControlChannel(sim::Scheduler& scheduler);
-  // Cancels pending in-process power-ons.
+  // Cancels pending in-process power-ons and detaches from the devices' events.
   ~ControlChannel();
   ControlChannel(const ControlChannel&) = delete;
   ControlChannel& operator=(const ControlChannel&) = delete;
 
-  // Adds a device under `name` (letters, digits, '-', '_', '.'; 1..64 bytes).
+  // Adds a device under `name` (letters, digits, '-', '_', '.'; 1..64 bytes)
+  // and becomes the listener of its events (Device::SetEventListener).
   // `server` (may be null: the device runs in-process) must serve `device`.
   // Throws std::invalid_argument for a bad or duplicate name (a start-up error).
   void AddDevice(std::string name, devices::Device& device,
@@ -145,6 +170,9 @@ class ControlChannel {
   std::vector<std::string> DeviceNames() const;
 
   void SetActionListener(ActionListener listener) { listener_ = std::move(listener); }
+  void SetDeviceEventListener(DeviceEventListener listener) {
+    device_event_listener_ = std::move(listener);
+  }
 
   // One request line -> one reply line (a JSON object, no newline):
   // {"ok":true,...} or {"ok":false,"error":"..."}. Never throws, whatever
@@ -169,7 +197,11 @@ class ControlChannel {
     devices::Device* device = nullptr;
     transport::DeviceServer* server = nullptr;
     sim::Scheduler::TimerId power_on_timer = sim::Scheduler::kNoTimer;
+    std::deque<DeviceEvent> events;  // the last kEventsKept
+    uint64_t events_seen = 0;
   };
+  void OnDeviceEvent(Target& target, const nlohmann::json& event);
+  nlohmann::json EventsOf(const Target& target, uint64_t after) const;
   // The target named `device_name` (empty: the only one), or null with
   // `error` set.
   Target* Find(const std::string& device_name, std::string* error) const;
@@ -181,6 +213,7 @@ class ControlChannel {
   sim::Scheduler& scheduler_;
   std::vector<std::unique_ptr<Target>> targets_;  // stable addresses for timers
   ActionListener listener_;
+  DeviceEventListener device_event_listener_;
 };
 
 // The vocabulary as data: one entry per command with its fields and an

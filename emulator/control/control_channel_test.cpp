@@ -245,7 +245,7 @@ TEST_F(ControlChannelTest, DevicesAndHelpNeedNoDevice) {
   EXPECT_TRUE(r["devices"][1]["endpoint"].is_null());
   r = Reply(channel_, R"({"cmd":"help"})");
   EXPECT_EQ(r["ok"], true);
-  EXPECT_EQ(r["commands"].size(), 9u);
+  EXPECT_EQ(r["commands"].size(), 10u);
 }
 
 TEST(VocabularyTest, EveryExampleInTheVocabularyParsesAsItsOwnCommand) {
@@ -424,6 +424,76 @@ TEST_F(ControlChannelTest, ActionsReachTheListenerAsSessionEventsQueriesDoNot) {
   EXPECT_TRUE(s.entries[0].is_event);
   EXPECT_EQ(s.entries[0].t_ns, 2 * sim::kNsPerSecond);
   EXPECT_EQ(s.entries[0].event["event"], "estop");
+}
+
+TEST_F(ControlChannelTest, DeviceEventsAreNumberedKeptForTheEventsQueryAndPassedOn) {
+  std::vector<DeviceEvent> passed;
+  std::vector<ControlEvent> actions;
+  channel_.SetDeviceEventListener([&](const DeviceEvent& e) { passed.push_back(e); });
+  channel_.SetActionListener([&](const ControlEvent& e) { actions.push_back(e); });
+  scheduler_.RunUntil(3 * sim::kNsPerSecond);
+  device_.Emit({{"event", "stall"}, {"joint", "boom"}, {"lost_steps", 120}});
+  scheduler_.RunUntil(4 * sim::kNsPerSecond);
+  device_.Emit({{"event", "collision"}, {"with", "floor"}});
+  ASSERT_EQ(passed.size(), 2u);
+  EXPECT_EQ(passed[0].device, "rig1");
+  EXPECT_EQ(passed[0].seq, 1u);
+  EXPECT_EQ(passed[1].seq, 2u);
+  EXPECT_EQ(passed[1].t_ns, 4 * sim::kNsPerSecond);
+
+  const json all = Reply(channel_, R"({"cmd":"events"})");
+  ASSERT_EQ(all["ok"], true) << all.dump();
+  ASSERT_EQ(all["events"].size(), 2u);
+  EXPECT_EQ(all["events"][0]["event"], "stall");
+  EXPECT_EQ(all["events"][0]["lost_steps"], 120);
+  EXPECT_EQ(all["events"][0]["t_ns"], 3 * sim::kNsPerSecond);
+  EXPECT_EQ(all["events"][0]["source"], "device");
+  EXPECT_EQ(all["last_seq"], 2);
+  EXPECT_EQ(all["missed"], 0);
+  const json later = Reply(channel_, R"({"cmd":"events","after":1})");
+  ASSERT_EQ(later["events"].size(), 1u);
+  EXPECT_EQ(later["events"][0]["with"], "floor");
+  EXPECT_EQ(Reply(channel_, R"({"cmd":"events","after":2})")["events"].size(), 0u);
+  EXPECT_TRUE(Contains(ErrorOf(channel_, R"({"cmd":"events","after":-1})"), "after"));
+  // A query, not an action.
+  EXPECT_TRUE(actions.empty());
+
+  // The session line is a valid event line that keeps the device's fields.
+  const std::string text = "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n" +
+                           EntryToJson(passed[0].ToSessionEntry()).dump() + "\n";
+  auto session = ParseSession(text);
+  ASSERT_TRUE(std::holds_alternative<Session>(session)) << std::get<SessionError>(session).message;
+  const SessionEntry& e = std::get<Session>(session).entries.at(0);
+  EXPECT_TRUE(e.is_event);
+  EXPECT_EQ(e.t_ns, 3 * sim::kNsPerSecond);
+  EXPECT_EQ(e.event["event"], "stall");
+  EXPECT_EQ(e.event["joint"], "boom");
+  EXPECT_EQ(e.event["source"], "device");
+}
+
+TEST_F(ControlChannelTest, OnlyTheLastEventsAreKeptAndTheMissedOnesAreCounted) {
+  for (int i = 0; i < static_cast<int>(ControlChannel::kEventsKept) + 10; ++i) {
+    device_.Emit({{"event", "stall"}, {"n", i}});
+  }
+  const json r = Reply(channel_, R"({"cmd":"events","after":5})");
+  ASSERT_EQ(r["events"].size(), ControlChannel::kEventsKept);
+  EXPECT_EQ(r["events"][0]["seq"], 11);
+  EXPECT_EQ(r["missed"], 5);  // 6..10 were dropped
+  EXPECT_EQ(r["last_seq"], ControlChannel::kEventsKept + 10);
+}
+
+TEST(ControlChannelDevicesTest, ADestroyedChannelNoLongerListensToItsDevices) {
+  sim::Scheduler scheduler;
+  FakeDevice device(scheduler);
+  int passed = 0;
+  {
+    ControlChannel channel(scheduler);
+    channel.AddDevice("rig", device);
+    channel.SetDeviceEventListener([&](const DeviceEvent&) { ++passed; });
+    device.Emit({{"event", "stall"}});
+  }
+  device.Emit({{"event", "stall"}});  // no channel to reach: not a crash
+  EXPECT_EQ(passed, 1);
 }
 
 // ---- a device served on an endpoint -------------------------------------------

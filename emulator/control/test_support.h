@@ -57,6 +57,9 @@ class FakeDevice final : public devices::Device, private sim::RigObserver {
     return {{"mode", "idle"}, {"power_ons", power_on_ns.size()}};
   }
 
+  // Reports an event as a device does by itself (a stall, a collision).
+  void Emit(const nlohmann::json& event) const { EmitEvent(event); }
+
   sim::Rig& the_rig() { return rig_; }
   sim::GioPort& the_gio() { return gio_; }
 

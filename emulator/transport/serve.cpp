@@ -194,6 +194,23 @@ void Emulator::RecordEvent(const std::string& name, const control::SessionEntry&
   }
 }
 
+void Emulator::AttachControl(control::ControlChannel& channel) {
+  channel.SetActionListener([this](const control::ControlEvent& e) {
+    Log(LogLevel::kInfo, "control: " + e.SessionLine().dump());
+    const std::string cmd = e.request.value("cmd", "");
+    if (cmd == "power_cycle" || cmd == "cut_link") return;
+    std::string device = e.request.value("device", "");
+    if (device.empty() && size() == 1) device = name(0);
+    RecordEvent(device, e.ToSessionEntry());
+  });
+  // What the simulated hardware did by itself: the host hears nothing of it,
+  // the log and the recording do.
+  channel.SetDeviceEventListener([this](const control::DeviceEvent& e) {
+    Log(LogLevel::kWarn, e.device + ": " + e.SessionLine().dump());
+    RecordEvent(e.device, e.ToSessionEntry());
+  });
+}
+
 void Emulator::Log(LogLevel level, std::string_view line) const {
   if (level <= config_.log_level) log_(line);
 }

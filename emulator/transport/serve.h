@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "control/control_channel.h"
 #include "control/session.h"
 #include "devices/device.h"
 #include "sim/scheduler.h"
@@ -111,6 +112,12 @@ class Emulator {
   void SetHooks(EmulatorHooks hooks) { hooks_ = std::move(hooks); }
   // Appends an event line to the recording of device `name` (if it records).
   void RecordEvent(const std::string& name, const control::SessionEntry& entry);
+  // Logs and records what happens through `channel`: every executed action
+  // (info; power cycles and link cuts are recorded by the link itself) and
+  // every device event (warn: a stall, a collision), each in the recording
+  // of the device it concerns. REQUIRES: `channel` serves this emulator's
+  // devices under their names and is destroyed before the emulator.
+  void AttachControl(control::ControlChannel& channel);
 
  private:
   struct Served;

@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
+#include <mutex>
 #include <thread>
 
 #include "control/session.h"
@@ -93,6 +96,79 @@ TEST(Serve, Dmc16EndToEndOverPtyAndTcpWithRecording) {
       saw_move = saw_move || d.find("MOTOR_MOVE motor=2") != std::string::npos;
   }
   EXPECT_TRUE(saw_move) << "recorded traffic carries decoded lines";
+  fs::remove_all(dir);
+}
+
+TEST(Serve, DeviceEventsAndControlActionsAreLoggedAndRecorded) {
+  const fs::path dir = TempDir();
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  EmulatorConfig config;
+  config.log_level = LogLevel::kWarn;
+  DeviceConfig dev;
+  dev.profile_path = std::string(root ? root : ".") + "/fixtures/profiles/dmc16-boom.json";
+  dev.endpoint = "tcp:127.0.0.1:0";
+  dev.record_path = (dir / "boom.jsonl").string();
+  config.devices = {dev};
+  std::vector<std::string> log;
+  std::mutex log_mutex;
+  {
+    Emulator e(config, [&](std::string_view l) {
+      std::lock_guard lock(log_mutex);
+      log.emplace_back(l);
+    });
+    control::ControlChannel channel(e.scheduler());
+    channel.AddDevice(e.name(0), e.device(0), &e.server(0));
+    e.AttachControl(channel);
+    e.Start();
+    std::thread io([&] { e.Run(); });
+    const int fd = testing::ConnectTcp(e.server(0).tcp_port());
+    ASSERT_GE(fd, 0);
+    DmcHostClient c(fd);
+    // Boom (motor 3, 888.9 steps per degree) down into the floor at 30 deg/s.
+    ASSERT_TRUE(c.Send(1, dmc::MotorSetSpeed{3, 26667, 266670}));
+    ASSERT_TRUE(c.ReplyTo(1, 5000).has_value());
+    ASSERT_TRUE(c.Send(2, dmc::MotorMove{3, -59 * 889}));
+    ASSERT_TRUE(c.ReplyTo(2, 5000).has_value());
+    bool hard_stop = false;
+    for (int n = 0; n < 200 && !hard_stop; ++n) {
+      auto f = c.Next(5000);
+      ASSERT_TRUE(f.has_value()) << "no MOTOR_HARD_STOP from the collision";
+      hard_stop = std::holds_alternative<dmc::MotorHardStop>(f->msg);
+    }
+    // An action from the control channel, on the scheduler's thread.
+    std::promise<std::string> reply;
+    asio::post(e.io(), [&] {
+      e.driver().Sync();
+      reply.set_value(channel.Handle(R"({"cmd":"estop","engaged":true})"));
+      e.driver().Kick();
+    });
+    EXPECT_NE(reply.get_future().get().find("\"ok\":true"), std::string::npos);
+    close(fd);
+    asio::post(e.io(), [&] { e.Stop(); });
+    io.join();
+  }
+  bool logged = false;
+  for (const std::string& l : log) logged = logged || l.find("\"collision\"") != std::string::npos;
+  EXPECT_TRUE(logged) << "device events are logged at warn";
+
+  auto loaded = control::LoadSession(dir / "boom.jsonl");
+  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
+  const control::Session& s = std::get<control::Session>(loaded);
+  const control::SessionEntry* collision = nullptr;
+  const control::SessionEntry* estop = nullptr;
+  for (const auto& entry : s.entries) {
+    if (!entry.is_event) continue;
+    if (entry.event.value("event", "") == "collision" && collision == nullptr) collision = &entry;
+    if (entry.event.value("event", "") == "estop") estop = &entry;
+  }
+  ASSERT_NE(collision, nullptr) << "the collision is in the recording";
+  EXPECT_EQ(collision->event["source"], "device");
+  EXPECT_EQ(collision->event["with"], "floor");
+  EXPECT_EQ(collision->event["halted_motors"], true);
+  EXPECT_EQ(collision->event["seq"].get<uint64_t>() >= 1, true);
+  ASSERT_NE(estop, nullptr) << "the control action is in the recording";
+  EXPECT_EQ(estop->event["source"], "control");
+  EXPECT_GT(estop->t_ns, collision->t_ns);
   fs::remove_all(dir);
 }
 
