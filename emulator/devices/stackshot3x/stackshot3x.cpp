@@ -469,6 +469,17 @@ void Stackshot3x::OnMotionFinished(int motor_id, sim::TimeNs /*time_ns*/, int64_
   if (motion_.pending) MotionAdvance();
 }
 
+void Stackshot3x::OnEStop(bool engaged, sim::TimeNs /*time_ns*/) {
+  if (!powered_ || !engaged) return;
+  // The rig has halted every axis. A stack or a curve run in progress ends
+  // there, as on the unit's stop button, and no frame is shot after it; a
+  // shutter fired on its own (CC_RAIL_SHUTTER_FIRE) is not motion and runs on.
+  AbortStack("stack aborted: e-stop");
+  motion_ = MotionRun{};
+  for (int a = 0; a < kAxes; ++a) axes_[Index(a)].target_rail_steps = RailPosition(a);
+  AddLog("e-stop");
+}
+
 void Stackshot3x::UserAbort() {
   if (!powered_) return;
   const bool stack = stack_.active;

@@ -289,6 +289,7 @@ class Stackshot3x : public Device, private sim::RigObserver {
   sim::MoveStatus MoveAxisTo(int axis, int64_t target_rail, double max_v, bool backlash);
   void FinishTakeup(int axis);
   void OnMotionFinished(int motor_id, sim::TimeNs time_ns, int64_t steps) override;
+  void OnEStop(bool engaged, sim::TimeNs time_ns) override;
 
   // Shutter.
   bool FireShutter(int output, uint32_t pulses, std::array<float, 2> on_s,

@@ -316,6 +316,35 @@ TEST(Stackshot3xTest, StackRunSettlesShootsAndReturns) {
   EXPECT_EQ(b.Status(Write(Command::kRailStack, 0, s)), Action::kBadParam);
 }
 
+TEST(Stackshot3xTest, TheEStopEndsAStackRunWithoutAnotherShot) {
+  SsBench b;
+  ASSERT_EQ(b.Status(Write(Command::kRailConfigSettleTime, 0, stackshot::F32Value{0.5f})),
+            Action::kRspOk);
+  stackshot::RailStack s;
+  s.num_steps = 5;
+  s.x_start = 0;
+  s.x_end = 6400;
+  ASSERT_EQ(b.Status(Write(Command::kRailStack, 0, s)), Action::kRspOk);
+  // Frame 0 shot at the start; then the rail moves towards frame 1.
+  b.RunFor(1500 * kMs);
+  ASSERT_TRUE(b.dev->StackRunning());
+  const size_t shots = b.dev->ShutterPulses().size();
+  ASSERT_GE(shots, 1u);
+  const sim::TimeNs pressed = b.sched.Now();
+  b.dev->rig()->EngageEStop();
+  EXPECT_FALSE(b.dev->StackRunning());
+  b.RunFor(30 * kSec);
+  // No shot after the e-stop, the rail stays where it halted.
+  EXPECT_EQ(b.dev->ShutterPulses().size(), shots);
+  for (const auto& p : b.dev->ShutterPulses()) EXPECT_LT(p.on_ns, pressed);
+  EXPECT_EQ(StatusBits(b, 0, Command::kRailStackStatus), 0u);
+  EXPECT_EQ(StatusBits(b) & 1, 0u);  // not moving
+  // Released, the unit takes a new stack.
+  b.dev->rig()->ReleaseEStop();
+  ASSERT_EQ(b.Status(Write(Command::kRailStack, 0, s)), Action::kRspOk);
+  EXPECT_TRUE(b.dev->StackRunning());
+}
+
 // --- configuration --------------------------------------------------------------------
 
 TEST(Stackshot3xTest, U8AndBoolConfigRangesAndRoundTrips) {
