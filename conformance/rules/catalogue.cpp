@@ -4,6 +4,7 @@
 #include "conformance/rules/catalogue.h"
 
 #include <algorithm>
+#include <unordered_map>
 
 namespace moco::conformance {
 namespace {
@@ -613,13 +614,17 @@ size_t RuleCount() {
 }
 
 const Rule* FindRule(std::string_view id) {
-  for (Protocol p : kAllProtocols) {
-    if (id.substr(0, RuleIdPrefix(p).size()) != RuleIdPrefix(p)) continue;
-    for (const Rule& r : RulesFor(p)) {
-      if (r.id == id) return &r;
+  // Looked up on every check a run or a fuzz campaign makes: an index built
+  // once over the catalogue's static tables (which never move).
+  static const std::unordered_map<std::string_view, const Rule*> index = [] {
+    std::unordered_map<std::string_view, const Rule*> m;
+    for (Protocol p : kAllProtocols) {
+      for (const Rule& r : RulesFor(p)) m.emplace(r.id, &r);
     }
-  }
-  return nullptr;
+    return m;
+  }();
+  const auto it = index.find(id);
+  return it == index.end() ? nullptr : it->second;
 }
 
 bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
