@@ -221,30 +221,6 @@ std::string JunitReport(const RunReport& report) {
   return s;
 }
 
-std::string XmlEscape(std::string_view s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char ch : s) {
-    switch (ch) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += static_cast<unsigned char>(ch) < 0x20 && ch != '\n' && ch != '\t' ? '?' : ch;
-    }
-  }
-  return out;
-}
-
 std::string WriteAtomically(const std::string& path, const std::string& text) {
   const std::string partial = path + ".partial";
   {

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "conformance/runner/runner.h"
+#include "wire/xml_escape.h"
 
 namespace moco::conformance {
 
@@ -21,9 +22,8 @@ std::string JunitReport(const RunReport& report);
 // failure, and a plot of reported motor positions.
 std::string HtmlReport(const RunReport& report);
 
-// `s` with & < > " escaped for XML/HTML text and attributes; control
-// characters other than newline and tab become '?'.
-std::string XmlEscape(std::string_view s);
+// XML/HTML escaping for the reports (wire/xml_escape.h).
+using wire::XmlEscape;
 
 // Writes `text` to "<path>.partial" and renames it to `path`. Returns an
 // error message, or an empty string.

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <limits>
 
+#include "wire/xml_escape.h"
+
 namespace moco::physics {
 namespace {
 
@@ -24,33 +26,6 @@ std::string Num(double v, const char* format = "%.2f") {
   char buf[48];
   std::snprintf(buf, sizeof(buf), format, v);
   return buf;
-}
-
-std::string Escape(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        // Control characters are not allowed in XML 1.0 text.
-        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t' || c == '\n') out += c;
-    }
-  }
-  return out;
 }
 
 struct Series {
@@ -121,7 +96,7 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
 
   out += "<g id=\"" + id + "\">\n";
   out += "<text x=\"" + Num(left + width / 2) + "\" y=\"" + Num(top - 8) +
-         "\" text-anchor=\"middle\" font-size=\"13\">" + Escape(panel_title) + "</text>\n";
+         "\" text-anchor=\"middle\" font-size=\"13\">" + wire::XmlEscape(panel_title) + "</text>\n";
   out += "<rect x=\"" + Num(left) + "\" y=\"" + Num(top) + "\" width=\"" + Num(width) +
          "\" height=\"" + Num(height) + "\" fill=\"none\" stroke=\"#888\"/>\n";
   const double step_x = NiceStep(rx.hi - rx.lo);
@@ -146,11 +121,11 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
            Num(std::abs(t) < step_y / 1e6 ? 0.0 : t, "%.4g") + "</text>\n";
   }
   out += "<text x=\"" + Num(left + width / 2) + "\" y=\"" + Num(top + height + 36) +
-         "\" text-anchor=\"middle\">" + Escape(x_title) + "</text>\n";
+         "\" text-anchor=\"middle\">" + wire::XmlEscape(x_title) + "</text>\n";
   const double ty = top + height / 2;
   out += "<text x=\"" + Num(left - 48) + "\" y=\"" + Num(ty) + "\" text-anchor=\"middle\"" +
-         " transform=\"rotate(-90 " + Num(left - 48) + " " + Num(ty) + ")\">" + Escape(y_title) +
-         "</text>\n";
+         " transform=\"rotate(-90 " + Num(left - 48) + " " + Num(ty) + ")\">" +
+         wire::XmlEscape(y_title) + "</text>\n";
   for (const Series& s : series) {
     std::string d;
     const size_t n = s.xs.size();
@@ -190,10 +165,10 @@ std::string RigPathSvg(const std::vector<RigPathSample>& samples, std::string_vi
   out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + Num(kWidth, "%.0f") +
          "\" height=\"" + Num(kHeight, "%.0f") + "\" viewBox=\"0 0 " + Num(kWidth, "%.0f") + " " +
          Num(kHeight, "%.0f") + "\" font-family=\"sans-serif\" font-size=\"11\">\n";
-  out += "<title>" + Escape(title) + "</title>\n";
+  out += "<title>" + wire::XmlEscape(title) + "</title>\n";
   out += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   out += "<text x=\"" + Num(kWidth / 2) + "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" +
-         Escape(title) + "</text>\n";
+         wire::XmlEscape(title) + "</text>\n";
   // Legend.
   out += "<g id=\"legend\">\n";
   out += std::string("<line x1=\"360\" y1=\"40\" x2=\"400\" y2=\"40\" stroke=\"") +
