@@ -598,23 +598,9 @@ json DeviceEvent::SessionLine() const {
   return line;
 }
 
-SessionEntry DeviceEvent::ToSessionEntry() const {
-  SessionEntry e;
-  e.t_ns = t_ns;
-  e.is_event = true;
-  e.event = SessionLine();
-  e.event.erase("t_ns");
-  return e;
-}
+SessionEntry DeviceEvent::ToSessionEntry() const { return SessionEntry::Event(SessionLine()); }
 
-SessionEntry ControlEvent::ToSessionEntry() const {
-  SessionEntry e;
-  e.t_ns = t_ns;
-  e.is_event = true;
-  e.event = SessionLine();
-  e.event.erase("t_ns");
-  return e;
-}
+SessionEntry ControlEvent::ToSessionEntry() const { return SessionEntry::Event(SessionLine()); }
 
 // ---- The channel ------------------------------------------------------------
 

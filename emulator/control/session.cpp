@@ -193,6 +193,19 @@ nlohmann::json HeaderToJson(const SessionHeader& h) {
   return j;
 }
 
+SessionEntry SessionEntry::Event(nlohmann::json line) {
+  SessionEntry e;
+  e.is_event = true;
+  if (line.is_object()) {
+    if (const auto it = line.find("t_ns"); it != line.end() && it->is_number_integer()) {
+      e.t_ns = it->get<int64_t>();
+    }
+    line.erase("t_ns");
+  }
+  e.event = std::move(line);
+  return e;
+}
+
 nlohmann::json EntryToJson(const SessionEntry& e) {
   if (e.is_event) {
     json j = e.event;

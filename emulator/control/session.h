@@ -44,6 +44,10 @@ struct SessionEntry {
   wire::Bytes bytes;                 // traffic only
   std::vector<std::string> decoded;  // traffic only, informational
   nlohmann::json event;              // event only: the whole line
+
+  // An event entry from its session line (an object with "t_ns", which the
+  // entry keeps as its time instead).
+  static SessionEntry Event(nlohmann::json line);
 };
 
 struct Session {

@@ -16,13 +16,8 @@ void SessionTap::OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes
 }
 
 void SessionTap::OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) {
-  control::SessionEntry e;
-  e.t_ns = t_ns;
-  e.is_event = true;
-  e.event = nlohmann::json::object();
-  e.event["event"] = std::string(kind);
-  e.event["detail"] = std::string(detail);
-  writer_.Append(e);
+  writer_.Append(control::SessionEntry::Event(
+      {{"t_ns", t_ns}, {"event", std::string(kind)}, {"detail", std::string(detail)}}));
 }
 
 }  // namespace moco::transport
