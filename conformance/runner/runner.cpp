@@ -7,6 +7,8 @@
 #include <chrono>
 #include <cstdio>
 
+#include "conformance/runner/case_loop.h"
+
 namespace moco::conformance {
 
 bool CaseResult::MustFailed() const {
@@ -73,46 +75,22 @@ RunReport RunDmc(Target& target, const RunOptions& options) {
   }
   const dmc::HiResponse hi = report.hi.value_or(dmc::HiResponse{});
 
-  const std::vector<Case>& cases = DmcCases();
-  for (size_t i = 0; i < cases.size(); ++i) {
-    const Case& k = cases[i];
-    if (i % options.shard_count != options.shard_index) continue;
-    const std::string full = k.suite + "/" + k.name;
-    if (!options.cases.empty() && !GlobMatch(options.cases, full)) continue;
-    CaseResult result;
-    result.suite = k.suite;
-    result.name = k.name;
-    result.summary = k.summary;
-    const Rule gate{"", Level::kMust, k.needs, "", "", ""};
-    if (!Applies(gate, hi)) {
-      result.applicable = false;
-      result.not_applicable_because =
-          "the device does not advertise " + std::string(NeedsText(k.needs));
-      report.cases.push_back(std::move(result));
-      continue;
-    }
-    const auto c0 = std::chrono::steady_clock::now();
-    if (target.CanRestart()) target.Restart();
-    Verdicts verdicts(options.rules);
-    DmcHost host(target, verdicts, options.host);
-    const TimeNs t0 = host.Now();
-    const auto* seen = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}));
-    if (seen != nullptr && !host.link_lost()) {
-      const dmc::HiResponse device_hi = *seen;
-      CaseContext ctx{host, verdicts, device_hi, target, options.host, options.random, result.log};
-      k.run(ctx);
-    }
-    host.Close();
-    if (host.link_lost()) result.log.push_back("the link to the device was lost");
-    if (verdicts.MustFailed() && k.suite != "random") {
-      result.log.push_back("transcript:\n" + Transcript(host));
-    }
-    result.target_ns = host.Now() - t0;
-    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-    result.outcomes = verdicts.outcomes();
-    result.KeepTraffic(host.traffic());
-    report.cases.push_back(std::move(result));
-  }
+  RunCases<DmcHost>(
+      target, options, DmcCases(), report,
+      [&](const Case& k) {
+        const Rule gate{"", Level::kMust, k.needs, "", "", ""};
+        return Applies(gate, hi)
+                   ? std::string()
+                   : "the device does not advertise " + std::string(NeedsText(k.needs));
+      },
+      [&](DmcHost& host, Verdicts& verdicts, const Case& k, std::vector<std::string>& log) {
+        const auto* seen = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}));
+        if (seen == nullptr || host.link_lost()) return;
+        const dmc::HiResponse device_hi = *seen;
+        CaseContext ctx{host, verdicts, device_hi, target, options.host, options.random, log};
+        k.run(ctx);
+      },
+      [](const DmcHost& host) { return Transcript(host); });
 
   SummarizeRules(report, DmcRules(), [&](const Rule& rule) { return Applies(rule, hi); });
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "conformance/runner/case_loop.h"
 #include "conformance/runner/runner.h"
 
 #include <algorithm>
@@ -54,44 +55,21 @@ RunReport RunStackshot(Target& target, const RunOptions& options) {
   }
   Describe(device, report);
 
-  const std::vector<SsCase>& cases = StackshotCases();
-  for (size_t i = 0; i < cases.size(); ++i) {
-    const SsCase& k = cases[i];
-    if (i % options.shard_count != options.shard_index) continue;
-    const std::string full = k.suite + "/" + k.name;
-    if (!options.cases.empty() && !GlobMatch(options.cases, full)) continue;
-    CaseResult result;
-    result.suite = k.suite;
-    result.name = k.name;
-    result.summary = k.summary;
-    if (!SsApplies(k.needs, device)) {
-      result.applicable = false;
-      result.not_applicable_because = "the device does not have " + std::string(NeedsText(k.needs));
-      report.cases.push_back(std::move(result));
-      continue;
-    }
-    const auto c0 = std::chrono::steady_clock::now();
-    if (target.CanRestart()) target.Restart();
-    Verdicts verdicts(options.rules);
-    SsHost host(target, verdicts, options.host);
-    const TimeNs t0 = host.Now();
-    const SsRecord* hello =
-        host.Call(SsRead(stackshot::Command::kPing, stackshot::PingRequest{0x5a}));
-    if (StatusOf(hello) == stackshot::Action::kRspOk && !host.link_lost()) {
-      SsCaseContext ctx{host, verdicts, device, target, options.host, options.random, result.log};
-      k.run(ctx);
-    }
-    host.Close();
-    if (host.link_lost()) result.log.push_back("the link to the device was lost");
-    if (verdicts.MustFailed() && k.suite != "random") {
-      result.log.push_back("transcript:\n" + SsTranscript(host));
-    }
-    result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
-    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-    result.outcomes = verdicts.outcomes();
-    result.KeepTraffic(host.traffic());
-    report.cases.push_back(std::move(result));
-  }
+  RunCases<SsHost>(
+      target, options, StackshotCases(), report,
+      [&](const SsCase& k) {
+        return SsApplies(k.needs, device)
+                   ? std::string()
+                   : "the device does not have " + std::string(NeedsText(k.needs));
+      },
+      [&](SsHost& host, Verdicts& verdicts, const SsCase& k, std::vector<std::string>& log) {
+        const SsRecord* hello =
+            host.Call(SsRead(stackshot::Command::kPing, stackshot::PingRequest{0x5a}));
+        if (StatusOf(hello) != stackshot::Action::kRspOk || host.link_lost()) return;
+        SsCaseContext ctx{host, verdicts, device, target, options.host, options.random, log};
+        k.run(ctx);
+      },
+      [](const SsHost& host) { return SsTranscript(host); });
 
   SummarizeRules(report, StackshotRules(),
                  [&](const Rule& rule) { return SsApplies(rule.needs, device); });

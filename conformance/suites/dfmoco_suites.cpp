@@ -12,6 +12,7 @@
 #include <cstdio>
 
 #include "conformance/rules/dfmoco_rules.h"
+#include "conformance/runner/case_loop.h"
 #include "conformance/runner/runner.h"
 
 namespace moco::conformance {
@@ -823,54 +824,29 @@ RunReport RunDfmoco(Target& target, const RunOptions& options) {
   }
   const dfmoco::HelloReply hi = hello.value_or(dfmoco::HelloReply{0, 0, ""});
 
-  const std::vector<DfmCase>& cases = DfmocoCases();
-  for (size_t i = 0; i < cases.size(); ++i) {
-    const DfmCase& k = cases[i];
-    if (i % options.shard_count != options.shard_index) continue;
-    const std::string full = k.suite + "/" + k.name;
-    if (!options.cases.empty() && !GlobMatch(options.cases, full)) continue;
-    CaseResult result;
-    result.suite = k.suite;
-    result.name = k.name;
-    result.summary = k.summary;
-    if (!hello || !DfmocoApplies(k.needs, hi)) {
-      result.applicable = false;
-      result.not_applicable_because =
-          !hello ? "the device did not answer hi"
-                 : "the device does not advertise " + std::string(NeedsText(k.needs));
-      report.cases.push_back(std::move(result));
-      continue;
-    }
-    const auto c0 = std::chrono::steady_clock::now();
-    if (target.CanRestart()) target.Restart();
-    Verdicts verdicts(options.rules);
-    DfmHost host(target, verdicts, options.host);
-    const TimeNs t0 = host.Now();
-    // A freshly powered device may still be starting (a UART not yet enabled
-    // loses what arrives): wait for its boot greeting, up to 1 s, before
-    // greeting it, so the boot `hi` is not taken for the answer.
-    if (target.CanRestart()) {
-      host.WaitFor(0, 1000 * kMs,
-                   [](const DfmLine& l) { return As<dfmoco::HelloReply>(&l) != nullptr; });
-    }
-    const auto* seen = As<dfmoco::HelloReply>(host.Call("hi"));
-    if (seen != nullptr && !host.link_lost()) {
-      const dfmoco::HelloReply device_hello = *seen;
-      DfmCaseContext ctx{host,         verdicts,       device_hello, target,
-                         options.host, options.random, result.log};
-      k.run(ctx);
-    }
-    host.Close();
-    if (host.link_lost()) result.log.push_back("the link to the device was lost");
-    if (verdicts.MustFailed() && k.suite != "random") {
-      result.log.push_back("transcript:\n" + DfmTranscript(host));
-    }
-    result.target_ns = host.Now() - t0;
-    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-    result.outcomes = verdicts.outcomes();
-    result.KeepTraffic(host.traffic());
-    report.cases.push_back(std::move(result));
-  }
+  RunCases<DfmHost>(
+      target, options, DfmocoCases(), report,
+      [&](const DfmCase& k) {
+        if (!hello) return std::string("the device did not answer hi");
+        return DfmocoApplies(k.needs, hi)
+                   ? std::string()
+                   : "the device does not advertise " + std::string(NeedsText(k.needs));
+      },
+      [&](DfmHost& host, Verdicts& verdicts, const DfmCase& k, std::vector<std::string>& log) {
+        // A freshly powered device may still be starting (a UART not yet
+        // enabled loses what arrives): wait for its boot greeting, up to 1 s,
+        // before greeting it, so the boot `hi` is not taken for the answer.
+        if (target.CanRestart()) {
+          host.WaitFor(0, 1000 * kMs,
+                       [](const DfmLine& l) { return As<dfmoco::HelloReply>(&l) != nullptr; });
+        }
+        const auto* seen = As<dfmoco::HelloReply>(host.Call("hi"));
+        if (seen == nullptr || host.link_lost()) return;
+        const dfmoco::HelloReply device_hello = *seen;
+        DfmCaseContext ctx{host, verdicts, device_hello, target, options.host, options.random, log};
+        k.run(ctx);
+      },
+      [](const DfmHost& host) { return DfmTranscript(host); });
 
   SummarizeRules(report, DfmocoRules(), [&](const Rule& rule) {
     return hello ? DfmocoApplies(rule, hi) : rule.needs == Needs::kNothing;
