@@ -25,6 +25,9 @@ using Kind = RigPlotError::Kind;
 using nlohmann::json;
 
 constexpr double kNsPerS = 1e9;
+// Samples are taken (and the rig simulated) from t = 0 to the plot's end:
+// beyond this many the period is too short for the session's length.
+constexpr int64_t kMaxSamples = 10'000'000;
 
 // Device output is not compared (a replay's business); only counted.
 class CountingSink final : public devices::ByteSink {
@@ -152,10 +155,19 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
 
   const std::vector<control::SessionEntry>& entries = session.entries;
   const sim::TimeNs last_entry_ns = entries.empty() ? 0 : entries.back().t_ns;
-  sim::TimeNs end_ns = last_entry_ns + static_cast<sim::TimeNs>(options.tail_s * kNsPerS);
+  const sim::TimeNs tail_ns = static_cast<sim::TimeNs>(options.tail_s * kNsPerS);
+  sim::TimeNs end_ns =
+      last_entry_ns > sim::kTimeNever - tail_ns ? sim::kTimeNever : last_entry_ns + tail_ns;
   if (options.to_s) end_ns = std::min(end_ns, static_cast<sim::TimeNs>(*options.to_s * kNsPerS));
   const sim::TimeNs from_ns =
       options.from_s ? static_cast<sim::TimeNs>(std::ceil(*options.from_s * kNsPerS)) : 0;
+  if (end_ns / options.period_ns > kMaxSamples) {
+    return RigPlotError{Kind::kBadOptions,
+                        "the plot would take more than " + std::to_string(kMaxSamples) +
+                            " samples (up to " + Seconds(static_cast<double>(end_ns) / kNsPerS) +
+                            " every " + std::to_string(options.period_ns) +
+                            " ns); give a longer sample period or an earlier end time"};
+  }
 
   RigPlot plot;
   RigPlotSummary& sum = plot.summary;

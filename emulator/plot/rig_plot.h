@@ -71,7 +71,7 @@ struct RigPlotError {
     kNotDmc,         // the session's protocol is not "dmc"
     kBadProfile,     // the device profile cannot be read or is invalid (ProfileError text)
     kNoPhysicalRig,  // the profile has no physical_rig
-    kBadOptions,     // period <= 0, negative or non-finite times
+    kBadOptions,     // period <= 0, negative or non-finite times, over 10^7 samples
     kEmptyWindow,    // from_s >= to_s, or no sample falls in the window
   };
   Kind kind = Kind::kBadOptions;

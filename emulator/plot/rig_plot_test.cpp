@@ -244,6 +244,12 @@ TEST(RigPlot, AnEmptyWindowIsNamed) {
   r = PlotSession(s, kBoomProfile, bad);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().kind, RigPlotError::Kind::kBadOptions);
+  // 8 s at 1 ns: far too many samples, refused before any is taken.
+  bad.period_ns = 1;
+  r = PlotSession(s, kBoomProfile, bad);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().kind, RigPlotError::Kind::kBadOptions);
+  EXPECT_NE(r.error().message.find("sample period"), std::string::npos) << r.error().message;
 }
 
 TEST(RigPlot, AProfileWithoutAPhysicalRigIsNamedWithTheFix) {
