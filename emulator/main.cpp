@@ -3,8 +3,11 @@
 #include <CLI/CLI.hpp>
 
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -14,8 +17,11 @@
 #include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
+#include "physics/bullet/rig_path_svg.h"
+#include "plot/rig_plot.h"
 #include "transport/control_socket.h"
 #include "transport/serve.h"
+#include "wire/atomic_file.h"
 #include "wire/transcript.h"
 
 namespace {
@@ -75,6 +81,89 @@ int Decode(const std::string& path, bool show_time, bool strict) {
   PrintLines(last_t, decoder.Finish(), show_time, problems);
   std::printf("%zu problem(s) in the traffic\n", problems);
   return strict && problems > 0 ? 1 : 0;
+}
+
+// Arguments of `mocosim plot`.
+struct PlotArgs {
+  std::string session_path;
+  std::string profile_path;
+  std::string out_path;  // empty: the session's path with .svg
+  double every_ms = 10;
+  std::optional<double> from_s;
+  std::optional<double> to_s;
+  double tail_s = 2;
+  std::string title;  // empty: "<rig name>: <session file name>"
+};
+
+// `mocosim plot SESSION --profile PROFILE`: replays the session's host bytes
+// into a DMC-16 driving the profile's physical rig and writes the camera
+// head's path, commanded against physical, as SVG (atomically). Exit 0 when
+// the plot was written, 1 when writing it failed, 2 for bad arguments or
+// files (the message names the problem and the fix).
+int Plot(const PlotArgs& a) {
+  auto loaded = LoadSession(a.session_path);
+  if (const auto* e = std::get_if<SessionError>(&loaded)) {
+    std::fprintf(stderr, "mocosim plot: %s%s%s\n", a.session_path.c_str(),
+                 e->line ? (":" + std::to_string(e->line) + ": ").c_str() : ": ",
+                 e->message.c_str());
+    return 2;
+  }
+  if (!(std::isfinite(a.every_ms) && a.every_ms >= 0.001 && a.every_ms <= 3.6e6)) {
+    std::fprintf(stderr,
+                 "mocosim plot: --every-ms must be a sample period of 0.001 .. 3600000 ms "
+                 "(e.g. 10), not %g\n",
+                 a.every_ms);
+    return 2;
+  }
+  moco::plot::RigPlotOptions options;
+  options.period_ns = std::llround(a.every_ms * 1e6);
+  options.from_s = a.from_s;
+  options.to_s = a.to_s;
+  options.tail_s = a.tail_s;
+  const moco::plot::RigPlotResult result =
+      moco::plot::PlotSession(std::get<Session>(loaded), a.profile_path, options);
+  if (!result.ok()) {
+    std::fprintf(stderr, "mocosim plot: %s: %s\n", a.session_path.c_str(),
+                 result.error().message.c_str());
+    return 2;
+  }
+  const moco::plot::RigPlot& plot = result.value();
+  const moco::plot::RigPlotSummary& sum = plot.summary;
+  for (const std::string& w : sum.warnings) {
+    std::fprintf(stderr, "mocosim plot: note: %s\n", w.c_str());
+  }
+  const std::string out =
+      a.out_path.empty() ? std::filesystem::path(a.session_path).replace_extension(".svg").string()
+                         : a.out_path;
+  const std::string title =
+      a.title.empty()
+          ? sum.rig_name + ": " + std::filesystem::path(a.session_path).filename().string()
+          : a.title;
+  if (auto error =
+          moco::wire::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
+    std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
+    return 1;
+  }
+  std::printf("plot %s: rig \"%s\", %zu samples every %g ms, %.3f s .. %.3f s (%.3f s)\n",
+              a.session_path.c_str(), sum.rig_name.c_str(), sum.sample_count,
+              static_cast<double>(options.period_ns) / 1e6, sum.start_s,
+              sum.start_s + sum.duration_s, sum.duration_s);
+  std::printf(
+      "  peak deviation %.1f mm at %.3f s, final %.1f mm (physical vs commanded nodal "
+      "point)\n",
+      sum.peak_deviation_mm, sum.peak_time_s, sum.final_deviation_mm);
+  std::string lost;
+  for (size_t j = 0; j < sum.lost_steps.size(); ++j) {
+    if (sum.lost_steps[j] == 0) continue;
+    if (!lost.empty()) lost += ", ";
+    lost += std::string(moco::physics::kJointNames[j]) + " " + std::to_string(sum.lost_steps[j]);
+  }
+  std::printf("  lost steps: %s\n", lost.empty() ? "none" : lost.c_str());
+  std::printf("  collisions: %" PRId64 "\n", sum.collisions);
+  std::printf("  replayed %" PRIu64 " host message(s), %zu control event(s)\n", sum.host_messages,
+              sum.control_events_applied);
+  std::printf("  wrote %s\n", out.c_str());
+  return 0;
 }
 
 // Runs the emulator until Ctrl-C, with the control socket and the scenario
@@ -151,6 +240,38 @@ int main(int argc, char** argv) {
   decode->add_flag("--strict", strict,
                    "Exit with status 1 when the traffic has problems (bad checksums, "
                    "unparsable lines, skipped bytes)");
+
+  PlotArgs plot_args;
+  auto* plot = app.add_subcommand(
+      "plot",
+      "Draw the camera head's path during a DMC v2 session as SVG. The session's host bytes "
+      "are replayed at their recorded times (virtual time, from power-on) into a DMC-16 "
+      "built from PROFILE, which must drive a Bullet-modelled boom rig (\"physical_rig\", "
+      "docs/profiles.md); recorded e-stop and limit control events are applied again. The "
+      "plot shows the nodal point in a top view (x, y) and a side view (y, z), in metres: "
+      "dashed where the commanded motor positions put it (ideal kinematics), solid where "
+      "the simulated rig has it (sag, lag, lost steps, collisions), and the distance "
+      "between the two in mm over time; a summary goes to stdout. Example: mocosim plot "
+      "fixtures/sessions/dmc16-boom-move.jsonl --profile "
+      "fixtures/profiles/dmc16-boom.json -o boom.svg");
+  plot->add_option("session", plot_args.session_path, "Session file (.jsonl, protocol dmc)")
+      ->required();
+  plot->add_option("--profile", plot_args.profile_path,
+                   "DMC-16 profile with a physical_rig, e.g. fixtures/profiles/dmc16-boom.json")
+      ->required();
+  plot->add_option("-o,--output", plot_args.out_path,
+                   "SVG file to write, atomically (default: the session's path with .svg)");
+  plot->add_option("--every-ms", plot_args.every_ms, "Sample period in ms (default 10)");
+  double from_s = 0, to_s = 0;
+  auto* from_opt =
+      plot->add_option("--from-s", from_s, "Plot from this time, s since power-on (default: 0)");
+  auto* to_opt =
+      plot->add_option("--to-s", to_s, "Plot up to this time, s (default: the end of the session)");
+  plot->add_option("--tail-s", plot_args.tail_s,
+                   "Keep sampling this long after the last entry while the rig settles; "
+                   "ends earlier once it is at rest (default 2)");
+  plot->add_option("--title", plot_args.title,
+                   "Title of the plot (default: the rig's name and the session file's name)");
 
   // --- one device: mocosim <model> --pty PATH | --tcp [HOST:]PORT ---
   struct OneDevice {
@@ -231,6 +352,11 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   if (decode->parsed()) return Decode(session_path, !no_time, strict);
+  if (plot->parsed()) {
+    if (from_opt->count() > 0) plot_args.from_s = from_s;
+    if (to_opt->count() > 0) plot_args.to_s = to_s;
+    return Plot(plot_args);
+  }
   if (models->parsed()) {
     for (const auto& m : moco::devices::DeviceModels()) {
       std::printf("%-12s %s (profile %s)\n", std::string(m.name).c_str(),

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <fstream>
 
+#include "wire/atomic_file.h"
+
 namespace moco::conformance {
 namespace {
 
@@ -222,20 +224,7 @@ std::string JunitReport(const RunReport& report) {
 }
 
 std::string WriteAtomically(const std::string& path, const std::string& text) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out) return "cannot write " + partial + ": " + std::strerror(errno);
-    out << text;
-    out.flush();
-    if (!out) return "cannot write " + partial + ": " + std::strerror(errno);
-  }
-  if (std::rename(partial.c_str(), path.c_str()) != 0) {
-    const std::string err = std::strerror(errno);
-    std::remove(partial.c_str());
-    return "cannot rename " + partial + " to " + path + ": " + err;
-  }
-  return "";
+  return wire::WriteFileAtomically(path, text).value_or("");
 }
 
 }  // namespace moco::conformance
