@@ -21,7 +21,7 @@
 #include "plot/rig_plot.h"
 #include "transport/control_socket.h"
 #include "transport/serve.h"
-#include "wire/atomic_file.h"
+#include "control/atomic_file.h"
 #include "wire/transcript.h"
 
 namespace {
@@ -140,7 +140,7 @@ int Plot(const PlotArgs& a) {
           ? sum.rig_name + ": " + std::filesystem::path(a.session_path).filename().string()
           : a.title;
   if (auto error =
-          moco::wire::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
+          moco::control::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
     std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
     return 1;
   }

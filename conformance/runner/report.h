@@ -25,8 +25,8 @@ std::string HtmlReport(const RunReport& report);
 // XML/HTML escaping for the reports (wire/xml_escape.h).
 using wire::XmlEscape;
 
-// Writes `text` to "<path>.partial" and renames it to `path`. Returns an
-// error message, or an empty string.
+// Writes `text` to a temporary file beside `path` and renames it to `path`
+// (control::WriteFileAtomically). Returns an error message, or an empty string.
 std::string WriteAtomically(const std::string& path, const std::string& text);
 
 }  // namespace moco::conformance

@@ -1,14 +1,14 @@
 // Whole-file replacement for generated documents (reports, plots): the text
 // goes to a temporary file beside the target, which is then renamed over it,
 // so readers see either the old file or the new one, never a part.
-#ifndef MOCO_WIRE_ATOMIC_FILE_H_
-#define MOCO_WIRE_ATOMIC_FILE_H_
+#ifndef MOCO_CONTROL_ATOMIC_FILE_H_
+#define MOCO_CONTROL_ATOMIC_FILE_H_
 
 #include <optional>
 #include <string>
 #include <string_view>
 
-namespace moco::wire {
+namespace moco::control {
 
 // Writes `text` to "<path>.partial-<pid>" in the same directory and renames it
 // to `path` (POSIX rename replaces an existing file in one step). Returns
@@ -18,6 +18,6 @@ namespace moco::wire {
 // a failing write, not against a power cut.
 std::optional<std::string> WriteFileAtomically(const std::string& path, std::string_view text);
 
-}  // namespace moco::wire
+}  // namespace moco::control
 
-#endif  // MOCO_WIRE_ATOMIC_FILE_H_
+#endif  // MOCO_CONTROL_ATOMIC_FILE_H_

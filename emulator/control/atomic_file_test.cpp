@@ -1,7 +1,7 @@
 // Tests for whole-file replacement (atomic_file.h): the file holds exactly the
 // text, replaces a previous one, and a failure leaves the old state and no
 // temporary file behind, with a message naming the path and the reason.
-#include "wire/atomic_file.h"
+#include "control/atomic_file.h"
 
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace moco::wire {
+namespace moco::control {
 namespace {
 
 namespace fs = std::filesystem;
@@ -108,4 +108,4 @@ RC_GTEST_PROP(WriteFileAtomically, TheFileHoldsExactlyTheLastTextWritten,
 }
 
 }  // namespace
-}  // namespace moco::wire
+}  // namespace moco::control

@@ -1,5 +1,5 @@
 // Whole-file replacement through a temporary file and rename (see atomic_file.h).
-#include "wire/atomic_file.h"
+#include "control/atomic_file.h"
 
 #include <unistd.h>
 
@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <cstring>
 
-namespace moco::wire {
+namespace moco::control {
 
 std::optional<std::string> WriteFileAtomically(const std::string& path, std::string_view text) {
   const std::string partial = path + ".partial-" + std::to_string(::getpid());
@@ -31,4 +31,4 @@ std::optional<std::string> WriteFileAtomically(const std::string& path, std::str
   return std::nullopt;
 }
 
-}  // namespace moco::wire
+}  // namespace moco::control
