@@ -130,6 +130,10 @@ size_t Rig::HeapBytes() const {
   return n;
 }
 
+void Rig::OnMotionStarted(int motor_id, TimeNs time_ns) {
+  if (observer_ != nullptr) observer_->OnMotionStarted(motor_id, time_ns);
+}
+
 void Rig::OnMotionFinished(int motor_id, TimeNs time_ns, int64_t steps) {
   if (observer_ != nullptr) observer_->OnMotionFinished(motor_id, time_ns, steps);
 }

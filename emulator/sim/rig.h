@@ -19,6 +19,9 @@ namespace moco::sim {
 class RigObserver {
  public:
   virtual ~RigObserver() = default;
+  // `motor_id` took a new motion plan (a move, a jog, a script, a stop ramp),
+  // whoever commanded it: a host request or one of the device's own timers.
+  virtual void OnMotionStarted(int /*motor_id*/, TimeNs /*time_ns*/) {}
   virtual void OnMotionFinished(int /*motor_id*/, TimeNs /*time_ns*/, int64_t /*steps*/) {}
   // A limit switch tripped while `motor_id` moved towards `end`; `set` and
   // `input` name the hardware input (set 0 for a switch without a set).
@@ -79,6 +82,7 @@ class Rig final : private MotorObserver {
   size_t HeapBytes() const;
 
  private:
+  void OnMotionStarted(int motor_id, TimeNs time_ns) override;
   void OnMotionFinished(int motor_id, TimeNs time_ns, int64_t steps) override;
   void OnLimitTripped(int motor_id, LimitEnd end, TimeNs time_ns, int64_t steps) override;
   // The input of the motor's set that guards `end`.

@@ -231,6 +231,7 @@ void StepperMotor::InstallPlan(Plan plan) {
   moving_ = true;
   end_timer_ = scheduler_.At(plan_.EndNs(), [this] { OnPlanEnd(); });
   ScheduleSwitchCheck();
+  if (observer_ != nullptr) observer_->OnMotionStarted(id_, scheduler_.Now());
 }
 
 void StepperMotor::CommitEdges(TimeNs up_to_ns) {

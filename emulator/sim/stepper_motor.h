@@ -59,6 +59,9 @@ struct SwitchPositions {
 class MotorObserver {
  public:
   virtual ~MotorObserver() = default;
+  // The motor took a new, non-empty motion plan (also when re-planned while
+  // moving). Called after the plan is in place.
+  virtual void OnMotionStarted(int /*motor_id*/, TimeNs /*time_ns*/) {}
   // The motor came to rest (end of a move or stop, or a halt) at `steps`.
   virtual void OnMotionFinished(int motor_id, TimeNs time_ns, int64_t steps) = 0;
   // A limit switch tripped during motion; the motor halted on `steps`

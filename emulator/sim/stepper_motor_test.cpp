@@ -34,6 +34,8 @@ struct Recorder : MotorObserver {
   };
   std::vector<Finished> finished;
   std::vector<Tripped> tripped;
+  std::vector<TimeNs> started;
+  void OnMotionStarted(int, TimeNs time_ns) override { started.push_back(time_ns); }
   void OnMotionFinished(int motor_id, TimeNs time_ns, int64_t steps) override {
     finished.push_back({motor_id, time_ns, steps});
   }
@@ -108,6 +110,24 @@ TEST_F(MotorTest, TrapezoidMoveEndsExactlyOnTargetAtTheAnalyticTime) {
   ASSERT_EQ(edges.size(), 5000u);
   EXPECT_EQ(CheckTraceLaws(edges, 0, 1000, 500), "");
   EXPECT_EQ(edges.back().step, 5000);
+}
+
+TEST_F(MotorTest, EveryNewPlanIsAnnouncedWhoeverCommandsIt) {
+  ASSERT_EQ(motor_.SetProfile(Profile(1000, 500)), MoveStatus::kOk);
+  EXPECT_EQ(motor_.MoveTo(0), MoveStatus::kOk);  // already there: no plan
+  EXPECT_TRUE(rec_.started.empty());
+  // A move commanded from a timer (as a device's own clock does).
+  sched_.At(2 * kNsPerSecond, [this] { motor_.MoveTo(3000); });
+  sched_.RunUntil(3 * kNsPerSecond);
+  ASSERT_EQ(rec_.started.size(), 1u);
+  EXPECT_EQ(rec_.started[0], 2 * kNsPerSecond);
+  // A re-plan while moving (a stop ramp) is a new plan too.
+  motor_.Stop();
+  ASSERT_EQ(rec_.started.size(), 2u);
+  EXPECT_EQ(rec_.started[1], 3 * kNsPerSecond);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(rec_.started.size(), 2u);
+  EXPECT_EQ(rec_.finished.size(), 1u);
 }
 
 TEST_F(MotorTest, TriangularMoveTakesTwiceSqrtDistanceOverAccel) {

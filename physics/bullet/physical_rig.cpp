@@ -56,7 +56,8 @@ void PhysicalRig::Tick() {
   const sim::TimeNs offset_ns = scheduler_.Now() - dynamics_.time_ns();
   collision_count_ += static_cast<int64_t>(events.collisions.size());
 
-  bool at_rest = counts == last_counts_ && dynamics_.MaxSpeed() < kRestSpeed;
+  bool at_rest = counts == last_counts_ && dynamics_.MaxSpeed() < kRestSpeed &&
+                 !(callbacks_.motion_planned && callbacks_.motion_planned());
   for (size_t j = 0; j < kJointCount; ++j) {
     if (dynamics_.Stalled(static_cast<Joint>(j))) at_rest = false;
   }

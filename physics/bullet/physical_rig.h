@@ -20,10 +20,10 @@ using StepCounts = std::array<int64_t, kJointCount>;
 
 // Samples the commanded step counts every 1 ms of simulated time while
 // awake, steps the dynamics, and goes to sleep (no pending timer, no cost)
-// once the command has not changed and every joint is at rest for
-// kRestTicks steps. The device calls Wake() whenever a commanded count may
-// start changing (a move starts, a position is set); a sleeping rig does not
-// poll.
+// once the command has not changed, no motion is planned and every joint is
+// at rest for kRestTicks steps. The device calls Wake() whenever a commanded
+// count may start changing (a motor takes a motion plan); a sleeping rig does
+// not poll.
 class PhysicalRig {
  public:
   // Sampled once per step; must be cheap and must not call back into the rig.
@@ -34,6 +34,10 @@ class PhysicalRig {
     std::function<void(const StallEvent&)> on_stall;
     // The head began to touch the floor or an obstacle (a device e-stops).
     std::function<void(const CollisionEvent&)> on_collision;
+    // Optional, sampled once per step: whether the device still has motion
+    // planned for a driving motor. The rig does not go to sleep while it has,
+    // even if the counts hold still for a while (a planned pause in a move).
+    std::function<bool()> motion_planned;
   };
 
   // Joint speeds (m/s or rad/s) below this count as rest.

@@ -97,6 +97,25 @@ TEST_F(PhysicalRigTest, AnIdleRigSettlesThenSchedulesNothing) {
   EXPECT_EQ(scheduler_.PendingCount(), 0u);
 }
 
+TEST_F(PhysicalRigTest, APlannedPauseKeepsTheRigAwakeSoTheMoveAfterItIsFollowed) {
+  bool planned = false;
+  PhysicalRig rig = MakeRig(
+      {.on_stall = nullptr, .on_collision = nullptr, .motion_planned = [&] { return planned; }});
+  scheduler_.RunUntilIdle(100'000);
+  ASSERT_FALSE(rig.awake());
+  // A move whose first second holds still (the counts do not change).
+  planned = true;
+  rig.Wake();
+  scheduler_.RunUntil(scheduler_.Now() + 1 * kNsPerSecond);
+  EXPECT_TRUE(rig.awake());
+  motors_.Move(Joint::kTrack, 0.3, 0.2, 0.5);  // no Wake: the rig is still sampling
+  scheduler_.RunUntil(scheduler_.Now() + 3 * kNsPerSecond);
+  planned = false;
+  scheduler_.RunUntilIdle(100'000);
+  EXPECT_FALSE(rig.awake());
+  EXPECT_NEAR(rig.dynamics().PhysicalJoints()[0], 0.3, 1e-3);
+}
+
 TEST_F(PhysicalRigTest, FollowsAMoveWithLagAndSleepsWhenItIsOver) {
   PhysicalRig rig = MakeRig();
   scheduler_.RunUntilIdle(100'000);
@@ -122,11 +141,14 @@ TEST_F(PhysicalRigTest, FollowsAMoveWithLagAndSleepsWhenItIsOver) {
 TEST_F(PhysicalRigTest, AHeadCollisionCallsBackOnTheSchedulersTimeAndAStopHolds) {
   std::vector<CollisionEvent> hits;
   std::vector<TimeNs> when;
-  PhysicalRig rig = MakeRig({.on_stall = nullptr, .on_collision = [&](const CollisionEvent& c) {
-                               hits.push_back(c);
-                               when.push_back(scheduler_.Now());
-                               motors_.Freeze();  // the device's e-stop
-                             }});
+  PhysicalRig rig = MakeRig({.on_stall = nullptr,
+                             .on_collision =
+                                 [&](const CollisionEvent& c) {
+                                   hits.push_back(c);
+                                   when.push_back(scheduler_.Now());
+                                   motors_.Freeze();  // the device's e-stop
+                                 },
+                             .motion_planned = nullptr});
   scheduler_.RunUntilIdle(100'000);
   const TimeNs start = scheduler_.Now();
   motors_.Move(Joint::kBoom, -60 * kDeg, 10 * kDeg, 20 * kDeg);
@@ -147,8 +169,9 @@ TEST_F(PhysicalRigTest, AHeadCollisionCallsBackOnTheSchedulersTimeAndAStopHolds)
 
 TEST_F(PhysicalRigTest, AStallCallsBackWithTheEpisodeOnTheSchedulersClock) {
   std::vector<StallEvent> stalls;
-  PhysicalRig rig = MakeRig(
-      {.on_stall = [&](const StallEvent& s) { stalls.push_back(s); }, .on_collision = nullptr});
+  PhysicalRig rig = MakeRig({.on_stall = [&](const StallEvent& s) { stalls.push_back(s); },
+                             .on_collision = nullptr,
+                             .motion_planned = nullptr});
   scheduler_.RunUntilIdle(100'000);
   scheduler_.RunUntil(scheduler_.Now() + 5 * kNsPerSecond);  // idle for a while
   const TimeNs jump_at = scheduler_.Now();
@@ -171,8 +194,9 @@ TEST_F(PhysicalRigTest, AStallCallsBackWithTheEpisodeOnTheSchedulersClock) {
 
 TEST_F(PhysicalRigTest, ARebasedCountJumpMovesNothingAndLaterMovesAreRelativeToIt) {
   std::vector<StallEvent> stalls;
-  PhysicalRig rig = MakeRig(
-      {.on_stall = [&](const StallEvent& s) { stalls.push_back(s); }, .on_collision = nullptr});
+  PhysicalRig rig = MakeRig({.on_stall = [&](const StallEvent& s) { stalls.push_back(s); },
+                             .on_collision = nullptr,
+                             .motion_planned = nullptr});
   motors_.Move(Joint::kTrack, 0.5, 0.2, 0.5);
   rig.Wake();
   scheduler_.RunUntilIdle(100'000);

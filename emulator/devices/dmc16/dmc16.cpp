@@ -124,6 +124,12 @@ void Dmc16::PowerOn() {
   SendUnsolicited(profile_.Hi());
 }
 
+void Dmc16::OnMotionStarted(int /*motor_id*/, sim::TimeNs /*time_ns*/) {
+  // Whatever started it (a request, a playback frame, a shot, a jog), the
+  // physical rig follows the motors again (it sleeps while nothing moves).
+  if (physical_) physical_->Wake();
+}
+
 void Dmc16::StartPhysicalRig() {
   if (!profile_.physical_rig.enabled) return;
   if (physical_) {
@@ -150,6 +156,15 @@ void Dmc16::StartPhysicalRig() {
     if (!moving) return;
     rig_.EngageEStop();
     rig_.ReleaseEStop();
+  };
+  // A planned pause inside a move (a blurred axis waiting for the others to
+  // reach speed) is not rest: the rig stays awake while a driving motor has
+  // motion planned.
+  callbacks.motion_planned = [this] {
+    for (const int m : profile_.physical_rig.motors) {
+      if (m != 0 && rig_.motor(m).IsMoving()) return true;
+    }
+    return false;
   };
   callbacks.on_stall = [this](const physics::StallEvent& e) {
     // An open-loop stepper slipped: the device's count and the joint differ
@@ -231,9 +246,6 @@ void Dmc16::OnHostBytes(wire::ByteView bytes) {
       ++stats_.framing_errors;
     }
   });
-  // A request may have started a move: the physical rig samples the motors
-  // again (it sleeps while nothing changes).
-  if (physical_) physical_->Wake();
 }
 
 void Dmc16::OnFrame(const dmc::FrameRef& f) {

@@ -176,6 +176,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
   void ResetState();
 
   // --- RigObserver ---
+  void OnMotionStarted(int motor_id, sim::TimeNs time_ns) override;
   void OnMotionFinished(int motor_id, sim::TimeNs time_ns, int64_t steps) override;
   void OnLimitTripped(int motor_id, sim::LimitEnd end, int set, sim::SwitchInput input,
                       sim::TimeNs time_ns, int64_t steps) override;

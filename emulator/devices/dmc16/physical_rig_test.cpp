@@ -156,5 +156,40 @@ TEST(Dmc16PhysicalRig, ResettingAPositionOrPowerCyclingDoesNotMoveTheRig) {
   EXPECT_NEAR(h.device().physical_rig()->dynamics().PhysicalJoints()[0], 0.2, 1e-3);
 }
 
+TEST(Dmc16PhysicalRig, APlaybackIsFollowedFromASleepingRigToItsLastFrame) {
+  // The rig sleeps once the pre-roll position is reached; RT_GO and then the
+  // device's own frame timers plan the motion, and every new plan wakes it.
+  Host h(BoomProfile());
+  constexpr uint32_t kFrames = 48;
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{0, kFrames - 1}), dmc::AckCode::kOk);
+  dmc::RtUploadMoveAxis track;
+  track.motor = 1;
+  track.last_set = true;
+  for (uint32_t i = 0; i < kFrames; ++i)
+    track.positions_steps.push_back(static_cast<int32_t>(i) * 300);
+  ASSERT_EQ(h.Request(track), dmc::AckCode::kOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), dmc::AckCode::kOk);
+  dmc::RtRunMove run;
+  run.fps_x1000 = 24000;
+  run.start_frame = 0;
+  run.end_frame = kFrames - 1;
+  run.preroll_ms = 500;
+  run.postroll_ms = 500;
+  ASSERT_EQ(h.Request(run), dmc::AckCode::kOk);
+  h.RunMs(5000);  // pre-roll reached, the rig settles and sleeps
+  ASSERT_FALSE(h.device().physical_rig()->awake());
+  const int64_t steps_before = h.device().physical_rig()->steps_taken();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), dmc::AckCode::kOk);
+  EXPECT_TRUE(h.device().physical_rig()->awake());
+  h.RunMs(10000);
+  // It stepped through the whole pass (about 2.5 s), not just a moment.
+  EXPECT_GT(h.device().physical_rig()->steps_taken() - steps_before, 2000);
+  ASSERT_FALSE(h.All<dmc::RtEnd>().empty());
+  // 0.1 m of track per 16000 steps (3200 steps/rev x 50:1 per metre).
+  const double track_m = h.device().physical_rig()->dynamics().PhysicalJoints()[0];
+  EXPECT_NEAR(track_m, static_cast<double>(h.Pos(1)) / 160000.0, 1e-3);
+  EXPECT_GT(h.Pos(1), (kFrames - 1) * 300);
+}
+
 }  // namespace
 }  // namespace moco::devices
