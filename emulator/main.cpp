@@ -6,12 +6,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "control/atomic_file.h"
 #include "control/control_channel.h"
 #include "control/scenario.h"
 #include "control/session.h"
@@ -21,7 +23,6 @@
 #include "plot/rig_plot.h"
 #include "transport/control_socket.h"
 #include "transport/serve.h"
-#include "control/atomic_file.h"
 #include "wire/transcript.h"
 
 namespace {
@@ -162,6 +163,23 @@ int Plot(const PlotArgs& a) {
   std::printf("  collisions: %" PRId64 "\n", sum.collisions);
   std::printf("  replayed %" PRIu64 " host message(s), %zu control event(s)\n", sum.host_messages,
               sum.control_events_applied);
+  if (!sum.recorded_device_events.empty() || !sum.replayed_device_events.empty()) {
+    auto list = [](const std::map<std::string, size_t>& counts) {
+      std::string s;
+      for (const auto& [kind, n] : counts) {
+        if (!s.empty()) s += ", ";
+        s += kind + " " + std::to_string(n);
+      }
+      return s.empty() ? std::string("none") : s;
+    };
+    std::printf("  device events: recorded %s; this replay %s\n",
+                list(sum.recorded_device_events).c_str(), list(sum.replayed_device_events).c_str());
+    if (sum.recorded_device_events != sum.replayed_device_events) {
+      std::fprintf(stderr,
+                   "mocosim plot: note: the replay's stalls and collisions differ from the "
+                   "recording's; was the session recorded with this profile and rig?\n");
+    }
+  }
   std::printf("  wrote %s\n", out.c_str());
   return 0;
 }

@@ -151,6 +151,10 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
   devices::Dmc16 device(scheduler, sink, std::move(profile));
   control::ControlChannel channel(scheduler);
   channel.AddDevice("dmc16", device);
+  std::map<std::string, size_t> replayed_events;
+  channel.SetDeviceEventListener([&](const control::DeviceEvent& e) {
+    ++replayed_events[e.event.value("event", std::string("?"))];
+  });
   device.PowerOn();
 
   const std::vector<control::SessionEntry>& entries = session.entries;
@@ -181,6 +185,10 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
       if (e.from != control::Origin::kHost) return;
       ++sum.host_chunks;
       device.OnHostBytes(e.bytes);
+      return;
+    }
+    if (e.event.value("source", std::string()) == "device") {
+      ++sum.recorded_device_events[e.event.value("event", std::string("?"))];
       return;
     }
     if (!IsReplayedEvent(e.event)) return;
@@ -239,6 +247,7 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
         sum.lost_steps[j] = lost_now[j] - lost_at_start[j];
       }
       sum.collisions = static_cast<int64_t>(device.stats().collisions - collisions_at_start);
+      sum.replayed_device_events = replayed_events;
       plot.samples.push_back(s);
     }
     if (next == entries.size() && !rig->awake()) {

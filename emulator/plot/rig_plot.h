@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -58,6 +59,12 @@ struct RigPlotSummary {
   // "scenario" with ok true), and those that could not be applied here.
   size_t control_events_applied = 0;
   std::vector<std::string> warnings;  // one line per event that could not be applied
+  // Device events ("stall", "collision"; docs/control.md "events") by kind,
+  // from power-on to the last sample: those the session recorded (event
+  // lines with "source":"device") and those this replay produced. They
+  // differ when the session was recorded with another profile or rig.
+  std::map<std::string, size_t> recorded_device_events;
+  std::map<std::string, size_t> replayed_device_events;
 };
 
 struct RigPlot {

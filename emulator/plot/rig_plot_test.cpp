@@ -7,11 +7,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
 #include <variant>
 
+#include "control/control_channel.h"
+#include "devices/dmc16/dmc16.h"
+#include "devices/dmc16/dmc16_profile.h"
 #include "physics/bullet/rig_path_svg.h"
 #include "wire/dmc.h"
 
@@ -301,6 +305,54 @@ control::Session WithEvent(control::Session s, double t_s, nlohmann::json line) 
 
 const nlohmann::json kEStop = {
     {"event", "estop"}, {"engaged", true}, {"source", "control"}, {"ok", true}};
+
+// A sink that keeps nothing (the recording below keeps only host bytes and
+// device events).
+class DropSink final : public devices::ByteSink {
+ public:
+  void Write(wire::ByteView) override {}
+};
+
+TEST(RigPlot, AReplayReproducesTheRecordedStallsAndCollisions) {
+  // The track driven beyond its pull-out torque, then the boom into the floor.
+  control::Session s =
+      HostSession({dmc::MotorSetSpeed{1, 100000, 2000000}, dmc::MotorMove{1, 80000},
+                   dmc::MotorSetSpeed{3, 10000, 10000}, dmc::MotorMove{3, -52444}});
+  // Record as mocosim does: the device events go into the session.
+  {
+    sim::Scheduler scheduler;
+    DropSink sink;
+    devices::Dmc16 device(scheduler, sink,
+                          devices::LoadDmc16Profile(Source("fixtures/profiles/dmc16-boom.json")));
+    control::ControlChannel channel(scheduler);
+    channel.AddDevice("dmc16", device);
+    std::vector<control::SessionEntry> events;
+    channel.SetDeviceEventListener(
+        [&](const control::DeviceEvent& e) { events.push_back(e.ToSessionEntry()); });
+    device.PowerOn();
+    for (const control::SessionEntry& e : std::vector(s.entries)) {
+      scheduler.RunUntil(e.t_ns);
+      device.OnHostBytes(e.bytes);
+    }
+    scheduler.RunUntil(12 * sim::kNsPerSecond);
+    ASSERT_FALSE(events.empty());
+    for (control::SessionEntry& e : events) s.entries.push_back(std::move(e));
+    std::stable_sort(s.entries.begin(), s.entries.end(),
+                     [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; });
+  }
+  RigPlotOptions o;
+  o.tail_s = 12;
+  const RigPlot plot = PlotOk(s, o);
+  const auto& recorded = plot.summary.recorded_device_events;
+  EXPECT_GE(recorded.count("stall"), 1u);
+  EXPECT_EQ(recorded.at("collision"), 1u);
+  EXPECT_EQ(plot.summary.replayed_device_events, recorded);
+  // A recording that does not match the replay shows as a difference.
+  const RigPlot other =
+      PlotOk(WithEvent(s, 0.05, {{"event", "stall"}, {"joint", "pan"}, {"source", "device"}}), o);
+  EXPECT_EQ(other.summary.recorded_device_events.at("stall"), recorded.at("stall") + 1);
+  EXPECT_NE(other.summary.replayed_device_events, other.summary.recorded_device_events);
+}
 
 TEST(RigPlot, ARecordedEStopStopsTheCommandedPath) {
   const control::Session plain = LoadFixture("dmc16-boom-move.jsonl");
