@@ -164,6 +164,8 @@ class ControlChannel {
   // Adds a device under `name` (letters, digits, '-', '_', '.'; 1..64 bytes)
   // and becomes the listener of its events (Device::SetEventListener).
   // `server` (may be null: the device runs in-process) must serve `device`.
+  // `device` (and `server`) must outlive the channel: its destructor detaches
+  // from the device's events.
   // Throws std::invalid_argument for a bad or duplicate name (a start-up error).
   void AddDevice(std::string name, devices::Device& device,
                  transport::DeviceServer* server = nullptr);

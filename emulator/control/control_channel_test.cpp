@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 
@@ -235,17 +236,27 @@ TEST_F(ControlChannelTest, StateMergesDeviceStateRigGioAndTime) {
 }
 
 TEST_F(ControlChannelTest, DevicesAndHelpNeedNoDevice) {
+  // A channel detaches from its devices when destroyed, so they must outlive
+  // it: the bare device is declared before this test's own channel.
   BareDevice bare;
-  channel_.AddDevice("cam", bare);
-  json r = Reply(channel_, R"({"cmd":"devices"})");
+  ControlChannel channel(scheduler_);
+  channel.AddDevice("rig1", device_);
+  channel.AddDevice("cam", bare);
+  json r = Reply(channel, R"({"cmd":"devices"})");
   ASSERT_EQ(r["devices"].size(), 2u);
   EXPECT_EQ(r["devices"][0]["name"], "rig1");
   EXPECT_EQ(r["devices"][0]["model"], "fake");
   EXPECT_EQ(r["devices"][1]["name"], "cam");
   EXPECT_TRUE(r["devices"][1]["endpoint"].is_null());
-  r = Reply(channel_, R"({"cmd":"help"})");
+  r = Reply(channel, R"({"cmd":"help"})");
   EXPECT_EQ(r["ok"], true);
-  EXPECT_EQ(r["commands"].size(), 10u);
+  // estop, limit, gio_in, power_cycle, cut_link, faults, state, events,
+  // devices, help (docs/control.md)
+  ASSERT_EQ(r["commands"].size(), 10u);
+  std::vector<std::string> names;
+  for (const json& c : r["commands"]) names.push_back(c["cmd"].get<std::string>());
+  EXPECT_NE(std::find(names.begin(), names.end(), "events"), names.end());
+  EXPECT_EQ(names.back(), "help");
 }
 
 TEST(VocabularyTest, EveryExampleInTheVocabularyParsesAsItsOwnCommand) {
@@ -264,16 +275,18 @@ TEST(VocabularyTest, EveryExampleInTheVocabularyParsesAsItsOwnCommand) {
 
 TEST_F(ControlChannelTest, WithSeveralDevicesTheDeviceFieldIsRequired) {
   FakeDevice other(scheduler_, 1, 1, "other");
-  channel_.AddDevice("rig2", other);
-  std::string e = ErrorOf(channel_, R"({"cmd":"estop","engaged":true})");
+  ControlChannel channel(scheduler_);  // after `other`: devices outlive the channel
+  channel.AddDevice("rig1", device_);
+  channel.AddDevice("rig2", other);
+  std::string e = ErrorOf(channel, R"({"cmd":"estop","engaged":true})");
   EXPECT_TRUE(Contains(e, "several devices")) << e;
   EXPECT_TRUE(Contains(e, "rig1, rig2")) << e;
-  e = ErrorOf(channel_, R"({"cmd":"estop","engaged":true,"device":"rig9"})");
+  e = ErrorOf(channel, R"({"cmd":"estop","engaged":true,"device":"rig9"})");
   EXPECT_TRUE(Contains(e, "unknown device \"rig9\"")) << e;
   EXPECT_FALSE(device_.the_rig().estop_engaged());
   EXPECT_FALSE(other.the_rig().estop_engaged());
 
-  EXPECT_EQ(Reply(channel_, R"({"cmd":"estop","engaged":true,"device":"rig2"})")["ok"], true);
+  EXPECT_EQ(Reply(channel, R"({"cmd":"estop","engaged":true,"device":"rig2"})")["ok"], true);
   EXPECT_TRUE(other.the_rig().estop_engaged());
   EXPECT_FALSE(device_.the_rig().estop_engaged());
 }
