@@ -96,10 +96,21 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
       }
       m.Finish();
     }
-    for (int motor : p.physical_rig.motors) {
+    for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
+      const int motor = p.physical_rig.motors[joint];
       if (motor > p.motor_count) {
         v.Fail("motors", "names a motor beyond motor_count",
                "use motors 1.." + std::to_string(p.motor_count) + " or 0 for a fixed joint");
+      }
+      // One stepper drives one joint: a motor shared by two joints would
+      // command both with the same steps.
+      for (size_t other = 0; other < joint && motor != 0; ++other) {
+        if (p.physical_rig.motors[other] == motor) {
+          v.Fail("motors." + std::string(physics::kJointNames[joint]),
+                 "is motor " + std::to_string(motor) + ", which already drives the " +
+                     std::string(physics::kJointNames[other]),
+                 "give each joint its own motor, or 0 for a fixed joint");
+        }
       }
     }
     // The rig file is read with the device profile, relative to its folder.

@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <string>
 #include <vector>
 
+#include "devices/dmc16/dmc16_profile.h"
 #include "devices/dmc16/dmc16_test_support.h"
+#include "devices/profile.h"
 
 namespace moco::devices {
 namespace {
@@ -189,6 +192,42 @@ TEST(Dmc16PhysicalRig, APlaybackIsFollowedFromASleepingRigToItsLastFrame) {
   const double track_m = h.device().physical_rig()->dynamics().PhysicalJoints()[0];
   EXPECT_NEAR(track_m, static_cast<double>(h.Pos(1)) / 160000.0, 1e-3);
   EXPECT_GT(h.Pos(1), (kFrames - 1) * 300);
+}
+
+// A profile whose physical_rig maps the joints badly is refused at load,
+// naming the field and the fix (docs/profiles.md).
+TEST(Dmc16PhysicalRig, AProfileMappingTheJointsBadlyIsRefusedNamingTheField) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  const std::string profiles = std::string(root ? root : ".") + "/fixtures/profiles";
+  const nlohmann::json good = nlohmann::json::parse(
+      R"({"model":"dmc16","motor_count":16,"physical_rig":{"rig":"../rigs/boom-jib.json"}})");
+  ASSERT_EQ(Dmc16ProfileFromJson(good, "p", profiles).physical_rig.rig.name,
+            "studio boom jib on 2.5 m track");
+  auto error = [&](const nlohmann::json& j) -> std::string {
+    try {
+      Dmc16ProfileFromJson(j, "p", profiles);
+    } catch (const ProfileError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  nlohmann::json shared = good;
+  shared["physical_rig"]["motors"] = {{"swing", 2}, {"pan", 2}};
+  const std::string e1 = error(shared);
+  EXPECT_NE(e1.find("physical_rig.motors.pan"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("already drives the swing"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("give each joint its own motor"), std::string::npos) << e1;
+  // Two fixed joints (motor 0) share nothing.
+  nlohmann::json fixed = good;
+  fixed["physical_rig"]["motors"] = {{"pan", 0}, {"roll", 0}};
+  EXPECT_EQ(error(fixed), "(accepted)");
+  nlohmann::json beyond = good;
+  beyond["motor_count"] = 4;
+  const std::string e2 = error(beyond);  // the default mapping uses motors 5 and 6
+  EXPECT_NE(e2.find("beyond motor_count"), std::string::npos) << e2;
+  nlohmann::json missing = good;
+  missing["physical_rig"].erase("rig");
+  EXPECT_NE(error(missing).find("physical_rig.rig"), std::string::npos);
 }
 
 }  // namespace
