@@ -79,6 +79,9 @@ int RunReplay(const std::string& path, std::string target_text, const std::strin
                 err->message);
   }
   const moco::control::Session& session = std::get<moco::control::Session>(loaded);
+  if (const std::string w = moco::control::SessionWarning(session); !w.empty()) {
+    std::fprintf(stderr, "mococheck: %s: %s\n", path.c_str(), w.c_str());
+  }
   const auto proto = ParseProtocol(moco::wire::ProtocolName(session.header.protocol));
   if (!proto) {
     return Fail(path + ": protocol " +
@@ -123,6 +126,9 @@ int RunFuzzCommand(const std::vector<std::string>& paths, std::string target_tex
     auto s = LoadSeed(p);
     if (const auto* err = std::get_if<std::string>(&s)) return Fail(*err);
     seeds.push_back(std::move(std::get<Seed>(s)));
+    if (!seeds.back().warning.empty()) {
+      std::fprintf(stderr, "mococheck: %s: %s\n", p.c_str(), seeds.back().warning.c_str());
+    }
     if (seeds.back().protocol != seeds.front().protocol) {
       return Fail(p + " speaks " + std::string(ProtocolName(seeds.back().protocol)) + " but " +
                   seeds.front().path + " speaks " +

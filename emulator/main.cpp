@@ -28,6 +28,7 @@
 namespace {
 
 using moco::control::LoadSession;
+using moco::control::SessionWarning;
 using moco::control::Origin;
 using moco::control::Session;
 using moco::control::SessionError;
@@ -61,6 +62,7 @@ int Decode(const std::string& path, bool show_time, bool strict) {
     return 2;
   }
   const Session& s = std::get<Session>(loaded);
+  const std::string warning = SessionWarning(s);
   std::printf("session %s: protocol %s%s%s, %zu entries\n", path.c_str(),
               std::string(ProtocolName(s.header.protocol)).c_str(),
               s.header.device.empty() ? "" : ", device ", s.header.device.c_str(),
@@ -80,6 +82,11 @@ int Decode(const std::string& path, bool show_time, bool strict) {
                show_time, problems);
   }
   PrintLines(last_t, decoder.Finish(), show_time, problems);
+  if (!warning.empty()) {
+    // A cut recording is a problem of the capture (--strict fails on it).
+    std::printf("!! %s\n", warning.c_str());
+    ++problems;
+  }
   std::printf("%zu problem(s) in the traffic\n", problems);
   return strict && problems > 0 ? 1 : 0;
 }
@@ -108,6 +115,9 @@ int Plot(const PlotArgs& a) {
                  e->line ? (":" + std::to_string(e->line) + ": ").c_str() : ": ",
                  e->message.c_str());
     return 2;
+  }
+  if (const std::string w = SessionWarning(std::get<Session>(loaded)); !w.empty()) {
+    std::fprintf(stderr, "mocosim plot: %s: %s\n", a.session_path.c_str(), w.c_str());
   }
   if (!(std::isfinite(a.every_ms) && a.every_ms >= 0.001 && a.every_ms <= 3.6e6)) {
     std::fprintf(stderr,

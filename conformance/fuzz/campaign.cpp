@@ -73,6 +73,7 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
   seed.protocol = *protocol;
   seed.device = s.header.device;
   seed.messages = SplitHostStream(*protocol, host);
+  seed.warning = control::SessionWarning(s);
   if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
   return seed;
 }

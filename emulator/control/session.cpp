@@ -144,6 +144,12 @@ std::variant<Session, SessionError> ParseSession(std::string_view text) {
     }
     json j = json::parse(line, nullptr, /*allow_exceptions=*/false);
     if (j.is_discarded()) {
+      // A recording that stopped mid-line (the process was killed) keeps
+      // every whole line before it: the writer flushes line by line.
+      if (end == text.size() && have_header) {
+        s.cut_line = line_no;
+        break;
+      }
       return Err(line_no, "line " + std::to_string(line_no) + " is not valid JSON");
     }
     if (!have_header) {
@@ -164,6 +170,13 @@ std::variant<Session, SessionError> ParseSession(std::string_view text) {
     return Err(1, "empty session: the first line must be a header (see docs/sessions.md)");
   }
   return s;
+}
+
+std::string SessionWarning(const Session& s) {
+  if (s.cut_line == 0) return {};
+  return "line " + std::to_string(s.cut_line) +
+         " is cut short (the recording did not finish); lines 1.." +
+         std::to_string(s.cut_line - 1) + " are read";
 }
 
 std::variant<Session, SessionError> LoadSession(const std::filesystem::path& path) {

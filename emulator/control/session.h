@@ -53,7 +53,15 @@ struct SessionEntry {
 struct Session {
   SessionHeader header;
   std::vector<SessionEntry> entries;
+  // The 1-based number of the file's last line when it was cut short (no
+  // newline and not valid JSON: a recording that did not finish, see
+  // SessionWriter); the entries before it are read. 0 when the file is whole.
+  size_t cut_line = 0;
 };
+
+// What a reader should tell the user about a session it read: the cut last
+// line, if any ("line 28 is cut short: ..."); empty when there is nothing.
+std::string SessionWarning(const Session& s);
 
 // A failure to read a session, with the 1-based line number and a message that
 // names the problem and the fix.

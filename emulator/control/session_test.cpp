@@ -63,7 +63,11 @@ TEST(SessionTest, ErrorsNameTheLineAndTheFix) {
       {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n{\"t_ns\":5,\"from\":\"host\",\"hex\":\"\"}\n"
        "{\"t_ns\":4,\"from\":\"host\",\"hex\":\"\"}",
        3, "backwards"},
-      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\nnot json", 2, "not valid JSON"},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\nnot json\n", 2, "not valid JSON"},
+      {"{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n{\"t_ns\":1,\"fr\n"
+       "{\"t_ns\":2,\"from\":\"host\",\"hex\":\"\"}",
+       2, "not valid JSON"},                     // cut short, but not the last line: damaged
+      {"{\"mocosim_sess", 1, "not valid JSON"},  // nothing whole to read
   };
   for (const auto& c : cases) {
     auto r = ParseSession(c.text);
@@ -137,6 +141,52 @@ RC_GTEST_PROP(SessionProp, TrafficRoundTripsThroughText,
     RC_ASSERT(s.entries[i].bytes == chunks[i].second);
     RC_ASSERT((s.entries[i].from == Origin::kHost) == chunks[i].first);
   }
+}
+
+TEST(SessionTest, ALastLineCutShortKeepsTheLinesBeforeIt) {
+  const std::string whole =
+      "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n"
+      "{\"t_ns\":1,\"from\":\"host\",\"hex\":\"44\"}\n";
+  Session s = Ok(ParseSession(whole + "{\"t_ns\":2,\"from\":\"dev"));
+  ASSERT_EQ(s.entries.size(), 1u);
+  EXPECT_EQ(s.cut_line, 3u);
+  EXPECT_EQ(SessionWarning(s),
+            "line 3 is cut short (the recording did not finish); lines 1..2 are read");
+  s = Ok(ParseSession(whole));
+  EXPECT_EQ(s.cut_line, 0u);
+  EXPECT_EQ(SessionWarning(s), "");
+}
+
+// Law: a recording cut at any byte after its header keeps every line that was
+// whole, and says so when the last one was not (SessionWriter flushes line by
+// line, docs/sessions.md).
+RC_GTEST_PROP(SessionProp, ACutRecordingKeepsEveryWholeLine,
+              (const std::vector<std::pair<bool, std::vector<uint8_t>>>& chunks)) {
+  SessionHeader h;
+  const std::string header = HeaderToJson(h).dump() + "\n";
+  std::string text = header;
+  std::vector<size_t> line_ends;  // offset just past each entry's newline
+  for (size_t i = 0; i < chunks.size(); ++i) {
+    SessionEntry e;
+    e.t_ns = static_cast<int64_t>(i);
+    e.from = chunks[i].first ? Origin::kHost : Origin::kDevice;
+    e.bytes = chunks[i].second;
+    text += EntryToJson(e).dump() + "\n";
+    line_ends.push_back(text.size());
+  }
+  const size_t cut = *rc::gen::inRange(header.size(), text.size() + 1);
+  auto r = ParseSession(std::string_view(text).substr(0, cut));
+  RC_ASSERT(std::holds_alternative<Session>(r));
+  const Session& s = std::get<Session>(r);
+  // Lines whose closing brace is in: a line cut only at its newline is whole.
+  size_t whole = 0;
+  while (whole < line_ends.size() && line_ends[whole] - 1 <= cut) ++whole;
+  RC_ASSERT(s.entries.size() == whole);
+  for (size_t i = 0; i < whole; ++i) RC_ASSERT(s.entries[i].bytes == chunks[i].second);
+  const bool cut_mid_line =
+      whole < line_ends.size() && cut > (whole ? line_ends[whole - 1] : header.size());
+  RC_ASSERT((s.cut_line != 0) == cut_mid_line);
+  if (cut_mid_line) RC_ASSERT(s.cut_line == whole + 2);  // 1-based, after the header
 }
 
 }  // namespace
