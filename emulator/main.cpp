@@ -28,10 +28,10 @@
 namespace {
 
 using moco::control::LoadSession;
-using moco::control::SessionWarning;
 using moco::control::Origin;
 using moco::control::Session;
 using moco::control::SessionError;
+using moco::control::SessionWarning;
 using moco::wire::Side;
 using moco::wire::TranscriptDecoder;
 using moco::wire::TranscriptLine;
