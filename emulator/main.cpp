@@ -62,7 +62,6 @@ int Decode(const std::string& path, bool show_time, bool strict) {
     return 2;
   }
   const Session& s = std::get<Session>(loaded);
-  const std::string warning = SessionWarning(s);
   std::printf("session %s: protocol %s%s%s, %zu entries\n", path.c_str(),
               std::string(ProtocolName(s.header.protocol)).c_str(),
               s.header.device.empty() ? "" : ", device ", s.header.device.c_str(),
@@ -82,7 +81,7 @@ int Decode(const std::string& path, bool show_time, bool strict) {
                show_time, problems);
   }
   PrintLines(last_t, decoder.Finish(), show_time, problems);
-  if (!warning.empty()) {
+  if (const std::string warning = SessionWarning(s); !warning.empty()) {
     // A cut recording is a problem of the capture (--strict fails on it).
     std::printf("!! %s\n", warning.c_str());
     ++problems;

@@ -24,10 +24,12 @@ bool Moves(Host& h, uint8_t motor, int32_t steps) {
   return std::holds_alternative<dmc::MotorMoveResponse>(h.Reply(id).msg);
 }
 
-Dmc16Profile BoomProfile() {
+std::string ProfilesDir() {
   const char* root = std::getenv("MOCO_SOURCE_DIR");
-  return LoadDmc16Profile(std::string(root ? root : ".") + "/fixtures/profiles/dmc16-boom.json");
+  return std::string(root ? root : ".") + "/fixtures/profiles";
 }
+
+Dmc16Profile BoomProfile() { return LoadDmc16Profile(ProfilesDir() + "/dmc16-boom.json"); }
 
 // Boom motor 3: 3200 steps/rev x 100:1 gear = 888.9 steps per degree (boom-jib.json).
 constexpr double kBoomStepsPerDeg = 3200.0 * 100.0 / 360.0;
@@ -197,8 +199,7 @@ TEST(Dmc16PhysicalRig, APlaybackIsFollowedFromASleepingRigToItsLastFrame) {
 // A profile whose physical_rig maps the joints badly is refused at load,
 // naming the field and the fix (docs/profiles.md).
 TEST(Dmc16PhysicalRig, AProfileMappingTheJointsBadlyIsRefusedNamingTheField) {
-  const char* root = std::getenv("MOCO_SOURCE_DIR");
-  const std::string profiles = std::string(root ? root : ".") + "/fixtures/profiles";
+  const std::string profiles = ProfilesDir();
   const nlohmann::json good = nlohmann::json::parse(
       R"({"model":"dmc16","motor_count":16,"physical_rig":{"rig":"../rigs/boom-jib.json"}})");
   ASSERT_EQ(Dmc16ProfileFromJson(good, "p", profiles).physical_rig.rig.name,
