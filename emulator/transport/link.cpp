@@ -165,14 +165,28 @@ void Link::StartRead() {
 }
 
 void Link::OnRead(const ErrorCode& ec, size_t n) {
-  reading_ = false;
   if (ec) {
+    reading_ = false;
     StreamEnded(ec == asio::error::eof ? std::string("host closed the connection")
                                        : "read failed: " + ec.message());
     driver_.Kick();
     return;
   }
+  // read_buf_ still holds this read's bytes: reading_ stays set until they are
+  // queued, so that a timer run by Sync() (the inbound wake calls StartRead)
+  // cannot start the next read into the same buffer. Asio may fill the buffer
+  // of a new read at once (a speculative read), which would overwrite bytes
+  // not yet consumed: host bytes lost, repeated and reordered.
+  const uint64_t gen = stream_gen_;
   const sim::TimeNs now = driver_.Sync();
+  if (gen != stream_gen_ || stopped_) {
+    // A timer closed this stream (a link cut, a stop): its bytes go with it,
+    // and read_buf_ may already belong to the next stream's read.
+    stats_.bytes_from_host += n;
+    stats_.cut_dropped += n;
+    driver_.Kick();
+    return;
+  }
   stats_.bytes_from_host += n;
   const wire::ByteView bytes(read_buf_.data(), n);
   if (now < cut_until_ns_) {
@@ -184,6 +198,7 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
     }
     DeliverInbound();
   }
+  reading_ = false;
   StartRead();
   driver_.Kick();
 }
