@@ -69,6 +69,23 @@ void Scheduler::RunUntil(TimeNs t) {
   running_ = false;
 }
 
+bool Scheduler::RunUntil(TimeNs t, size_t max_events) {
+  if (running_) return false;
+  running_ = true;
+  size_t n = 0;
+  while (!heap_.empty() && heap_.front().time <= t) {
+    if (n == max_events) {
+      running_ = false;
+      return false;
+    }
+    RunTop();
+    ++n;
+  }
+  if (t > now_) now_ = t;
+  running_ = false;
+  return true;
+}
+
 size_t Scheduler::RunUntilIdle(size_t max_events) {
   if (running_) return 0;
   running_ = true;

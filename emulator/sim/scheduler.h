@@ -70,6 +70,14 @@ class Scheduler {
   // events due at Now() and leaves Now() unchanged.
   void RunUntil(TimeNs t);
 
+  // As RunUntil(t), but stops after max_events events. Returns true when
+  // every event due by t ran (Now() is then t, or stays if t is earlier);
+  // false when it stopped with events still due, leaving Now() at the time of
+  // the last event run, so a later call resumes in order. A driver that is
+  // behind (more due work than it can run in one go) uses it to return to its
+  // event loop between slices.
+  bool RunUntil(TimeNs t, size_t max_events);
+
   // Runs events until none is pending or max_events ran. Returns the number
   // of events run.
   size_t RunUntilIdle(size_t max_events = SIZE_MAX);

@@ -274,5 +274,56 @@ RC_GTEST_PROP(SchedulerProp, RunUntilChunkingDoesNotChangeOrder,
   RC_ASSERT(run(true) == run(false));
 }
 
+// Law: a bounded RunUntil (the real-time driver's catch-up slices) runs the
+// same events in the same order at the same times as an unbounded one, in
+// however small slices, and ends at the same Now().
+RC_GTEST_PROP(SchedulerProp, BoundedRunUntilSlicesDoNotChangeOrderOrTime,
+              (const std::vector<uint16_t>& times, const std::vector<uint8_t>& bounds)) {
+  const auto until = static_cast<TimeNs>(*rc::gen::inRange(0, 600));
+  auto run = [&](bool sliced) {
+    Scheduler s;
+    std::vector<std::pair<TimeNs, size_t>> log;
+    for (size_t i = 0; i < times.size(); ++i) {
+      s.At(times[i] % 500, [&log, &s, i] {
+        log.push_back({s.Now(), i});
+        if (i % 2 == 0) {
+          s.After(static_cast<TimeNs>(i % 5), [&log, &s, i] {
+            log.push_back({s.Now(), 100000 + i});
+          });
+        }
+      });
+    }
+    if (sliced) {
+      size_t k = 0;
+      size_t slices = 0;
+      while (!s.RunUntil(until, bounds.empty() ? 1 : 1 + bounds[k++ % bounds.size()] % 8)) {
+        RC_ASSERT(s.Now() <= until);
+        ++slices;
+        RC_ASSERT(slices <= 4 * times.size() + 4);
+      }
+    } else {
+      s.RunUntil(until);
+    }
+    log.push_back({s.Now(), SIZE_MAX});
+    return log;
+  };
+  RC_ASSERT(run(true) == run(false));
+}
+
+TEST(SchedulerTest, BoundedRunUntilStopsAtTheBoundAndResumes) {
+  Scheduler s;
+  std::vector<int> ran;
+  for (int i = 0; i < 5; ++i) s.At(10 * i, [&ran, i] { ran.push_back(i); });
+  EXPECT_FALSE(s.RunUntil(100, 2));
+  EXPECT_EQ(ran, (std::vector<int>{0, 1}));
+  EXPECT_EQ(s.Now(), 10);  // the last event run, not the target
+  EXPECT_FALSE(s.RunUntil(100, 2));
+  EXPECT_TRUE(s.RunUntil(100, 2));
+  EXPECT_EQ(ran, (std::vector<int>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(s.Now(), 100);
+  EXPECT_TRUE(s.RunUntil(50, 0));  // nothing due: done, time does not go back
+  EXPECT_EQ(s.Now(), 100);
+}
+
 }  // namespace
 }  // namespace moco::sim

@@ -41,7 +41,19 @@ RealtimeDriver::Clock::time_point RealtimeDriver::WallTimeOf(sim::TimeNs t_ns) c
 
 void RealtimeDriver::RunDue() {
   in_run_ = true;
-  scheduler_.RunUntil(NowNs());
+  const sim::TimeNs until = NowNs();
+  const Clock::time_point slice_end = Clock::now() + kMaxSliceWall;
+  size_t run = 0;
+  bool done = false;
+  // Bounded catch-up: when more is due than a slice may run (a scenario of
+  // thousands of 1 ms events, a machine that fell behind), the rest runs from
+  // the next timer expiry, so signals and I/O get their turn in between.
+  while (!done && run < kMaxSliceEvents) {
+    done = scheduler_.RunUntil(until, kEventsPerWallCheck);
+    run += kEventsPerWallCheck;
+    if (Clock::now() >= slice_end) break;
+  }
+  if (!done) ++catch_up_slices_;
   in_run_ = false;
 }
 

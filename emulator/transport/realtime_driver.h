@@ -41,13 +41,13 @@ class RealtimeDriver {
   void Stop();
   bool running() const { return started_ && !stopped_; }
 
-  // Runs every event due by the wall clock, then arms the timer at the next
-  // pending event. Cheap when nothing changed. No-op before Start(), after
+  // Runs the events due by the wall clock (one slice), then arms the timer at
+  // the next pending event (at once when the slice left some due). Cheap when nothing changed. No-op before Start(), after
   // Stop(), and inside a scheduler callback.
   void Kick();
 
-  // Advances the scheduler to the wall clock (running the events due by then)
-  // and returns its Now(). Call before handing the device anything from
+  // Advances the scheduler to the wall clock (running the events due by then,
+  // at most one slice: see kMaxSliceEvents) and returns its Now(). Call before handing the device anything from
   // outside the scheduler, so the device sees a current time. Inside a
   // scheduler callback, returns the scheduler's Now() unchanged.
   sim::TimeNs Sync();
@@ -65,6 +65,17 @@ class RealtimeDriver {
 
   // Number of timer expiries handled (for tests and benchmarks).
   uint64_t wakeups() const { return wakeups_; }
+  // Number of runs that stopped at the slice bound with events still due.
+  uint64_t catch_up_slices() const { return catch_up_slices_; }
+
+  // One run of due events (Kick, Sync, a timer expiry) runs at most this
+  // many events, and stops early once it has taken kMaxSliceWall; what is
+  // left runs from the next expiry of the timer, armed at once, so the
+  // io_context reaches signals and I/O between slices however far behind
+  // the scheduler is.
+  static constexpr size_t kMaxSliceEvents = 4096;
+  static constexpr size_t kEventsPerWallCheck = 256;
+  static constexpr std::chrono::milliseconds kMaxSliceWall{10};
 
  private:
   void RunDue();
@@ -81,6 +92,7 @@ class RealtimeDriver {
   bool armed_ = false;
   sim::TimeNs armed_at_ns_ = 0;
   uint64_t wakeups_ = 0;
+  uint64_t catch_up_slices_ = 0;
 };
 
 }  // namespace moco::transport

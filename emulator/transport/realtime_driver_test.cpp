@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <vector>
 
 #include "transport/test_support.h"
@@ -129,6 +130,34 @@ TEST(RealtimeDriverTest, FarEventsStayPendingAndStopCancels) {
   io.run_for(std::chrono::milliseconds(50));
   EXPECT_TRUE(io.stopped());
   EXPECT_FALSE(far_ran);
+}
+
+// A scheduler far behind the wall clock (a scenario of hundreds of 1 ms
+// events, a stalled machine) runs its backlog in bounded slices: a signal
+// raised before the backlog starts is handled while most of it is still due,
+// not after it, and the backlog still runs whole and in order.
+TEST(RealtimeDriverTest, ABacklogOfDueEventsYieldsToSignalsBetweenSlices) {
+  asio::io_context io;
+  sim::Scheduler s;
+  RealtimeDriver d(io, s);
+  constexpr int kEvents = 100'000;
+  std::vector<int> order;
+  order.reserve(kEvents);
+  for (int i = 0; i < kEvents; ++i) s.At(0, [&order, i] { order.push_back(i); });
+  asio::signal_set signals(io, SIGUSR1);
+  size_t ran_at_signal = SIZE_MAX;
+  signals.async_wait([&](const ErrorCode& ec, int) {
+    if (!ec) ran_at_signal = order.size();
+  });
+  ASSERT_EQ(::raise(SIGUSR1), 0);
+  d.Start();
+  EXPECT_LE(order.size(), RealtimeDriver::kMaxSliceEvents) << "Start ran past one slice";
+  ASSERT_TRUE(RunUntil(io, [&] { return order.size() == kEvents && ran_at_signal != SIZE_MAX; },
+                       std::chrono::milliseconds(30000)));
+  EXPECT_LT(ran_at_signal, static_cast<size_t>(kEvents / 2))
+      << "the signal waited for the backlog";
+  EXPECT_GT(d.catch_up_slices(), 0u);
+  for (int i = 0; i < kEvents; ++i) ASSERT_EQ(order[static_cast<size_t>(i)], i);
 }
 
 }  // namespace
