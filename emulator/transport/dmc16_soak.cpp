@@ -1,8 +1,14 @@
 // Load test of served DMC-16s (the emulator's soak run): N devices in one
-// process on PTYs and TCP ports, each driven by its own host at R requests/s
-// for S seconds. Checks that no request is lost, reordered or unanswered and
-// that memory stays flat; prints the numbers. Exit 0 when all hold.
+// process on PTYs and TCP ports, each driven by its own host for S seconds,
+// either at R requests/s on unpaced lines, or (--pacing) on lines paced at the
+// device's baud rate with the host writing up to A requests ahead in writes of
+// up to 500 requests (far more than the line carries: the host outruns it).
+// Checks that every request is answered exactly once and in order (none lost,
+// repeated, reordered or invented), that memory stays flat, and with --record
+// that every device's recording decodes without a problem (as `mocosim decode
+// --strict`); prints the numbers. Exit 0 when all hold.
 //   dmc16_soak [--seconds 60] [--devices 8] [--rate 2000]
+//   dmc16_soak --pacing [--ahead 2000] [--record] [--seconds 60] [--devices 8]
 #include <malloc.h>
 #include <sys/resource.h>
 
@@ -10,15 +16,19 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cerrno>
 #include <cstring>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "control/session.h"
 #include "transport/dmc_host_client.h"
 #include "transport/serve.h"
+#include "wire/transcript.h"
 
 namespace {
 
@@ -42,7 +52,9 @@ long RssKiB() {
 struct HostResult {
   uint64_t sent = 0;
   uint64_t answered = 0;
-  uint64_t out_of_order = 0;
+  uint64_t out_of_order = 0;  // an answer to a later request before an earlier one's
+  uint64_t duplicated = 0;    // a second answer to a request already answered
+  uint64_t invented = 0;      // an answer to a request never sent
   uint64_t wrong_type = 0;
   uint64_t bad_frames = 0;
   bool io_error = false;
@@ -60,9 +72,51 @@ dmc::HostMessage RequestFor(uint64_t i) {
   }
 }
 
-void DriveHost(int fd, double seconds, int rate, HostResult& r) {
-  constexpr uint32_t kFirstId = 0x10000;  // unsolicited frames use the device's own low IDs
+constexpr uint32_t kFirstId = 0x10000;  // unsolicited frames use the device's own low IDs
+
+// Reads answers until the writer is done and every request is answered (or
+// nothing arrived for 3 s), judging each against the requests sent.
+void ReadAnswers(int fd, const std::atomic<uint64_t>& sent, const std::atomic<bool>& done,
+                 std::atomic<uint64_t>& answered, HostResult& r) {
+  DmcHostClient reader(fd);
+  std::vector<bool> seen;
+  uint64_t expect = 0;
+  auto last_progress = Clock::now();
+  for (;;) {
+    auto f = reader.Next(200);
+    if (!f) {
+      if (done.load() && (expect >= sent.load() ||
+                          Clock::now() - last_progress > std::chrono::seconds(3))) {
+        break;
+      }
+      continue;
+    }
+    if (f->id < kFirstId) continue;  // unsolicited (the power-on HI)
+    last_progress = Clock::now();
+    const uint64_t i = f->id - kFirstId;
+    if (i >= sent.load()) {
+      ++r.invented;
+      continue;
+    }
+    if (i >= seen.size()) seen.resize(i + 1 + 4096, false);
+    if (seen[i]) {
+      ++r.duplicated;
+      continue;
+    }
+    seen[i] = true;
+    if (i != expect) ++r.out_of_order;
+    expect = i + 1;
+    ++r.answered;
+    answered.store(r.answered);
+    if (f->type != dmc::TypeOf(RequestFor(i))) ++r.wrong_type;
+  }
+  r.bad_frames = reader.bad_frames();
+}
+
+// At `rate` requests/s, one request per write.
+void DriveHostAtRate(int fd, double seconds, int rate, HostResult& r) {
   std::atomic<uint64_t> sent{0};
+  std::atomic<uint64_t> answered{0};
   std::atomic<bool> done{false};
   std::thread writer([&] {
     DmcHostClient client(fd);
@@ -73,90 +127,175 @@ void DriveHost(int fd, double seconds, int rate, HostResult& r) {
           t0 + std::chrono::duration_cast<Clock::duration>(period * static_cast<double>(i));
       if (std::chrono::duration<double>(due - t0).count() >= seconds) break;
       std::this_thread::sleep_until(due);
+      sent.store(i + 1);  // before the bytes leave: an answer may come back at once
       if (!client.Send(kFirstId + static_cast<uint32_t>(i), RequestFor(i))) {
+        sent.store(i);
         r.io_error = true;
         break;
       }
-      sent.store(i + 1);
     }
     done.store(true);
   });
-  DmcHostClient reader(fd);
-  uint64_t expect = 0;
-  auto last_progress = Clock::now();
-  for (;;) {
-    auto f = reader.Next(200);
-    if (!f) {
-      if (done.load() &&
-          (expect >= sent.load() || Clock::now() - last_progress > std::chrono::seconds(3))) {
-        break;
-      }
-      continue;
-    }
-    if (f->id < kFirstId) continue;  // unsolicited (the power-on HI)
-    last_progress = Clock::now();
-    const uint64_t i = f->id - kFirstId;
-    if (i != expect) ++r.out_of_order;
-    expect = i + 1;
-    ++r.answered;
-    const uint16_t want = dmc::TypeOf(RequestFor(i));
-    if (f->type != want) ++r.wrong_type;
-  }
+  ReadAnswers(fd, sent, done, answered, r);
   writer.join();
   r.sent = sent.load();
-  r.bad_frames = reader.bad_frames();
+}
+
+// As far ahead as `ahead` unanswered requests, in writes of up to 500.
+void DriveHostAhead(int fd, double seconds, uint64_t ahead, HostResult& r) {
+  constexpr uint64_t kMaxBurst = 500;
+  std::atomic<uint64_t> sent{0};
+  std::atomic<uint64_t> answered{0};
+  std::atomic<bool> done{false};
+  std::thread writer([&] {
+    const auto end = Clock::now() + std::chrono::duration<double>(seconds);
+    moco::wire::Bytes burst;
+    uint64_t i = 0;
+    while (Clock::now() < end) {
+      const uint64_t outstanding = i - answered.load();
+      if (outstanding >= ahead) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        continue;
+      }
+      const uint64_t n = std::min(kMaxBurst, ahead - outstanding);
+      burst.clear();
+      for (uint64_t k = 0; k < n; ++k) {
+        dmc::Encode(kFirstId + static_cast<uint32_t>(i + k), RequestFor(i + k), burst);
+      }
+      i += n;
+      sent.store(i);
+      if (!moco::transport::testing::WriteAll(fd, burst.data(), burst.size())) {
+        r.io_error = true;
+        break;
+      }
+    }
+    done.store(true);
+  });
+  ReadAnswers(fd, sent, done, answered, r);
+  writer.join();
+  r.sent = sent.load();
+}
+
+// Problems `mocosim decode --strict` would count in a recording; -1 when it
+// cannot be read.
+long RecordingProblems(const std::filesystem::path& path, size_t* entries) {
+  auto loaded = moco::control::LoadSession(path);
+  const auto* session = std::get_if<moco::control::Session>(&loaded);
+  if (session == nullptr) return -1;
+  *entries = session->entries.size();
+  moco::wire::TranscriptDecoder decoder(session->header.protocol);
+  long problems = 0;
+  auto count = [&](const std::vector<moco::wire::TranscriptLine>& lines) {
+    for (const auto& l : lines) problems += l.problem ? 1 : 0;
+  };
+  for (const auto& e : session->entries) {
+    if (e.is_event) continue;
+    count(decoder.Feed(e.from == moco::control::Origin::kHost ? moco::wire::Side::kHost
+                                                               : moco::wire::Side::kDevice,
+                       e.bytes));
+  }
+  count(decoder.Finish());
+  if (!moco::control::SessionWarning(*session).empty()) ++problems;
+  return problems;
 }
 
 }  // namespace
 
+int Usage() {
+  std::fprintf(stderr,
+               "usage: dmc16_soak [--seconds S] [--devices N] [--rate R]\n"
+               "       dmc16_soak --pacing [--ahead A] [--record] [--seconds S] [--devices N]\n"
+               "  --rate R    unpaced lines, R requests/s per device, one per write (default 2000)\n"
+               "  --pacing    lines paced at the device's baud rate; the host writes up to A\n"
+               "              unanswered requests ahead (default 2000), up to 500 per write\n"
+               "  --record    record every device's session and decode each strictly\n");
+  return 2;
+}
+
+// A whole number in [lo, hi], or nullopt.
+std::optional<long> Whole(const char* text, long lo, long hi) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (errno != 0 || end == text || *end != '\0' || v < lo || v > hi) return std::nullopt;
+  return v;
+}
+
 int main(int argc, char** argv) {
   double seconds = 60;
-  int devices = 8;
-  int rate = 2000;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  long devices = 8;
+  long rate = 2000;
+  long ahead = 2000;
+  bool pacing = false;
+  bool record = false;
+  for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--pacing") {
+      pacing = true;
+      continue;
+    }
+    if (a == "--record") {
+      record = true;
+      continue;
+    }
+    if (i + 1 >= argc) return Usage();
+    const char* v = argv[++i];
+    std::optional<long> n;
     if (a == "--seconds") {
-      seconds = std::atof(argv[i + 1]);
-    } else if (a == "--devices") {
-      devices = std::atoi(argv[i + 1]);
+      char* end = nullptr;
+      seconds = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(seconds > 0 && seconds <= 86400)) {
+        std::fprintf(stderr, "dmc16_soak: --seconds takes a number in (0, 86400]\n");
+        return 2;
+      }
+      continue;
+    }
+    if (a == "--devices") {
+      n = Whole(v, 1, 64);
+      if (n) devices = *n;
     } else if (a == "--rate") {
-      rate = std::atoi(argv[i + 1]);
+      n = Whole(v, 1, 1'000'000);
+      if (n) rate = *n;
+    } else if (a == "--ahead") {
+      n = Whole(v, 1, 1'000'000);
+      if (n) ahead = *n;
     } else {
-      std::fprintf(stderr, "usage: dmc16_soak [--seconds S] [--devices N] [--rate R]\n");
+      return Usage();
+    }
+    if (!n) {
+      std::fprintf(stderr, "dmc16_soak: %s takes a whole number (devices 1..64, rate and ahead "
+                           "1..1000000)\n", a.c_str());
       return 2;
     }
-  }
-  if (seconds <= 0 || devices < 1 || devices > 64 || rate < 1) {
-    std::fprintf(stderr, "dmc16_soak: need --seconds > 0, --devices 1..64, --rate >= 1\n");
-    return 2;
   }
   const auto dir =
       std::filesystem::temp_directory_path() / ("moco_soak_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   moco::transport::EmulatorConfig config;
   config.log_level = moco::transport::LogLevel::kError;
-  for (int d = 0; d < devices; ++d) {
+  for (long d = 0; d < devices; ++d) {
     moco::transport::DeviceConfig c;
     c.model = "dmc16";
     c.name = "dmc16-" + std::to_string(d + 1);
-    // Even devices on PTYs, odd on TCP. Pacing off: 2k requests/s need more
-    // than a 115200-baud line carries.
+    // Even devices on PTYs, odd on TCP. Unpaced at a fixed rate: 2k
+    // requests/s need more than a 115200-baud line carries.
     c.endpoint = d % 2 == 0 ? "pty:" + (dir / c.name).string() : "tcp:127.0.0.1:0";
-    c.no_pacing = true;
+    c.no_pacing = !pacing;
+    if (record) c.record_path = (dir / (c.name + ".jsonl")).string();
     config.devices.push_back(c);
   }
-  moco::transport::Emulator emulator(config, [](std::string_view l) {
+  auto emulator = std::make_unique<moco::transport::Emulator>(config, [](std::string_view l) {
     std::fprintf(stderr, "%.*s\n", static_cast<int>(l.size()), l.data());
   });
-  emulator.Start();
-  std::thread io([&] { emulator.Run(); });
+  emulator->Start();
+  std::thread io([&] { emulator->Run(); });
   std::vector<int> fds;
-  for (int d = 0; d < devices; ++d) {
-    moco::transport::DeviceServer& s = emulator.server(static_cast<size_t>(d));
+  for (long d = 0; d < devices; ++d) {
+    moco::transport::DeviceServer& s = emulator->server(static_cast<size_t>(d));
     const int fd = s.pty() != nullptr ? moco::transport::testing::OpenPtyHost(s.pty_path())
                                       : moco::transport::testing::ConnectTcp(s.tcp_port());
     if (fd < 0) {
-      std::fprintf(stderr, "dmc16_soak: cannot open device %d: %s\n", d, std::strerror(errno));
+      std::fprintf(stderr, "dmc16_soak: cannot open device %ld: %s\n", d, std::strerror(errno));
       return 1;
     }
     fds.push_back(fd);
@@ -165,9 +304,14 @@ int main(int argc, char** argv) {
   std::vector<std::thread> hosts;
   long rss_start = 0;
   const auto t0 = Clock::now();
-  for (int d = 0; d < devices; ++d) {
-    hosts.emplace_back(DriveHost, fds[static_cast<size_t>(d)], seconds, rate,
-                       std::ref(results[static_cast<size_t>(d)]));
+  for (long d = 0; d < devices; ++d) {
+    HostResult& r = results[static_cast<size_t>(d)];
+    const int fd = fds[static_cast<size_t>(d)];
+    if (pacing) {
+      hosts.emplace_back(DriveHostAhead, fd, seconds, static_cast<uint64_t>(ahead), std::ref(r));
+    } else {
+      hosts.emplace_back(DriveHostAtRate, fd, seconds, static_cast<int>(rate), std::ref(r));
+    }
   }
   // Memory after the first second (warm), and at the end.
   std::this_thread::sleep_for(
@@ -179,38 +323,68 @@ int main(int argc, char** argv) {
   const long rss_end = RssKiB();
   const long heap_end = HeapInUseKiB();
   for (int fd : fds) close(fd);
-  moco::transport::asio::post(emulator.io(), [&] { emulator.Stop(); });
+  moco::transport::asio::post(emulator->io(), [&] { emulator->Stop(); });
   io.join();
+  emulator.reset();  // finishes the recordings
+
+  long recording_problems = 0;
+  size_t recorded_entries = 0;
+  if (record) {
+    for (const auto& c : config.devices) {
+      size_t entries = 0;
+      const long p = RecordingProblems(c.record_path, &entries);
+      if (p < 0) {
+        std::printf("  recording %s cannot be read\n", c.record_path.c_str());
+        ++recording_problems;
+        continue;
+      }
+      recording_problems += p;
+      recorded_entries += entries;
+    }
+  }
   std::filesystem::remove_all(dir);
 
-  uint64_t sent = 0, answered = 0, ooo = 0, wrong = 0, bad = 0;
-  bool io_error = false;
+  HostResult all;
   for (const HostResult& r : results) {
-    sent += r.sent;
-    answered += r.answered;
-    ooo += r.out_of_order;
-    wrong += r.wrong_type;
-    bad += r.bad_frames;
-    io_error = io_error || r.io_error;
+    all.sent += r.sent;
+    all.answered += r.answered;
+    all.out_of_order += r.out_of_order;
+    all.duplicated += r.duplicated;
+    all.invented += r.invented;
+    all.wrong_type += r.wrong_type;
+    all.bad_frames += r.bad_frames;
+    all.io_error = all.io_error || r.io_error;
   }
-  const uint64_t lost = sent - std::min(sent, answered);
-  std::printf("dmc16 soak: %d devices (%d pty, %d tcp), %.1f s, target %d req/s each\n", devices,
-              (devices + 1) / 2, devices / 2, elapsed, rate);
+  const uint64_t lost = all.sent - std::min(all.sent, all.answered);
+  if (pacing) {
+    std::printf("dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, paced lines, host up to "
+                "%ld requests ahead\n",
+                devices, (devices + 1) / 2, devices / 2, elapsed, ahead);
+  } else {
+    std::printf("dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, target %ld req/s each\n",
+                devices, (devices + 1) / 2, devices / 2, elapsed, rate);
+  }
+  auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
   std::printf(
       "  requests sent %llu (%.0f/s per device), answered %llu, lost %llu, reordered %llu, "
-      "wrong type %llu, bad frames %llu\n",
-      static_cast<unsigned long long>(sent), static_cast<double>(sent) / elapsed / devices,
-      static_cast<unsigned long long>(answered), static_cast<unsigned long long>(lost),
-      static_cast<unsigned long long>(ooo), static_cast<unsigned long long>(wrong),
-      static_cast<unsigned long long>(bad));
+      "duplicated %llu, invented %llu, wrong type %llu, bad frames %llu\n",
+      u(all.sent), static_cast<double>(all.sent) / elapsed / static_cast<double>(devices),
+      u(all.answered), u(lost), u(all.out_of_order), u(all.duplicated), u(all.invented),
+      u(all.wrong_type), u(all.bad_frames));
+  if (record) {
+    std::printf("  recordings: %zu entries, %ld problem(s) decoding strictly\n", recorded_entries,
+                recording_problems);
+  }
   std::printf(
       "  heap in use after warm-up %ld KiB, at end %ld KiB (growth %ld KiB); RSS %ld -> %ld KiB\n",
       heap_start, heap_end, heap_end - heap_start, rss_start, rss_end);
   // Flat memory: nothing the run keeps grows with the number of requests (RSS
   // also holds the allocator's high-water mark of backlogs, so it is shown
-  // but not judged).
+  // but not judged). Recordings are streamed to disk, so they count too.
   const bool flat = heap_end - heap_start < 1024;
-  const bool ok = !io_error && lost == 0 && ooo == 0 && wrong == 0 && bad == 0 && flat;
+  const bool ok = !all.io_error && all.sent > 0 && lost == 0 && all.out_of_order == 0 &&
+                  all.duplicated == 0 && all.invented == 0 && all.wrong_type == 0 &&
+                  all.bad_frames == 0 && recording_problems == 0 && flat;
   std::printf("  %s\n", ok ? "PASS" : "FAIL");
   return ok ? 0 : 1;
 }
