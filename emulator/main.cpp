@@ -13,7 +13,7 @@
 #include <variant>
 #include <vector>
 
-#include "control/atomic_file.h"
+#include "base/file_io.h"
 #include "control/control_channel.h"
 #include "control/scenario.h"
 #include "control/session.h"
@@ -150,7 +150,7 @@ int Plot(const PlotArgs& a) {
           ? sum.rig_name + ": " + std::filesystem::path(a.session_path).filename().string()
           : a.title;
   if (auto error =
-          moco::control::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
+          moco::base::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
     std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
     return 1;
   }
