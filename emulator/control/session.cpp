@@ -253,6 +253,11 @@ void SessionWriter::Append(const SessionEntry& entry) {
   WriteLine(EntryToJson(entry));
 }
 
+void SessionWriter::Abandon() {
+  finished_ = true;
+  file_.Abandon();
+}
+
 bool SessionWriter::Finish(std::string* error) {
   if (finished_) return true;
   finished_ = true;

@@ -101,6 +101,9 @@ class SessionWriter {
   void Append(const SessionEntry& entry);
   // Flushes, closes and renames into place. Returns false (with a message) on an I/O error.
   bool Finish(std::string* error = nullptr);
+  // Drops the recording: an existing file at path() stays as it was (a
+  // temporary file is removed). Finish() then does nothing.
+  void Abandon();
   const std::filesystem::path& path() const { return path_; }
   // Finish() replaces a regular file that was at path() when the writer opened.
   bool replaces_existing() const { return file_.replaces_existing(); }
