@@ -188,7 +188,8 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
         }
         opts.faults = std::get<FaultConfig>(parsed);
       }
-      opts.observer = s->tee.empty() ? nullptr : &s->tee;
+      // The recording's tap joins the tee below, once everything else has started.
+      opts.observer = s->tee.empty() && d.record_path.empty() ? nullptr : &s->tee;
       const std::string name = d.name;
       const LogLevel level = config_.log_level;
       LogFn sink = log_;
