@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "base/file_io.h"
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/replay.h"
 #include "conformance/rules/catalogue.h"
@@ -447,6 +448,27 @@ int main(int argc, char** argv) {
 
   if (!profile.empty() && ts.kind != TargetSpec::Kind::kInProcess) {
     return Fail("--profile applies to in-process targets only; an external device has its own");
+  }
+  // Every output is checked before the run, not after it (docs/files.md).
+  {
+    const std::vector<std::pair<std::string, std::string>> outputs = {
+        {"--junit", junit}, {"--html", html_path}, {"--json", json_path},
+        {"--save-session", session_path}};
+    for (size_t i = 0; i < outputs.size(); ++i) {
+      const auto& [option, path] = outputs[i];
+      if (path.empty()) continue;
+      if (auto err = moco::base::CheckOutputPath(path, option)) return Fail(*err);
+      if (!profile.empty() && moco::base::SameFile(path, profile)) {
+        return Fail(option + " " + path + " is the --profile; writing it would destroy the " +
+                    "profile: choose another path for " + option);
+      }
+      for (size_t j = 0; j < i; ++j) {
+        if (!outputs[j].second.empty() && moco::base::SameFile(path, outputs[j].second)) {
+          return Fail(option + " " + path + " is also " + outputs[j].first +
+                      "; one report would overwrite the other: give each its own file");
+        }
+      }
+    }
   }
   auto made = MakeTarget(ts, profile, baud ? baud : DefaultBaud(proto));
   if (const auto* err = std::get_if<std::string>(&made)) return Fail(*err);

@@ -13,7 +13,7 @@
 #include <variant>
 #include <vector>
 
-#include "control/atomic_file.h"
+#include "base/file_io.h"
 #include "control/control_channel.h"
 #include "control/scenario.h"
 #include "control/session.h"
@@ -108,6 +108,23 @@ struct PlotArgs {
 // the plot was written, 1 when writing it failed, 2 for bad arguments or
 // files (the message names the problem and the fix).
 int Plot(const PlotArgs& a) {
+  const std::string out =
+      a.out_path.empty() ? std::filesystem::path(a.session_path).replace_extension(".svg").string()
+                         : a.out_path;
+  // The output is checked before the work, and never written over an input.
+  if (auto error = moco::base::CheckOutputPath(out, "--output")) {
+    std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
+    return 2;
+  }
+  for (const std::string& input : {a.session_path, a.profile_path}) {
+    if (moco::base::SameFile(out, input)) {
+      std::fprintf(stderr,
+                   "mocosim plot: --output %s is also an input (%s); writing it would destroy "
+                   "it: give another -o\n",
+                   out.c_str(), input.c_str());
+      return 2;
+    }
+  }
   auto loaded = LoadSession(a.session_path);
   if (const auto* e = std::get_if<SessionError>(&loaded)) {
     std::fprintf(stderr, "mocosim plot: %s%s%s\n", a.session_path.c_str(),
@@ -142,15 +159,12 @@ int Plot(const PlotArgs& a) {
   for (const std::string& w : sum.warnings) {
     std::fprintf(stderr, "mocosim plot: note: %s\n", w.c_str());
   }
-  const std::string out =
-      a.out_path.empty() ? std::filesystem::path(a.session_path).replace_extension(".svg").string()
-                         : a.out_path;
   const std::string title =
       a.title.empty()
           ? sum.rig_name + ": " + std::filesystem::path(a.session_path).filename().string()
           : a.title;
   if (auto error =
-          moco::control::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
+          moco::base::WriteFileAtomically(out, moco::physics::RigPathSvg(plot.samples, title))) {
     std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
     return 1;
   }

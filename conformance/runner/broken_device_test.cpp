@@ -5,6 +5,7 @@
 #include <rapidcheck/gtest.h>
 
 #include <cstdio>
+#include <fstream>
 #include <cstdlib>
 #include <filesystem>
 

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "control/atomic_file.h"
+#include "base/file_io.h"
 
 namespace moco::conformance {
 namespace {
@@ -224,7 +224,7 @@ std::string JunitReport(const RunReport& report) {
 }
 
 std::string WriteAtomically(const std::string& path, const std::string& text) {
-  return control::WriteFileAtomically(path, text).value_or("");
+  return base::WriteFileAtomically(path, text).value_or("");
 }
 
 }  // namespace moco::conformance

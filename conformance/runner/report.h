@@ -25,8 +25,10 @@ std::string HtmlReport(const RunReport& report);
 // XML/HTML escaping for the reports (wire/xml_escape.h).
 using wire::XmlEscape;
 
-// Writes `text` to a temporary file beside `path` and renames it to `path`
-// (control::WriteFileAtomically). Returns an error message, or an empty string.
+// Writes `text` as the whole file at `path` (base::WriteFileAtomically: a
+// regular file is replaced atomically, a device or FIFO such as /dev/null is
+// written in place, a directory is refused). Returns an error message, or an
+// empty string.
 std::string WriteAtomically(const std::string& path, const std::string& text);
 
 }  // namespace moco::conformance

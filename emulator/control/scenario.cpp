@@ -8,6 +8,8 @@
 #include <limits>
 #include <sstream>
 
+#include "base/file_io.h"
+
 namespace moco::control {
 namespace {
 
@@ -77,14 +79,11 @@ bool Later(const auto& a, const auto& b) {
 
 Scenario Scenario::Load(const std::filesystem::path& path) {
   const std::string where = "scenario " + path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw ScenarioError(where + ": cannot be read: check the path and its permissions");
+  std::string text;
+  if (auto error = base::ReadFileBounded(path.string(), &text)) {
+    throw ScenarioError(where + " " + *error);
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ScenarioError(where + ": read error");
-  return Parse(text.str(), where);
+  return Parse(text, where);
 }
 
 Scenario Scenario::Parse(std::string_view text, std::string where) {

@@ -118,7 +118,7 @@ TEST(ScenarioLoadTest, LoadsAFileAndNamesAnUnreadableOne) {
     ADD_FAILURE() << "no error";
   } catch (const ScenarioError& e) {
     EXPECT_TRUE(Contains(e.what(), "missing.json")) << e.what();
-    EXPECT_TRUE(Contains(e.what(), "cannot be read")) << e.what();
+    EXPECT_TRUE(Contains(e.what(), "does not exist")) << e.what();
   }
   std::ofstream(file) << R"({"events":[{"at_ms":5,"cmd":"estop"}]})";
   try {

@@ -180,14 +180,12 @@ std::string SessionWarning(const Session& s) {
 }
 
 std::variant<Session, SessionError> LoadSession(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return Err(0, "cannot open session file " + path.string() + ": check the path");
+  std::string text;
+  if (auto error = base::ReadFileBounded(
+          path.string(), &text, {.max_bytes = 0, .max_line_bytes = kMaxSessionLineBytes})) {
+    return Err(0, "session file " + path.string() + " " + *error);
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) return Err(0, "error reading " + path.string());
-  return ParseSession(ss.str());
+  return ParseSession(text);
 }
 
 nlohmann::json HeaderToJson(const SessionHeader& h) {
@@ -234,11 +232,9 @@ nlohmann::json EntryToJson(const SessionEntry& e) {
 }
 
 SessionWriter::SessionWriter(std::filesystem::path path, const SessionHeader& header)
-    : path_(std::move(path)), partial_(path_.string() + ".partial") {
-  out_.open(partial_, std::ios::binary | std::ios::trunc);
-  if (!out_) {
-    throw std::runtime_error("cannot create " + partial_.string() +
-                             ": check that the directory exists and is writable");
+    : path_(std::move(path)) {
+  if (auto error = file_.Open(path_.string())) {
+    throw std::runtime_error("recording: " + *error);
   }
   WriteLine(HeaderToJson(header));
 }
@@ -248,8 +244,8 @@ SessionWriter::~SessionWriter() {
 }
 
 void SessionWriter::WriteLine(const nlohmann::json& j) {
-  out_ << j.dump(-1, ' ', false, json::error_handler_t::replace) << '\n';
-  out_.flush();
+  // An error is kept by the file and reported by Finish().
+  (void)file_.Write(j.dump(-1, ' ', false, json::error_handler_t::replace) + '\n');
 }
 
 void SessionWriter::Append(const SessionEntry& entry) {
@@ -257,21 +253,16 @@ void SessionWriter::Append(const SessionEntry& entry) {
   WriteLine(EntryToJson(entry));
 }
 
+void SessionWriter::Abandon() {
+  finished_ = true;
+  file_.Abandon();
+}
+
 bool SessionWriter::Finish(std::string* error) {
   if (finished_) return true;
   finished_ = true;
-  out_.flush();
-  const bool write_ok = static_cast<bool>(out_);
-  out_.close();
-  if (!write_ok) {
-    if (error) *error = "write error on " + partial_.string() + " (disk full?)";
-    return false;
-  }
-  std::error_code ec;
-  std::filesystem::rename(partial_, path_, ec);
-  if (ec) {
-    if (error)
-      *error = "cannot rename " + partial_.string() + " to " + path_.string() + ": " + ec.message();
+  if (auto e = file_.Commit()) {
+    if (error) *error = *e;
     return false;
   }
   return true;

@@ -6,13 +6,13 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "base/file_io.h"
 #include "wire/bytes.h"
 #include "wire/transcript.h"
 
@@ -72,18 +72,27 @@ struct SessionError {
 
 // Parses a whole session from text. Never throws.
 std::variant<Session, SessionError> ParseSession(std::string_view text);
-// Reads and parses a file. Never throws.
+// The longest line a session file may have (a line is one message or event;
+// a longer one is not a session, e.g. /dev/zero behind a FIFO).
+inline constexpr size_t kMaxSessionLineBytes = size_t{4} << 20;
+
+// Reads and parses a file (any length, each line at most
+// kMaxSessionLineBytes; a directory or device is refused). Never throws.
 std::variant<Session, SessionError> LoadSession(const std::filesystem::path& path);
 
 nlohmann::json HeaderToJson(const SessionHeader& h);
 nlohmann::json EntryToJson(const SessionEntry& e);
 
-// Writes a session line by line: every line is flushed as written to
-// "<path>.partial", and Finish() renames it to <path>, so a finished file is
-// always whole and a crash leaves at most the last line missing in .partial.
+// Writes a session line by line: every line is written through as it comes
+// to an exclusively created "<path>.partial-<pid>-<n>" beside <path> (after
+// its symlinks), and Finish() renames it to <path>, so a finished file is
+// always whole and a crash leaves at most the last line cut short in the
+// .partial file. A FIFO or character device (/dev/null) at <path> is written
+// in place and stays what it is (base::OutputFile).
 class SessionWriter {
  public:
-  // Throws std::runtime_error with a user-facing message if the file cannot be created.
+  // Throws std::runtime_error with a user-facing message if the file cannot be
+  // created (a directory, a socket, a missing directory, ...).
   SessionWriter(std::filesystem::path path, const SessionHeader& header);
   ~SessionWriter();  // Finish()es if not done yet; never throws.
   SessionWriter(const SessionWriter&) = delete;
@@ -92,13 +101,19 @@ class SessionWriter {
   void Append(const SessionEntry& entry);
   // Flushes, closes and renames into place. Returns false (with a message) on an I/O error.
   bool Finish(std::string* error = nullptr);
+  // Drops the recording: an existing file at path() stays as it was (a
+  // temporary file is removed). Finish() then does nothing.
+  void Abandon();
   const std::filesystem::path& path() const { return path_; }
+  // Finish() replaces a regular file that was at path() when the writer opened.
+  bool replaces_existing() const { return file_.replaces_existing(); }
+  // Where the lines go until Finish() (empty when written in place).
+  const std::string& partial_path() const { return file_.temporary_path(); }
 
  private:
   void WriteLine(const nlohmann::json& j);
   std::filesystem::path path_;
-  std::filesystem::path partial_;
-  std::ofstream out_;
+  base::OutputFile file_;
   bool finished_ = false;
 };
 

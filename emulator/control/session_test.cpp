@@ -5,8 +5,15 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <thread>
 
 namespace moco::control {
 namespace {
@@ -95,12 +102,14 @@ TEST(SessionTest, WriterWritesPartialThenRenames) {
     e.bytes = {0xaa, 0x10};
     w.Append(e);
     EXPECT_FALSE(std::filesystem::exists(path));
-    EXPECT_TRUE(std::filesystem::exists(path.string() + ".partial"));
+    const std::string partial = w.partial_path();
+    EXPECT_EQ(partial.rfind(path.string() + ".partial-", 0), 0u) << partial;
+    EXPECT_TRUE(std::filesystem::exists(partial));
     std::string err;
     EXPECT_TRUE(w.Finish(&err)) << err;
+    EXPECT_FALSE(std::filesystem::exists(partial));
   }
   EXPECT_TRUE(std::filesystem::exists(path));
-  EXPECT_FALSE(std::filesystem::exists(path.string() + ".partial"));
   const Session s = Ok(LoadSession(path));
   EXPECT_EQ(s.header.protocol, Protocol::kStackshot);
   ASSERT_EQ(s.entries.size(), 1u);
@@ -114,7 +123,9 @@ TEST(SessionTest, WriterRefusesUnwritableDirectoryWithMessage) {
     SessionWriter w("/nonexistent-dir-for-moco/s.jsonl", h);
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("writable"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir-for-moco does not exist"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -187,6 +198,139 @@ RC_GTEST_PROP(SessionProp, ACutRecordingKeepsEveryWholeLine,
       whole < line_ends.size() && cut > (whole ? line_ends[whole - 1] : header.size());
   RC_ASSERT((s.cut_line != 0) == cut_mid_line);
   if (cut_mid_line) RC_ASSERT(s.cut_line == whole + 2);  // 1-based, after the header
+}
+
+// --- where a recording goes (docs/files.md) ----------------------------------------------
+
+namespace fs = std::filesystem;
+
+class RecordDir {
+ public:
+  RecordDir() {
+    static int counter = 0;
+    path_ = fs::temp_directory_path() /
+            ("moco_record_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~RecordDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+SessionEntry HostBytes(int64_t t_ns, wire::Bytes b) {
+  SessionEntry e;
+  e.t_ns = t_ns;
+  e.bytes = std::move(b);
+  return e;
+}
+
+TEST(SessionWriterFiles, RecordingIntoAFifoWritesInPlaceAndTheFifoStaysAFifo) {
+  RecordDir dir;
+  const fs::path fifo = dir.path() / "record.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] {
+    std::ifstream in(fifo, std::ios::binary);
+    received.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  });
+  {
+    SessionWriter w(fifo, SessionHeader{});
+    EXPECT_TRUE(w.partial_path().empty());
+    w.Append(HostBytes(5, {0x44, 0x46}));
+    std::string err;
+    EXPECT_TRUE(w.Finish(&err)) << err;
+  }
+  reader.join();
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+  const Session s = Ok(ParseSession(received));
+  ASSERT_EQ(s.entries.size(), 1u);
+  EXPECT_EQ(s.entries[0].bytes, (wire::Bytes{0x44, 0x46}));
+}
+
+TEST(SessionWriterFiles, ADirectoryIsRefusedAtOpenNamingItAndIsLeftAlone) {
+  RecordDir dir;
+  try {
+    SessionWriter w(dir.path(), SessionHeader{});
+    ADD_FAILURE() << "a directory was accepted as a recording";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(dir.path().string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(fs::is_directory(dir.path()));
+  EXPECT_FALSE(fs::exists(dir.path().string() + ".corrupt"));
+}
+
+TEST(SessionWriterFiles, ASymlinkPlantedAtThePartialNameIsNeverWrittenThrough) {
+  RecordDir dir;
+  const fs::path victim = dir.path() / "victim.txt";
+  { std::ofstream(victim) << "precious"; }
+  const fs::path path = dir.path() / "s.jsonl";
+  const uint64_t next = base::internal::NextTemporaryNumber();
+  for (uint64_t n = next; n < next + 3; ++n) {
+    fs::create_symlink(victim, path.string() + ".partial-" + std::to_string(::getpid()) + "-" +
+                                   std::to_string(n));
+  }
+  // The old fixed name too.
+  fs::create_symlink(victim, path.string() + ".partial");
+  {
+    SessionWriter w(path, SessionHeader{});
+    w.Append(HostBytes(1, {0x01}));
+    ASSERT_TRUE(w.Finish());
+  }
+  EXPECT_EQ(Slurp(victim), "precious");
+  EXPECT_EQ(Ok(LoadSession(path)).entries.size(), 1u);
+}
+
+TEST(SessionWriterFiles, ReplacingAnExistingRecordingIsKnownAtOpen) {
+  RecordDir dir;
+  const fs::path path = dir.path() / "s.jsonl";
+  { SessionWriter(path, SessionHeader{}).Finish(); }
+  SessionWriter again(path, SessionHeader{});
+  EXPECT_TRUE(again.replaces_existing());
+  SessionWriter fresh(dir.path() / "new.jsonl", SessionHeader{});
+  EXPECT_FALSE(fresh.replaces_existing());
+}
+
+TEST(SessionReaderFiles, DevicesDirectoriesAndEndlessLinesAreRefusedNotRead) {
+  RecordDir dir;
+  for (const std::string& p : {std::string("/dev/zero"), dir.path().string(),
+                               (dir.path() / "missing.jsonl").string()}) {
+    const auto r = LoadSession(p);
+    ASSERT_TRUE(std::holds_alternative<SessionError>(r)) << p;
+    EXPECT_NE(std::get<SessionError>(r).message.find(p), std::string::npos)
+        << std::get<SessionError>(r).message;
+  }
+  // A FIFO fed without a newline: stops at the line bound instead of growing.
+  const fs::path fifo = dir.path() / "endless";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    std::FILE* f = std::fopen(fifo.c_str(), "wb");
+    const std::string block(65536, 'x');
+    while (std::fwrite(block.data(), 1, block.size(), f) == block.size()) {
+    }
+    std::fclose(f);
+  });
+  const auto r = LoadSession(fifo);
+  writer.join();
+  ASSERT_TRUE(std::holds_alternative<SessionError>(r));
+  EXPECT_NE(std::get<SessionError>(r).message.find("line 1 is longer than 4 MiB"),
+            std::string::npos)
+      << std::get<SessionError>(r).message;
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include <limits>
 #include <sstream>
 
+#include "base/file_io.h"
+
 namespace moco::devices {
 namespace {
 
@@ -190,15 +192,11 @@ void ProfileReader::Finish() const {
 nlohmann::json ReadProfileFile(const std::string& path, std::string* where_out) {
   const std::string where = "profile " + path;
   if (where_out != nullptr) *where_out = where;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw ProfileError(where +
-                       ": cannot be opened; check the path and that the file is readable "
-                       "(the shipped profiles are in fixtures/profiles/)");
+  std::string text;
+  if (auto error = base::ReadFileBounded(path, &text)) {
+    throw ProfileError(where + " " + *error + " (the shipped profiles are in fixtures/profiles/)");
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseProfileText(text.str(), where);
+  return ParseProfileText(text, where);
 }
 
 nlohmann::json ParseProfileText(std::string_view text, const std::string& where) {

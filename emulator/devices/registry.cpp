@@ -3,8 +3,6 @@
 
 #include <stdexcept>
 
-#include "devices/stackshot3x/state_store.h"
-
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/dmc16/dmc16.h"
 #include "devices/stackshot3x/stackshot3x.h"
@@ -30,25 +28,9 @@ const DeviceModel* FindDeviceModel(std::string_view name) {
   return nullptr;
 }
 
-namespace {
-
-// A StackShot that owns the file its NVM lives in (the store is built first).
-struct StoreHolder {
-  explicit StoreHolder(const std::string& path) : store(path) {}
-  FileStateStore store;
-};
-class StackshotWithStore final : private StoreHolder, public Stackshot3x {
- public:
-  StackshotWithStore(sim::Scheduler& scheduler, ByteSink& out, Stackshot3xProfile profile,
-                     const std::string& path)
-      : StoreHolder(path), Stackshot3x(scheduler, out, std::move(profile), &store) {}
-};
-
-}  // namespace
-
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
                                      sim::Scheduler& scheduler, ByteSink& out,
-                                     const std::string& state_path) {
+                                     StateStore* state) {
   if (model == "dmc16") {
     Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
     return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
@@ -61,9 +43,7 @@ std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& 
   if (model == "stackshot3x") {
     Stackshot3xProfile profile =
         profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
-    if (state_path.empty())
-      return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile));
-    return std::make_unique<StackshotWithStore>(scheduler, out, std::move(profile), state_path);
+    return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "devices/device.h"
+#include "devices/stackshot3x/state_store.h"
 #include "sim/scheduler.h"
 #include "wire/transcript.h"
 
@@ -31,11 +32,12 @@ const DeviceModel* FindDeviceModel(std::string_view name);
 // file at `profile_path` (empty: the model's built-in defaults). Throws
 // ProfileError for a bad profile and std::invalid_argument (listing the
 // models) for an unknown model. `scheduler` and `out` must outlive the device.
-// `state_path`: where a model that keeps_state keeps its NVM (written
-// atomically; empty: in memory only, lost at exit). Ignored by other models.
+// `state`: where a model that keeps_state keeps its NVM (nullptr: in memory
+// only, lost at exit); it must outlive the device. The caller opens the file
+// behind it (devices open no files). Ignored by other models.
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
                                      sim::Scheduler& scheduler, ByteSink& out,
-                                     const std::string& state_path = "");
+                                     StateStore* state = nullptr);
 
 }  // namespace moco::devices
 

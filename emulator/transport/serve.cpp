@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "base/file_io.h"
 #include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
@@ -66,6 +67,43 @@ class DebugTap final : public TrafficObserver {
   LogFn log_;
 };
 
+// Refuses, before anything is opened, every output that cannot be written (a
+// directory, a socket, a missing directory) and every output that is another
+// output or an input: one would overwrite the other.
+void CheckFiles(const EmulatorConfig& c) {
+  struct File {
+    std::string path;
+    std::string role;
+  };
+  std::vector<File> outputs;
+  std::vector<File> inputs;
+  for (const DeviceConfig& d : c.devices) {
+    if (!d.record_path.empty()) outputs.push_back({d.record_path, d.name + "'s recording"});
+    if (!d.state_path.empty()) outputs.push_back({d.state_path, d.name + "'s state file"});
+    if (!d.profile_path.empty()) inputs.push_back({d.profile_path, d.name + "'s profile"});
+  }
+  if (!c.scenario_path.empty()) inputs.push_back({c.scenario_path, "the scenario"});
+  for (const File& o : outputs) {
+    if (auto error = base::CheckOutputPath(o.path, "")) throw ConfigError(o.role + " " + *error);
+  }
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    for (size_t j = i + 1; j < outputs.size(); ++j) {
+      if (base::SameFile(outputs[i].path, outputs[j].path)) {
+        throw ConfigError(outputs[j].path + " is both " + outputs[i].role + " and " +
+                          outputs[j].role + "; one would overwrite the other: give each its "
+                          "own file");
+      }
+    }
+    for (const File& in : inputs) {
+      if (base::SameFile(outputs[i].path, in.path)) {
+        throw ConfigError(outputs[i].path + " is both " + in.role + " and " + outputs[i].role +
+                          "; writing the output would destroy the input: choose another path "
+                          "for the output");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 // $XDG_STATE_HOME/mocosim/<name>.json, else ~/.local/state/mocosim/<name>.json,
@@ -83,6 +121,8 @@ std::string DefaultStatePath(const std::string& name) {
 
 struct Emulator::Served {
   DeviceConfig config;
+  bool default_state = false;  // state_path is DefaultStatePath(name)
+  std::unique_ptr<devices::FileStateStore> store;  // outlives `device`
   std::unique_ptr<control::SessionWriter> writer;
   std::unique_ptr<SessionTap> tap;
   std::unique_ptr<DebugTap> debug;
@@ -98,6 +138,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
     throw ConfigError("no device to serve; give at least one (e.g. --pty /tmp/dmc16)");
   }
   std::set<std::string> names;
+  std::set<std::string> defaulted_state;
   std::map<std::string, int> per_model;
   for (DeviceConfig& d : config_.devices) {
     if (d.name.empty()) {
@@ -107,7 +148,20 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
     if (!names.insert(d.name).second) {
       throw ConfigError("two devices are named \"" + d.name + "\"; give each a unique \"name\"");
     }
+    const devices::DeviceModel* model = devices::FindDeviceModel(d.model);
+    if (model != nullptr && !model->keeps_state && !d.state_path.empty()) {
+      throw ConfigError(d.name + ": a " + d.model + " keeps no state, so it takes no state file (" +
+                        d.state_path + "); remove \"state\" (only stackshot3x has NVM)");
+    }
+    if (model != nullptr && model->keeps_state && d.state_path.empty()) {
+      // The shared default: the lock taken below keeps two processes off it.
+      d.state_path = DefaultStatePath(d.name);
+      defaulted_state.insert(d.name);
+      std::error_code ec;
+      std::filesystem::create_directories(std::filesystem::path(d.state_path).parent_path(), ec);
+    }
   }
+  CheckFiles(config_);
   try {
     for (const DeviceConfig& d : config_.devices) {
       const devices::DeviceModel* model = devices::FindDeviceModel(d.model);
@@ -119,16 +173,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       }
       auto s = std::make_unique<Served>();
       s->config = d;
-      if (!d.record_path.empty()) {
-        control::SessionHeader h;
-        h.protocol = model->protocol;
-        h.device = std::string(model->name);
-        h.clock = "virtual";
-        h.note = "recorded by mocosim from " + d.endpoint;
-        s->writer = std::make_unique<control::SessionWriter>(d.record_path, h);
-        s->tap = std::make_unique<SessionTap>(*s->writer, model->protocol);
-        s->tee.Add(s->tap.get());
-      }
+      s->default_state = defaulted_state.count(d.name) > 0;
       if (config_.log_level >= LogLevel::kDebug) {
         s->debug = std::make_unique<DebugTap>(model->protocol, d.name, log_);
         s->tee.Add(s->debug.get());
@@ -143,7 +188,8 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
         }
         opts.faults = std::get<FaultConfig>(parsed);
       }
-      opts.observer = s->tee.empty() ? nullptr : &s->tee;
+      // The recording's tap joins the tee below, once everything else has started.
+      opts.observer = s->tee.empty() && d.record_path.empty() ? nullptr : &s->tee;
       const std::string name = d.name;
       const LogLevel level = config_.log_level;
       LogFn sink = log_;
@@ -156,26 +202,43 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
         throw std::runtime_error(d.name + ": " + e.what());
       }
       if (model->keeps_state) {
-        if (s->config.state_path.empty()) s->config.state_path = DefaultStatePath(d.name);
-        std::error_code ec;
-        std::filesystem::create_directories(
-            std::filesystem::path(s->config.state_path).parent_path(), ec);
-      } else {
-        s->config.state_path.clear();
+        s->store = std::make_unique<devices::FileStateStore>(s->config.state_path);
+        devices::StateLoad first;
+        if (auto error = s->store->Open(&first)) throw ConfigError(d.name + ": " + *error);
+        if (first.status == devices::StateLoad::Status::kCorrupt) {
+          Log(LogLevel::kWarn, d.name + ": " + first.message);
+        }
       }
       try {
         s->device = devices::CreateDevice(d.model, d.profile_path, scheduler_, s->server->sink(),
-                                          s->config.state_path);
+                                          s->store.get());
       } catch (const devices::ProfileError&) {
         throw;
       } catch (const std::exception& e) {
         throw ConfigError(d.name + ": " + e.what());
+      }
+      // Last, so that a device failing to start leaves no recording behind.
+      if (!d.record_path.empty()) {
+        control::SessionHeader h;
+        h.protocol = model->protocol;
+        h.device = std::string(model->name);
+        h.clock = "virtual";
+        h.note = "recorded by mocosim from " + d.endpoint;
+        s->writer = std::make_unique<control::SessionWriter>(d.record_path, h);
+        s->tap = std::make_unique<SessionTap>(*s->writer, model->protocol);
+        s->tee.Add(s->tap.get());
+        if (s->writer->replaces_existing()) {
+          Log(LogLevel::kWarn, d.name + ": " + d.record_path +
+                                   " exists; the recording replaces it when mocosim stops");
+        }
       }
       served_.push_back(std::move(s));
     }
   } catch (...) {
     for (auto& s : served_) {
       if (s->server) s->server->Stop();
+      // A start that failed records nothing: an earlier file at the path stays.
+      if (s->writer) s->writer->Abandon();
     }
     throw;
   }
@@ -225,7 +288,8 @@ void Emulator::Start() {
     s->device->PowerOn();
     Log(LogLevel::kError,
         s->config.name + " (" + s->config.model + ") on " + s->server->Where() +
-            (s->config.state_path.empty() ? "" : ", state " + s->config.state_path));
+            (s->config.state_path.empty() ? "" : ", state " + s->config.state_path) +
+            (s->default_state ? " (the default for this name; --state PATH for another)" : ""));
   }
   driver_.Kick();
   signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM);
@@ -262,7 +326,9 @@ void Emulator::Stop() {
         Log(LogLevel::kError, s->config.name + ": recording not completed: " + error);
         exit_code_ = 1;
       } else {
-        Log(LogLevel::kInfo, s->config.name + ": recorded " + s->writer->path().string());
+        Log(LogLevel::kInfo, s->config.name + ": recorded " + s->writer->path().string() +
+                                 (s->writer->replaces_existing() ? " (replacing the previous file)"
+                                                                 : ""));
       }
     }
   }
@@ -317,6 +383,10 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
       dc.profile_path = path_of(d.GetString("profile", ""));
       dc.record_path = path_of(d.GetString("record", ""));
       dc.state_path = path_of(d.GetString("state", ""));
+      if (!dc.state_path.empty() && !devices::FindDeviceModel(dc.model)->keeps_state) {
+        d.Fail("state", "is given, but a " + dc.model + " keeps no state",
+               "remove it (only stackshot3x keeps its NVM in a state file)");
+      }
       dc.no_pacing = d.GetBool("no_pacing", false);
       dc.faults = d.GetString("faults", "");
       d.Finish();
@@ -331,12 +401,10 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
 
 EmulatorConfig LoadRunConfig(const std::string& path) {
   const std::string where = "run file " + path;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(where + ": cannot be read; check the path");
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::string text;
+  if (auto error = base::ReadFileBounded(path, &text)) throw ConfigError(where + " " + *error);
   try {
-    const nlohmann::json j = devices::ParseProfileText(text.str(), where);
+    const nlohmann::json j = devices::ParseProfileText(text, where);
     return ParseRunConfig(j, where, std::filesystem::path(path).parent_path().string());
   } catch (const devices::ProfileError& e) {
     throw ConfigError(e.what());

@@ -2,15 +2,19 @@
 // file reader, and start-up errors that name the problem.
 #include "transport/serve.h"
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <iterator>
 #include <mutex>
 #include <thread>
 
+#include "base/file_io.h"
 #include "control/session.h"
 #include "transport/dmc_host_client.h"
 #include "wire/stackshot.h"
@@ -414,6 +418,198 @@ TEST(RunConfig, ErrorsNameTheField) {
   EXPECT_NE(
       error_of(R"({"log_level": "loud", "devices": [{"endpoint": "tcp:1"}]})").find("log_level"),
       std::string::npos);
+}
+
+// --- the files a served device writes (docs/files.md) ---------------------------------------
+
+std::string RefusalOf(const EmulatorConfig& c, std::vector<std::string>* log = nullptr) {
+  try {
+    Emulator e(c, [log](std::string_view l) {
+      if (log != nullptr) log->emplace_back(l);
+    });
+  } catch (const std::exception& ex) {
+    return ex.what();
+  }
+  return "";
+}
+
+DeviceConfig TcpDevice(std::string model = "dmc16", std::string name = "") {
+  DeviceConfig d;
+  d.model = std::move(model);
+  d.name = std::move(name);
+  d.endpoint = "tcp:127.0.0.1:0";
+  return d;
+}
+
+TEST(ServeFiles, TwoDevicesRecordingToOneFileAreRefusedAtStart) {
+  const fs::path dir = TempDir();
+  EmulatorConfig c;
+  DeviceConfig a = TcpDevice("dmc16", "a"), b = TcpDevice("dmc16", "b");
+  a.record_path = (dir / "rec.jsonl").string();
+  b.record_path = (dir / "." / "rec.jsonl").string();
+  c.devices = {a, b};
+  const std::string error = RefusalOf(c);
+  EXPECT_NE(error.find("a's recording and b's recording"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(dir / "rec.jsonl"));
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ARecordingOntoTheProfileIsRefusedAndTheProfileKept) {
+  const fs::path dir = TempDir();
+  const fs::path profile = dir / "p.json";
+  { std::ofstream(profile) << "{}"; }
+  fs::create_symlink(profile, dir / "link.json");
+  EmulatorConfig c;
+  DeviceConfig d = TcpDevice();
+  d.profile_path = profile.string();
+  d.record_path = (dir / "link.json").string();
+  c.devices = {d};
+  const std::string error = RefusalOf(c);
+  EXPECT_NE(error.find("dmc16's profile and dmc16's recording"), std::string::npos) << error;
+  std::ifstream in(profile);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "{}");
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ARecordingIntoADirectoryIsRefusedAtStartNamingIt) {
+  const fs::path dir = TempDir();
+  EmulatorConfig c;
+  DeviceConfig d = TcpDevice();
+  d.record_path = dir.string();
+  c.devices = {d};
+  const std::string error = RefusalOf(c);
+  EXPECT_NE(error.find(dir.string() + ": is a directory"), std::string::npos) << error;
+  EXPECT_TRUE(fs::is_directory(dir));
+  EXPECT_FALSE(fs::exists(dir.string() + ".corrupt"));
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ARecordingIntoAFifoIsWrittenInPlaceAndTheFifoStaysAFifo) {
+  const fs::path dir = TempDir();
+  const fs::path fifo = dir / "rec.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] {
+    std::ifstream in(fifo, std::ios::binary);
+    received.assign(std::istreambuf_iterator<char>(in), {});
+  });
+  {
+    EmulatorConfig c;
+    c.log_level = LogLevel::kError;
+    DeviceConfig d = TcpDevice();
+    d.record_path = fifo.string();
+    c.devices = {d};
+    Emulator e(c, [](std::string_view) {});
+    e.Start();
+    asio::post(e.io(), [&] { e.Stop(); });
+    EXPECT_EQ(e.Run(), 0);
+  }
+  reader.join();
+  EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+  EXPECT_NE(received.find("\"mocosim_session\""), std::string::npos) << received;
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ReplacingAnExistingRecordingIsLogged) {
+  const fs::path dir = TempDir();
+  { std::ofstream(dir / "rec.jsonl") << "old\n"; }
+  EmulatorConfig c;
+  DeviceConfig d = TcpDevice();
+  d.record_path = (dir / "rec.jsonl").string();
+  c.devices = {d};
+  std::vector<std::string> log;
+  {
+    Emulator e(c, [&log](std::string_view l) { log.emplace_back(l); });
+  }
+  bool said = false;
+  for (const std::string& l : log) said |= l.find("rec.jsonl exists; the recording replaces it") != std::string::npos;
+  EXPECT_TRUE(said);
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, AStartThatFailsLeavesAnEarlierRecordingAsItWas) {
+  const fs::path dir = TempDir();
+  { std::ofstream(dir / "rec.jsonl") << "old\n"; }
+  EmulatorConfig c;
+  DeviceConfig a = TcpDevice("dmc16", "a");
+  a.record_path = (dir / "rec.jsonl").string();
+  DeviceConfig b = TcpDevice("dmc16", "b");
+  b.faults = "nonsense=1";
+  c.devices = {a, b};
+  EXPECT_NE(RefusalOf(c), "");
+  std::ifstream in(dir / "rec.jsonl");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "old\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ASecondEmulatorOnTheSameStateFileIsRefusedNamingTheFileAndTheFix) {
+  const fs::path dir = TempDir();
+  EmulatorConfig c;
+  DeviceConfig d = TcpDevice("stackshot3x");
+  d.state_path = (dir / "nvm.json").string();
+  c.devices = {d};
+  Emulator first(c, [](std::string_view) {});
+  const std::string error = RefusalOf(c);
+  EXPECT_NE(error.find(d.state_path), std::string::npos) << error;
+  EXPECT_NE(error.find("--state PATH"), std::string::npos) << error;
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, ACorruptStateFileIsWarnedOnTheConsoleAndKept) {
+  const fs::path dir = TempDir();
+  { std::ofstream(dir / "nvm.json") << R"({"serial_number": )"; }
+  EmulatorConfig c;
+  c.log_level = LogLevel::kWarn;
+  DeviceConfig d = TcpDevice("stackshot3x");
+  d.state_path = (dir / "nvm.json").string();
+  c.devices = {d};
+  std::vector<std::string> log;
+  { Emulator e(c, [&log](std::string_view l) { log.emplace_back(l); }); }
+  bool warned = false;
+  for (const std::string& l : log) {
+    warned |= l.find(d.state_path + " is not valid JSON") != std::string::npos &&
+              l.find("nvm.json.corrupt") != std::string::npos;
+  }
+  EXPECT_TRUE(warned);
+  EXPECT_TRUE(fs::exists(dir / "nvm.json.corrupt"));
+  fs::remove_all(dir);
+}
+
+TEST(ServeFiles, AStateFileForAModelWithoutNvmIsRefused) {
+  EmulatorConfig c;
+  DeviceConfig d = TcpDevice("dmc16");
+  d.state_path = "/tmp/never-written.json";
+  c.devices = {d};
+  EXPECT_NE(RefusalOf(c).find("keeps no state"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(
+      R"({"devices": [{"model": "dmc16", "endpoint": "tcp:1", "state": "s.json"}]})");
+  try {
+    ParseRunConfig(j, "run file r.json", "/b");
+    ADD_FAILURE() << "accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("devices[0].state"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ServeFiles, RunFilesAreReadBoundedAndDevicesRefused) {
+  const fs::path dir = TempDir();
+  for (const std::string& p : {std::string("/dev/zero"), dir.string()}) {
+    try {
+      LoadRunConfig(p);
+      ADD_FAILURE() << p;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("run file " + p), std::string::npos) << e.what();
+    }
+  }
+  { std::ofstream(dir / "big.json") << std::string(base::kMaxInputFileBytes + 1, ' '); }
+  try {
+    LoadRunConfig((dir / "big.json").string());
+    ADD_FAILURE() << "a 4 MiB run file was read";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("4 MiB"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

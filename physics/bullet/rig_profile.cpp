@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/file_io.h"
 #include "physics/bullet/rig_dynamics.h"
 
 namespace moco::physics {
@@ -375,15 +376,13 @@ RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view wh
 }
 
 RigProfileResult ReadRigProfile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return RigProfileError{"(file)", "rig profile " + path +
-                                         ": cannot be read; check the path (e.g. "
+  std::string text;
+  if (auto error = base::ReadFileBounded(path, &text)) {
+    return RigProfileError{"(file)", "rig profile " + path + " " + *error +
+                                         " (the shipped rigs are in fixtures/rigs/, e.g. "
                                          "fixtures/rigs/boom-jib.json)"};
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseRigProfile(text.str(), "rig profile " + path);
+  return ParseRigProfile(text, "rig profile " + path);
 }
 
 Point3 IdealNodal(const RigProfile& p, const JointVector& q) {

@@ -137,7 +137,8 @@ void Stackshot3x::LoadNvm() {
   store_error_.clear();
   if (store_ == nullptr) return;
   const StateLoad loaded = store_->Load();
-  if (loaded.status == StateLoad::Status::kCorrupt) {
+  if (loaded.status == StateLoad::Status::kCorrupt ||
+      loaded.status == StateLoad::Status::kUnsupported) {
     store_error_ = loaded.message;
     AddLog("nvm: " + loaded.message);
     return;

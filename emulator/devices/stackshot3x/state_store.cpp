@@ -1,16 +1,7 @@
 // Non-volatile state stores (see state_store.h).
 #include "devices/stackshot3x/state_store.h"
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <sstream>
-#include <system_error>
-
-// fsync: the one POSIX call the atomic write needs (std::fstream cannot
-// force data to the disk before the rename).
-#include <unistd.h>
+#include <utility>
 
 namespace moco::devices {
 
@@ -35,78 +26,102 @@ bool MemoryStateStore::Save(const nlohmann::json& state) {
   return true;
 }
 
-FileStateStore::FileStateStore(std::filesystem::path path) : path_(std::move(path)) {}
+FileStateStore::FileStateStore(std::filesystem::path path, int supported_version)
+    : path_(std::move(path)), supported_version_(supported_version) {}
 
-std::filesystem::path FileStateStore::PartialPath() const {
-  std::filesystem::path p = path_;
-  p += ".partial";
-  return p;
+std::string FileStateStore::Target() const {
+  base::OutputTarget t;
+  return base::ResolveOutput(path_.string(), &t) ? path_.string() : t.path;
 }
 
-std::filesystem::path FileStateStore::CorruptPath() const {
-  std::filesystem::path p = path_;
-  p += ".corrupt";
-  return p;
+std::filesystem::path FileStateStore::CorruptPath() const { return Target() + ".corrupt"; }
+
+std::filesystem::path FileStateStore::LockPath() const { return Target() + ".lock"; }
+
+std::optional<std::string> FileStateStore::Open(StateLoad* first) {
+  const std::string where = "state file " + path_.string();
+  base::OutputTarget target;
+  if (auto error = base::ResolveOutput(path_.string(), &target)) {
+    return "state file " + *error + "; or give another file with --state PATH";
+  }
+  if (target.kind == base::PathKind::kRegular || target.kind == base::PathKind::kMissing) {
+    if (lock_.Acquire(target.path + ".lock")) {
+      return where + " is in use by another running mocosim (it holds " + target.path +
+             ".lock); give this device its own file with --state PATH (\"state\" in a run file)";
+    }
+  }
+  pending_.reset();
+  StateLoad load = Load();
+  if (load.status == StateLoad::Status::kUnsupported) return load.message;
+  *first = load;
+  pending_ = std::move(load);
+  return std::nullopt;
 }
 
 StateLoad FileStateStore::Load() {
+  if (pending_) {
+    StateLoad out = std::move(*pending_);
+    pending_.reset();
+    return out;
+  }
   StateLoad out;
-  std::error_code ec;
-  if (!std::filesystem::exists(path_, ec)) return out;  // kEmpty
+  const std::string where = "state file " + path_.string();
+  base::OutputTarget target;
+  if (auto error = base::ResolveOutput(path_.string(), &target)) {
+    out.status = StateLoad::Status::kCorrupt;
+    out.message = "state file " + *error;
+    return out;
+  }
+  // Nothing stored yet; a device or FIFO (/dev/null: keep nothing) holds no state.
+  if (target.kind != base::PathKind::kRegular) return out;
+  std::string text;
+  if (auto error = base::ReadFileBounded(target.path, &text)) {
+    // Unreadable is not corrupt: the file is left where it is.
+    out.status = StateLoad::Status::kCorrupt;
+    out.message = where + " " + *error;
+    return out;
+  }
   std::string problem;
-  {
-    std::ifstream in(path_, std::ios::binary);
-    if (!in) {
-      problem = "cannot be opened for reading";
-    } else {
-      std::ostringstream text;
-      text << in.rdbuf();
-      nlohmann::json j = nlohmann::json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-      if (j.is_discarded()) {
-        problem = "is not valid JSON";
-      } else if (!j.is_object()) {
-        problem = "does not hold a JSON object";
-      } else {
-        out.status = StateLoad::Status::kLoaded;
-        out.state = std::move(j);
-        return out;
-      }
-    }
+  nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) {
+    problem = text.empty() ? "is empty" : "is not valid JSON (cut short?)";
+  } else if (!j.is_object()) {
+    problem = "does not hold a JSON object";
+  } else if (const auto v = j.find("version");
+             v != j.end() && !(v->is_number_integer() && v->get<int64_t>() == supported_version_)) {
+    unsupported_ = true;
+    out.status = StateLoad::Status::kUnsupported;
+    out.message = where + " has \"version\": " + v->dump() + "; this mocosim reads version " +
+                  std::to_string(supported_version_) +
+                  " (was it written by a newer one?). It is left untouched: give another file "
+                  "with --state PATH, or move it away to start from defaults";
+    return out;
+  } else {
+    unsupported_ = false;
+    out.status = StateLoad::Status::kLoaded;
+    out.state = std::move(j);
+    return out;
   }
   out.status = StateLoad::Status::kCorrupt;
-  out.message = "state file " + path_.string() + " " + problem;
-  std::filesystem::rename(path_, CorruptPath(), ec);
-  if (ec) {
-    out.message += "; it could not be moved aside (" + ec.message() + ")";
+  out.message = where + " " + problem;
+  std::string moved_to;
+  if (auto error = base::MoveAsideNumbered(target.path, ".corrupt", &moved_to)) {
+    out.message += "; it could not be kept aside (" + *error + ")";
   } else {
-    out.message +=
-        "; kept aside as " + CorruptPath().filename().string() + ", starting from defaults";
+    out.message += "; kept as " + moved_to + ", starting from defaults";
   }
   return out;
 }
 
 bool FileStateStore::Save(const nlohmann::json& state) {
-  const std::filesystem::path partial = PartialPath();
-  const std::string text = state.dump(2) + "\n";
-  std::FILE* f = std::fopen(partial.c_str(), "wb");
-  if (f == nullptr) {
-    error_ = "cannot write " + partial.string() + ": " + std::strerror(errno);
+  if (unsupported_) {
+    error_ = "state file " + path_.string() +
+             " has a version this mocosim does not read; it is not replaced";
     return false;
   }
-  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size() &&
-                       std::fflush(f) == 0 && ::fsync(::fileno(f)) == 0;
-  const int write_errno = errno;
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !closed) {
-    error_ = "cannot write " + partial.string() + ": " + std::strerror(write_errno);
-    std::error_code ignored;
-    std::filesystem::remove(partial, ignored);
-    return false;
-  }
-  std::error_code ec;
-  std::filesystem::rename(partial, path_, ec);
-  if (ec) {
-    error_ = "cannot rename " + partial.string() + " to " + path_.string() + ": " + ec.message();
+  if (auto error = base::WriteFileAtomically(path_.string(), state.dump(2) + "\n",
+                                             /*sync=*/true)) {
+    error_ = *error;
     return false;
   }
   error_.clear();

@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/file_io.h"
+
 namespace moco::devices {
 
 // The outcome of reading a store.
@@ -20,6 +22,8 @@ struct StateLoad {
     kEmpty,    // nothing stored yet: start from factory defaults
     kLoaded,   // `state` holds what was saved
     kCorrupt,  // something was stored but cannot be read; `message` says what
+    kUnsupported,  // stored by a format version this program does not read; left
+                   // untouched and never overwritten; `message` says what and the fix
   };
   Status status = Status::kEmpty;
   nlohmann::json state;  // kLoaded: an object
@@ -58,25 +62,46 @@ class MemoryStateStore final : public StateStore {
   std::string error_;
 };
 
-// A JSON file. Save writes "<path>.partial", flushes it to the disk and
-// renames it over <path>, so a crash leaves either the old or the new file.
-// Load of a file that is not a JSON object moves it aside to
-// "<path>.corrupt" (replacing an older one) and reports kCorrupt with a
-// message naming the file; the next Load then finds nothing (kEmpty).
+// A JSON file, written by base::WriteFile: a regular file is replaced through
+// an exclusive temporary file, flushed to the disk and renamed, so a crash
+// leaves either the old or the new file; a symlink is followed and its final
+// target replaced (the link stays); a character device or FIFO (--state
+// /dev/null: keep nothing) is written in place and reads as empty.
+// Load of a file that is not a JSON object moves it aside to the first free
+// "<target>.corrupt", "<target>.corrupt.1", ... (never replacing an older
+// copy) and reports kCorrupt with a message naming the file and the copy; the
+// next Load then finds nothing (kEmpty). A "version" other than
+// `supported_version` is kUnsupported: the file is left as it is and Save
+// refuses to replace it.
 class FileStateStore final : public StateStore {
  public:
-  explicit FileStateStore(std::filesystem::path path);
+  explicit FileStateStore(std::filesystem::path path, int supported_version = 1);
+
+  // What serving a device does first: takes an exclusive lock on
+  // "<target>.lock" for the store's lifetime (none for a device or FIFO) and
+  // loads the file; `first` receives that load, which the next Load() returns
+  // again (so the device sees it too). Returns a message naming the file and
+  // the fix when it cannot be used: a directory or special file, locked by
+  // another process, or an unsupported version.
+  std::optional<std::string> Open(StateLoad* first);
 
   StateLoad Load() override;
   bool Save(const nlohmann::json& state) override;
   const std::string& last_error() const override { return error_; }
 
   const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path PartialPath() const;
+  // Where the first corrupt copy goes ("<target>.corrupt").
   std::filesystem::path CorruptPath() const;
+  // The lock file Open() holds ("<target>.lock").
+  std::filesystem::path LockPath() const;
 
  private:
+  std::string Target() const;
   std::filesystem::path path_;
+  int supported_version_;
+  std::optional<StateLoad> pending_;  // Open()'s load, for the next Load()
+  bool unsupported_ = false;          // the file must not be replaced
+  base::FileLock lock_;
   std::string error_;
 };
 

@@ -2,9 +2,14 @@
 // with a message naming the file, and the in-memory store.
 #include "devices/stackshot3x/state_store.h"
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -24,6 +29,13 @@ class StateStoreTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
+std::string Slurp(const std::filesystem::path& p);
+
+// The i-th corrupt copy of `path`: .corrupt, .corrupt.1, ...
+std::filesystem::path CorruptCopy(const std::filesystem::path& path, size_t i) {
+  return path.string() + ".corrupt" + (i == 0 ? "" : "." + std::to_string(i));
+}
+
 std::string Slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
   std::ostringstream s;
@@ -40,7 +52,10 @@ TEST_F(StateStoreTest, SaveThenLoadRoundTripsAndLeavesNoPartialFile) {
   FileStateStore store(dir_ / "s.json");
   const nlohmann::json state = {{"serial_number", 5}, {"log", {"a", "b"}}};
   ASSERT_TRUE(store.Save(state));
-  EXPECT_FALSE(std::filesystem::exists(store.PartialPath()));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir_),
+                          std::filesystem::directory_iterator()),
+            1)
+      << "no temporary file left";
   const StateLoad l = FileStateStore(dir_ / "s.json").Load();
   ASSERT_EQ(l.status, StateLoad::Status::kLoaded);
   EXPECT_EQ(l.state, state);
@@ -48,24 +63,122 @@ TEST_F(StateStoreTest, SaveThenLoadRoundTripsAndLeavesNoPartialFile) {
   EXPECT_EQ(store.Load().state["serial_number"], 6);
 }
 
-TEST_F(StateStoreTest, CorruptFileIsMovedAsideWithAMessageNamingIt) {
+TEST_F(StateStoreTest, EveryCorruptFileIsKeptAsideNumberedNoneOverwritten) {
   const auto path = dir_ / "s.json";
-  for (const char* text : {"{\"a\": ", "[1, 2]", "\xFF\xFE"}) {
-    { std::ofstream(path) << text; }
+  const std::vector<std::string> texts = {"{\"a\": ", "[1, 2]", "\xFF\xFE", ""};
+  for (size_t i = 0; i < texts.size(); ++i) {
+    { std::ofstream(path) << texts[i]; }
     FileStateStore store(path);
     const StateLoad l = store.Load();
-    ASSERT_EQ(l.status, StateLoad::Status::kCorrupt) << text;
+    ASSERT_EQ(l.status, StateLoad::Status::kCorrupt) << texts[i];
+    const std::string copy =
+        store.CorruptPath().string() + (i == 0 ? "" : "." + std::to_string(i));
     EXPECT_NE(l.message.find(path.string()), std::string::npos) << l.message;
+    EXPECT_NE(l.message.find(copy), std::string::npos) << l.message;
     EXPECT_FALSE(std::filesystem::exists(path));
-    EXPECT_EQ(Slurp(store.CorruptPath()), text);
     EXPECT_EQ(store.Load().status, StateLoad::Status::kEmpty);
+  }
+  for (size_t i = 0; i < texts.size(); ++i) {
+    EXPECT_EQ(Slurp(CorruptCopy(path, i)), texts[i]) << "copy " << i;
   }
 }
 
 TEST_F(StateStoreTest, UnwritableDirectoryFailsWithAReason) {
   FileStateStore store(dir_ / "missing-dir" / "s.json");
   EXPECT_FALSE(store.Save({{"a", 1}}));
-  EXPECT_NE(store.last_error().find("s.json.partial"), std::string::npos);
+  EXPECT_NE(store.last_error().find("missing-dir does not exist"), std::string::npos)
+      << store.last_error();
+}
+
+TEST_F(StateStoreTest, ASymlinkedStateFileIsWrittenThroughAndStaysALink) {
+  std::filesystem::create_directory(dir_ / "real");
+  const auto target = dir_ / "real" / "nvm.json";
+  { std::ofstream(target) << R"({"serial_number": 1})"; }
+  const auto link = dir_ / "nvm.json";
+  std::filesystem::create_symlink("real/nvm.json", link);
+  FileStateStore store(link);
+  ASSERT_EQ(store.Load().state["serial_number"], 1);
+  ASSERT_TRUE(store.Save({{"serial_number", 2}})) << store.last_error();
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(FileStateStore(target).Load().state["serial_number"], 2);
+  // A corrupt target is kept aside beside the target; the link stays.
+  { std::ofstream(target) << "{"; }
+  EXPECT_EQ(store.Load().status, StateLoad::Status::kCorrupt);
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "real" / "nvm.json.corrupt"));
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+}
+
+TEST_F(StateStoreTest, AnUnknownVersionIsRefusedLeftUntouchedAndNeverReplaced) {
+  const auto path = dir_ / "s.json";
+  const std::string text = R"({"format": "stackshot3x-nvm", "version": 99})";
+  { std::ofstream(path) << text; }
+  FileStateStore store(path);
+  StateLoad first;
+  const auto error = store.Open(&first);
+  ASSERT_TRUE(error.has_value());
+  EXPECT_NE(error->find(path.string()), std::string::npos) << *error;
+  EXPECT_NE(error->find("99"), std::string::npos) << *error;
+  EXPECT_NE(error->find("--state"), std::string::npos) << *error;
+  EXPECT_FALSE(store.Save({{"version", 1}}));
+  EXPECT_EQ(Slurp(path), text);
+  EXPECT_EQ(FileStateStore(path).Load().status, StateLoad::Status::kUnsupported);
+}
+
+TEST_F(StateStoreTest, OpenLocksTheFileAgainstASecondUser) {
+  const auto path = dir_ / "s.json";
+  FileStateStore first(path);
+  StateLoad load;
+  ASSERT_EQ(first.Open(&load), std::nullopt);
+  EXPECT_EQ(load.status, StateLoad::Status::kEmpty);
+  FileStateStore second(path);
+  const auto error = second.Open(&load);
+  ASSERT_TRUE(error.has_value());
+  EXPECT_NE(error->find(path.string()), std::string::npos) << *error;
+  EXPECT_NE(error->find("--state PATH"), std::string::npos) << *error;
+}
+
+TEST_F(StateStoreTest, OpenHandsItsLoadToTheDeviceToo) {
+  const auto path = dir_ / "s.json";
+  { std::ofstream(path) << "{"; }
+  FileStateStore store(path);
+  StateLoad first;
+  ASSERT_EQ(store.Open(&first), std::nullopt);
+  ASSERT_EQ(first.status, StateLoad::Status::kCorrupt);
+  const StateLoad again = store.Load();
+  EXPECT_EQ(again.status, StateLoad::Status::kCorrupt);
+  EXPECT_EQ(again.message, first.message);
+  EXPECT_EQ(store.Load().status, StateLoad::Status::kEmpty);
+}
+
+TEST_F(StateStoreTest, AFifoAsStateIsWrittenInPlaceAndStaysAFifo) {
+  // --state /dev/null keeps nothing; a FIFO proves the same path without
+  // putting a real device node at risk.
+  const auto fifo = dir_ / "state.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  FileStateStore store(fifo);
+  StateLoad first;
+  ASSERT_EQ(store.Open(&first), std::nullopt);
+  EXPECT_EQ(first.status, StateLoad::Status::kEmpty);
+  std::string received;
+  std::thread reader([&] { received = Slurp(fifo); });
+  EXPECT_TRUE(store.Save({{"serial_number", 3}})) << store.last_error();
+  reader.join();
+  EXPECT_TRUE(std::filesystem::is_fifo(std::filesystem::symlink_status(fifo)));
+  EXPECT_NE(received.find("\"serial_number\": 3"), std::string::npos) << received;
+  EXPECT_FALSE(std::filesystem::exists(fifo.string() + ".corrupt"));
+  EXPECT_FALSE(std::filesystem::exists(fifo.string() + ".lock"));
+}
+
+TEST_F(StateStoreTest, ADirectoryIsRefusedAtOpenAndLeftAlone) {
+  const auto d = dir_ / "state-dir";
+  std::filesystem::create_directory(d);
+  FileStateStore store(d);
+  StateLoad first;
+  const auto error = store.Open(&first);
+  ASSERT_TRUE(error.has_value());
+  EXPECT_NE(error->find("is a directory"), std::string::npos) << *error;
+  EXPECT_TRUE(std::filesystem::is_directory(d));
+  EXPECT_FALSE(std::filesystem::exists(d.string() + ".corrupt"));
 }
 
 TEST(MemoryStateStoreTest, KeepsTheLastSaveAndCanPlayCorrupt) {
