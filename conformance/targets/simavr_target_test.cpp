@@ -4,12 +4,15 @@
 #include "conformance/targets/simavr_target.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -394,10 +397,17 @@ TEST(SimavrTarget, ErrorsNameTheProblem) {
   ASSERT_TRUE(err2.has_value());
   EXPECT_NE(err2->find("atmega9999"), std::string::npos) << *err2;
 
-  SimavrTarget not_elf(SimavrSpec{__FILE__, "", 0});
+  // A text file (not this source by __FILE__: that path may be relative to
+  // the build folder, and the test runs from the source folder).
+  const std::string text_path =
+      (std::filesystem::temp_directory_path() / ("moco_not_elf_" + std::to_string(::getpid())))
+          .string();
+  std::ofstream(text_path) << std::string(256, '#') << "\nnot an ELF at all\n";
+  SimavrTarget not_elf(SimavrSpec{text_path, "", 0});
   const auto err3 = not_elf.Open();
   ASSERT_TRUE(err3.has_value());
   EXPECT_NE(err3->find("not an ELF file"), std::string::npos) << *err3;
+  std::filesystem::remove(text_path);
 
   // An ELF for another machine (this test program): simavr 1.6 would crash on it.
   SimavrTarget host_elf(SimavrSpec{"/proc/self/exe", "", 0});
