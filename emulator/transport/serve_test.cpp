@@ -469,12 +469,15 @@ TEST(RunConfig, ErrorsSpeakOfTheRunFileAndItsDocumentNotAProfile) {
     }
     return std::string();
   };
-  for (const char* text : {R"({"devics": []})", R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})",
+  for (const char* text : {R"({"devices": [{"endpoint": "tcp:1"}], "devics": 1})",
+                           R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})",
                            R"([1])"}) {
     const std::string e = error_of(text);
     EXPECT_NE(e.find("run file r.json"), std::string::npos) << e;
     EXPECT_EQ(e.find("profile"), std::string::npos) << e;
-    if (text[0] == '{') EXPECT_NE(e.find("docs/run-files.md"), std::string::npos) << e;
+    if (text[0] == '{') {
+      EXPECT_NE(e.find("docs/run-files.md"), std::string::npos) << e;
+    }
   }
 }
 
