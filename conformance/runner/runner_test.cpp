@@ -163,6 +163,11 @@ TEST(Targets, ParseTargetSpecNamesTheProblem) {
   ASSERT_TRUE(std::holds_alternative<TargetSpec>(ok));
   EXPECT_EQ(std::get<TargetSpec>(ok).kind, TargetSpec::Kind::kTcp);
   EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("pty:/tmp/x")).address, "/tmp/x");
+  // The scheme is kept as written, so a serial: target is not labelled pty:.
+  EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")).scheme, "serial");
+  auto serial = MakeTarget(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")), "", 9600);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<Target>>(serial));
+  EXPECT_EQ(std::get<std::unique_ptr<Target>>(serial)->Name(), "serial:/dev/ttyUSB0 @9600");
   EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("in-process:dmc16")).kind,
             TargetSpec::Kind::kInProcess);
   for (const char* bad : {"tcp:5000", "tcp:host:port", "ftp:x", "pty:", "dmc16"}) {
@@ -170,7 +175,7 @@ TEST(Targets, ParseTargetSpecNamesTheProblem) {
     ASSERT_TRUE(std::holds_alternative<std::string>(r)) << bad;
     EXPECT_NE(std::get<std::string>(r).find("in-process:MODEL"), std::string::npos) << bad;
   }
-  auto unknown = MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster"}, "", 115200);
+  auto unknown = MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster", "in-process"}, "", 115200);
   ASSERT_TRUE(std::holds_alternative<std::string>(unknown));
   EXPECT_NE(std::get<std::string>(unknown).find("dmc16"), std::string::npos);
 }
