@@ -180,8 +180,8 @@ int RunReplay(const std::string& path, std::string target_text, const std::strin
   if (steps >= 0) options.position_steps = steps;
   if (ms >= 0) options.time_ms = ms;
   const ReplayResult r = Replay(session, *proto, *target, options);
-  std::cout << "mococheck replay: " << path << " -> " << target->Name() << "\n" << ReplayText(r)
-            << std::flush;
+  std::cout << "mococheck replay: " << path << " -> " << target->Name() << "\n"
+            << ReplayText(r) << std::flush;
   if (const auto lost = target->LinkLost()) {
     return Fail("target error: " + target->Name() + ": " + *lost +
                 "; the comparison proves nothing about the device");
@@ -487,7 +487,8 @@ int main(int argc, char** argv) {
   }
   if (!cases_glob.empty()) {
     bool any = false;
-    for (const CaseInfo& k : runner->cases()) any = any || GlobMatch(cases_glob, k.suite + "/" + k.name);
+    for (const CaseInfo& k : runner->cases())
+      any = any || GlobMatch(cases_glob, k.suite + "/" + k.name);
     if (!any) {
       return Fail("--cases " + cases_glob + " selects no " + std::string(ProtocolTitle(proto)) +
                   " case; see the case names with 'mococheck cases --protocol " +
@@ -503,11 +504,10 @@ int main(int argc, char** argv) {
     bool known = false;
     for (const char* k : kDeadlineKinds) known = known || kind == k;
     int64_t ms = 0;
-    const std::string problem =
-        eq == std::string::npos
-            ? "no '='"
-            : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1), int64_t{1},
-                                     int64_t{600000}, ms);
+    const std::string problem = eq == std::string::npos
+                                    ? "no '='"
+                                    : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1),
+                                                             int64_t{1}, int64_t{600000}, ms);
     if (!known || !problem.empty()) {
       return Fail("--deadline " + d +
                   ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS a whole "

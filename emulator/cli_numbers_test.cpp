@@ -15,8 +15,8 @@ namespace {
 TEST(ParseNumber, UnsignedTakesOnlyDecimalDigitsThatFit) {
   EXPECT_EQ(ParseNumber<uint64_t>("0"), 0u);
   EXPECT_EQ(ParseNumber<uint64_t>("18446744073709551615"), UINT64_MAX);
-  for (const char* bad : {"", "-1", "+1", "18446744073709551616", "1e23", "1.0", " 1", "1 ",
-                          "0x10", "nan", "inf", "1x"}) {
+  for (const char* bad : {"", "-1", "+1", "18446744073709551616", "1e23", "1.0", " 1", "1 ", "0x10",
+                          "nan", "inf", "1x"}) {
     EXPECT_FALSE(ParseNumber<uint64_t>(bad).has_value()) << bad;
   }
 }

@@ -256,9 +256,10 @@ int main(int argc, char** argv) {
   // recording is completed and its PTY symlink removed.
   std::signal(SIGPIPE, SIG_IGN);
   using moco::cli::AddNumber;
-  CLI::App app{"mocosim: emulated DMC-16, DFMoco Arduino and StackShot 3X devices\n"
-               "Exit status (docs/exit-codes.md): 0 done, 1 a recording or plot could not be "
-               "completed, 2 a usage, file or set-up error"};
+  CLI::App app{
+      "mocosim: emulated DMC-16, DFMoco Arduino and StackShot 3X devices\n"
+      "Exit status (docs/exit-codes.md): 0 done, 1 a recording or plot could not be "
+      "completed, 2 a usage, file or set-up error"};
   app.set_version_flag("--version", "mocosim 0.1.0");
   app.require_subcommand(1);
 

@@ -243,8 +243,9 @@ std::string JunitReport(const RunReport& report) {
   size_t errors = 0;
   const std::string no_verdict =
       !report.target_error.empty() ? "target error: " + report.target_error
-      : report.interrupted_by != 0 ? "interrupted by signal " + std::to_string(report.interrupted_by)
-                                   : std::string();
+      : report.interrupted_by != 0
+          ? "interrupted by signal " + std::to_string(report.interrupted_by)
+          : std::string();
   if (!no_verdict.empty()) {
     ++tests;
     ++errors;
@@ -257,8 +258,8 @@ std::string JunitReport(const RunReport& report) {
        std::to_string(failures) + "\" errors=\"" + std::to_string(errors) + "\">\n";
   s += "  <testsuite name=\"mococheck." + report.protocol + "\" tests=\"" + std::to_string(tests) +
        "\" failures=\"" + std::to_string(failures) + "\" errors=\"" + std::to_string(errors) +
-       "\" skipped=\"" + std::to_string(skipped) +
-       "\" time=\"" + std::to_string(report.wall_s) + "\">\n";
+       "\" skipped=\"" + std::to_string(skipped) + "\" time=\"" + std::to_string(report.wall_s) +
+       "\">\n";
   s += "    <properties><property name=\"target\" value=\"" + XmlEscape(report.target) +
        "\"/><property name=\"seed\" value=\"" + std::to_string(report.options.random.seed) +
        "\"/></properties>\n";

@@ -175,7 +175,8 @@ TEST(Targets, ParseTargetSpecNamesTheProblem) {
     ASSERT_TRUE(std::holds_alternative<std::string>(r)) << bad;
     EXPECT_NE(std::get<std::string>(r).find("in-process:MODEL"), std::string::npos) << bad;
   }
-  auto unknown = MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster", "in-process"}, "", 115200);
+  auto unknown =
+      MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster", "in-process"}, "", 115200);
   ASSERT_TRUE(std::holds_alternative<std::string>(unknown));
   EXPECT_NE(std::get<std::string>(unknown).find("dmc16"), std::string::npos);
 }

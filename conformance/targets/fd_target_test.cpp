@@ -149,8 +149,7 @@ TEST(FdTarget, APeerThatHangsUpIsALostLinkNotASigpipe) {
   for (int i = 0; i < 100000 && !failed; ++i) failed = !t.Send(frame);
   EXPECT_TRUE(failed);
   ASSERT_TRUE(t.LinkLost().has_value());
-  EXPECT_NE(t.LinkLost()->find("writing to the device failed"), std::string::npos)
-      << *t.LinkLost();
+  EXPECT_NE(t.LinkLost()->find("writing to the device failed"), std::string::npos) << *t.LinkLost();
   wire::Bytes got;
   EXPECT_FALSE(t.Receive(t.Now() + 2'000'000'000, got));
 }

@@ -258,10 +258,9 @@ bool FdTarget::Send(wire::ByteView bytes) {
   while (done < bytes.size()) {
     if (StopRequested() != 0) return false;
     // MSG_NOSIGNAL: a peer that closed is an EPIPE here, never a SIGPIPE.
-    const ssize_t w =
-        kind_ == Kind::kTcp
-            ? send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL)
-            : write(fd_, bytes.data() + done, bytes.size() - done);
+    const ssize_t w = kind_ == Kind::kTcp
+                          ? send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL)
+                          : write(fd_, bytes.data() + done, bytes.size() - done);
     if (w > 0) {
       done += static_cast<size_t>(w);
       continue;
@@ -389,9 +388,8 @@ std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& 
       return std::unique_ptr<Target>(InProcessTarget::ForModel(spec.address, profile_path));
     }
     case TargetSpec::Kind::kSerial:
-      return std::unique_ptr<Target>(
-          std::make_unique<FdTarget>(FdTarget::Kind::kSerial, spec.address, baud,
-                                     spec.scheme.empty() ? "pty" : spec.scheme));
+      return std::unique_ptr<Target>(std::make_unique<FdTarget>(
+          FdTarget::Kind::kSerial, spec.address, baud, spec.scheme.empty() ? "pty" : spec.scheme));
     case TargetSpec::Kind::kTcp:
       return std::unique_ptr<Target>(
           std::make_unique<FdTarget>(FdTarget::Kind::kTcp, spec.address, baud));

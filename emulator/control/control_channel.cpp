@@ -952,7 +952,7 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
     std::vector<std::set<std::string, std::less<>>> keys;  // per open object
     std::string duplicate;
     const json::parser_callback_t note_keys = [&keys, &duplicate](int, json::parse_event_t event,
-                                                                 json& parsed) {
+                                                                  json& parsed) {
       if (event == json::parse_event_t::object_start) {
         keys.emplace_back();
       } else if (event == json::parse_event_t::object_end) {
@@ -980,9 +980,8 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
       if (auto it = request.find("id"); it != request.end()) id = *it;
     }
     if (!duplicate.empty()) {
-      return Dump(ErrorReply("the key \"" + duplicate +
-                                 "\" appears twice in one object; give each key once",
-                             id));
+      return Dump(ErrorReply(
+          "the key \"" + duplicate + "\" appears twice in one object; give each key once", id));
     }
     auto parsed = ParseCommand(request);
     if (auto* err = std::get_if<std::string>(&parsed)) return Dump(ErrorReply(*err, id));

@@ -206,19 +206,18 @@ nlohmann::json ParseProfileText(std::string_view text, const std::string& where)
   // The keys leading to the value being parsed, so that a value the parser
   // refuses (1e400, beyond a double) is reported with its field's name.
   std::vector<std::string> path;
-  const nlohmann::json::parser_callback_t track = [&path](int depth,
-                                                          nlohmann::json::parse_event_t event,
-                                                          nlohmann::json& parsed) {
-    // `depth` counts the containers open around the event.
-    if (event == nlohmann::json::parse_event_t::key && depth >= 1 && parsed.is_string()) {
-      path.resize(static_cast<size_t>(depth));
-      path.back() = parsed.get<std::string>();
-    } else if (event == nlohmann::json::parse_event_t::array_start && depth >= 0) {
-      path.resize(static_cast<size_t>(depth) + 1);
-      path.back() = "[]";
-    }
-    return true;
-  };
+  const nlohmann::json::parser_callback_t track =
+      [&path](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        // `depth` counts the containers open around the event.
+        if (event == nlohmann::json::parse_event_t::key && depth >= 1 && parsed.is_string()) {
+          path.resize(static_cast<size_t>(depth));
+          path.back() = parsed.get<std::string>();
+        } else if (event == nlohmann::json::parse_event_t::array_start && depth >= 0) {
+          path.resize(static_cast<size_t>(depth) + 1);
+          path.back() = "[]";
+        }
+        return true;
+      };
   try {
     nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), track, true, true);
     if (!j.is_object()) {

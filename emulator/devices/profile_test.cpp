@@ -90,7 +90,8 @@ TEST(ParseProfileText, SyntaxErrorGivesOffset) {
 }
 
 TEST(ParseProfileText, NumberBeyondADoubleNamesTheFileAndTheField) {
-  std::string msg = ErrorOf([] { ParseProfileText(R"({"motor_count": 1e400})", "profile x.json"); });
+  std::string msg =
+      ErrorOf([] { ParseProfileText(R"({"motor_count": 1e400})", "profile x.json"); });
   EXPECT_NE(msg.find("profile x.json: field \"motor_count\" is a number beyond the range"),
             std::string::npos)
       << msg;

@@ -222,7 +222,8 @@ TEST_F(PtyPortTest, ADeletedSymlinkIsLoggedAndCreatedAgain) {
   ASSERT_TRUE(fs::is_symlink(path_));
   fs::remove(path_);
   ASSERT_TRUE(RunUntil(io_, [&] { return fs::is_symlink(fs::symlink_status(path_)); }))
-      << "the link was not created again; log:\n" << log_;
+      << "the link was not created again; log:\n"
+      << log_;
   EXPECT_EQ(fs::read_symlink(path_).string(), port_->slave_name());
   EXPECT_NE(log_.find("the PTY link " + path_ + " was deleted; created it again"),
             std::string::npos)
@@ -245,8 +246,9 @@ TEST_F(PtyPortTest, WhatAppearsAtTheLinkPathIsNeverReplaced) {
   Serve(false);
   fs::remove(path_);
   { std::ofstream(path_) << "keep me"; }
-  ASSERT_TRUE(RunUntil(io_, [&] { return log_.find("replaced by something else") != std::string::npos; }))
-      << log_;
+  ASSERT_TRUE(RunUntil(io_, [&] {
+    return log_.find("replaced by something else") != std::string::npos;
+  })) << log_;
   // Several more checks: still reported once and left alone.
   const size_t checks_before = log_.size();
   for (int i = 0; i < 5; ++i) {

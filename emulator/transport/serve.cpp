@@ -233,8 +233,9 @@ void Emulator::Start() {
   signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM, SIGHUP);
   signals_->async_wait([this](const ErrorCode& ec, int sig) {
     if (ec) return;
-    Log(LogLevel::kInfo, std::string("stopping on ") +
-                             (sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "SIGTERM"));
+    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                                        : sig == SIGHUP ? "SIGHUP"
+                                                                        : "SIGTERM"));
     Stop();
   });
   if (hooks_.on_started) hooks_.on_started();

@@ -376,7 +376,8 @@ TEST(Serve, WifiWithoutAnAddressListensOnLoopbackAndSaysSo) {
   EXPECT_NE(e.server(0).Where().find("udp 127.0.0.1:"), std::string::npos) << e.server(0).Where();
   e.Start();
   bool logged = false;
-  for (const std::string& l : lines) logged = logged || l.find("udp 127.0.0.1:") != std::string::npos;
+  for (const std::string& l : lines)
+    logged = logged || l.find("udp 127.0.0.1:") != std::string::npos;
   EXPECT_TRUE(logged) << "the start-up line names the address listened on";
   e.Stop();
   fs::remove_all(dir);
@@ -470,8 +471,7 @@ TEST(RunConfig, ErrorsSpeakOfTheRunFileAndItsDocumentNotAProfile) {
     return std::string();
   };
   for (const char* text : {R"({"devices": [{"endpoint": "tcp:1"}], "devics": 1})",
-                           R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})",
-                           R"([1])"}) {
+                           R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})", R"([1])"}) {
     const std::string e = error_of(text);
     EXPECT_NE(e.find("run file r.json"), std::string::npos) << e;
     EXPECT_EQ(e.find("profile"), std::string::npos) << e;
