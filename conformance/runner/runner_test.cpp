@@ -125,6 +125,45 @@ TEST(Runner, InProcessCasesRunFast) {
   EXPECT_LT(s, 60.0);
 }
 
+TEST(Reports, TheStreamedPiecesAddUpToTheConsoleReport) {
+  RunOptions options;
+  options.cases = "connect/*,motor/*";
+  std::string streamed;
+  size_t calls = 0;
+  options.on_progress = [&](const RunReport& so_far) {
+    if (calls++ == 0) {
+      EXPECT_TRUE(so_far.cases.empty()) << "the first call comes before any case";
+      streamed += ConsoleDevice(so_far);
+      return;
+    }
+    ASSERT_FALSE(so_far.cases.empty());
+    streamed += ConsoleCase(so_far.cases.back(), false);
+  };
+  const RunReport r = RunInProcess(options);
+  ASSERT_GT(r.cases.size(), 1u);
+  EXPECT_EQ(calls, r.cases.size() + 1) << "once after the introduction, once per case";
+  EXPECT_EQ(ConsoleTitle(r.target, r.protocol) + streamed + ConsoleSummary(r, false),
+            ConsoleReport(r, false));
+}
+
+TEST(Reports, ARunWithoutAVerdictSaysSoInEveryReport) {
+  RunReport lost = RunInProcess();
+  lost.target_error = "the device closed the connection";
+  EXPECT_EQ(ExitCode(lost), 2);
+  EXPECT_NE(ConsoleReport(lost, false).find("result: TARGET ERROR"), std::string::npos);
+  EXPECT_EQ(JsonReport(lost)["exit_code"], 2);
+  EXPECT_EQ(JsonReport(lost)["target_error"], "the device closed the connection");
+  EXPECT_NE(JunitReport(lost).find("<error message=\"target error: the device closed"),
+            std::string::npos);
+  EXPECT_NE(HtmlReport(lost).find("TARGET ERROR"), std::string::npos);
+  RunReport stopped = RunInProcess();
+  stopped.interrupted_by = 1;
+  EXPECT_EQ(ExitCode(stopped), 2);
+  EXPECT_NE(ConsoleReport(stopped, false).find("result: INTERRUPTED"), std::string::npos);
+  EXPECT_EQ(JsonReport(stopped)["interrupted_by_signal"], 1);
+  EXPECT_NE(JunitReport(stopped).find("errors=\"1\""), std::string::npos);
+}
+
 TEST(Reports, JsonAndJunitCarryEveryCaseAndRule) {
   const RunReport r = RunInProcess();
   const nlohmann::json j = JsonReport(r);
