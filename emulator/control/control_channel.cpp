@@ -939,6 +939,25 @@ json ControlChannel::Execute(const Command& command, std::string_view source, in
   return reply;
 }
 
+json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate) {
+  duplicate.clear();
+  std::vector<std::set<std::string, std::less<>>> keys;  // per open object
+  const json::parser_callback_t note_keys = [&keys, &duplicate](int, json::parse_event_t event,
+                                                                json& parsed) {
+    if (event == json::parse_event_t::object_start) {
+      keys.emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      if (!keys.empty()) keys.pop_back();
+    } else if (event == json::parse_event_t::key && !keys.empty() && parsed.is_string()) {
+      if (!keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
+        duplicate = parsed.get<std::string>();
+      }
+    }
+    return true;
+  };
+  return json::parse(text, note_keys);
+}
+
 std::string ControlChannel::Handle(std::string_view line, std::string_view source) {
   try {
     while (!line.empty() && (line.back() == '\r' || line.back() == '\n')) line.remove_suffix(1);
@@ -949,23 +968,9 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
     json request;
     // A key given twice in one object ({"engaged":true,"engaged":false}) is
     // refused, not settled silently by the last one.
-    std::vector<std::set<std::string, std::less<>>> keys;  // per open object
     std::string duplicate;
-    const json::parser_callback_t note_keys = [&keys, &duplicate](int, json::parse_event_t event,
-                                                                  json& parsed) {
-      if (event == json::parse_event_t::object_start) {
-        keys.emplace_back();
-      } else if (event == json::parse_event_t::object_end) {
-        if (!keys.empty()) keys.pop_back();
-      } else if (event == json::parse_event_t::key && !keys.empty() && parsed.is_string()) {
-        if (!keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
-          duplicate = parsed.get<std::string>();
-        }
-      }
-      return true;
-    };
     try {
-      request = json::parse(line, note_keys);
+      request = ParseJsonNotingDuplicateKeys(line, duplicate);
     } catch (const json::parse_error& e) {
       return Dump(ErrorReply("malformed JSON at byte " + std::to_string(e.byte) +
                              ": send one JSON object per line, e.g. {\"cmd\":\"state\"}"));
