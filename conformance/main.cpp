@@ -2,17 +2,26 @@
 // devices (the three vendor specs; ERRATA; docs/rules.md). Drives
 // Dragonframe-style traffic at a device and checks every byte against the
 // rule catalogue. Exit: 0 every MUST rule passed,
-// 1 a MUST rule failed, 2 usage or target error.
+// 1 a MUST rule failed, 2 usage or target error, or a run cut short by a
+// signal (docs/exit-codes.md).
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <map>
+#include <set>
 
+#include <sys/stat.h>
 #include <unistd.h>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "base/file_io.h"
+#include "cli_numbers.h"
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/replay.h"
 #include "conformance/rules/catalogue.h"
@@ -34,20 +43,68 @@ int Fail(const std::string& message) {
   return kExitUsage;
 }
 
-// "i/n" with 1 <= i <= n.
+// "i/n" with 1 <= i <= n <= 1000, both whole decimal numbers.
 bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
   const size_t slash = text.find('/');
   if (slash == std::string::npos) return false;
-  try {
-    const unsigned long i = std::stoul(text.substr(0, slash));
-    const unsigned long n = std::stoul(text.substr(slash + 1));
-    if (n == 0 || i == 0 || i > n || n > 1000) return false;
-    index = static_cast<uint32_t>(i - 1);
-    count = static_cast<uint32_t>(n);
-    return true;
-  } catch (const std::exception&) {
-    return false;
+  const auto i = moco::cli::ParseNumber<uint32_t>(std::string_view(text).substr(0, slash));
+  const auto n = moco::cli::ParseNumber<uint32_t>(std::string_view(text).substr(slash + 1));
+  if (!i || !n || *n == 0 || *i == 0 || *i > *n || *n > 1000) return false;
+  index = *i - 1;
+  count = *n;
+  return true;
+}
+
+// Why a report cannot be written at `path` ("" when it can, as far as can be
+// told before the run): a directory, a missing or unwritable directory to
+// create it in, or an existing special file that is not writable.
+std::string ReportPathProblem(const std::string& option, const std::string& path) {
+  namespace fs = std::filesystem;
+  if (path.empty()) return option + " needs a file name";
+  struct stat st {};
+  if (stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) {
+      return option + " " + path + " is a directory; give a file name, e.g. " +
+             (fs::path(path) / "report").string();
+    }
+    if (!S_ISREG(st.st_mode)) {
+      return access(path.c_str(), W_OK) == 0
+                 ? ""
+                 : option + " " + path + " cannot be written: " + std::strerror(errno);
+    }
   }
+  // A regular file is replaced through a temporary file beside it.
+  const fs::path parent = fs::path(path).parent_path();
+  const std::string dir = parent.empty() ? "." : parent.string();
+  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    return option + " " + path + ": the directory " + dir +
+           " does not exist; create it first or give another path";
+  }
+  if (access(dir.c_str(), W_OK | X_OK) != 0) {
+    return option + " " + path + ": the directory " + dir + " is not writable (" +
+           std::strerror(errno) + "); give a path in a writable directory";
+  }
+  return "";
+}
+
+// SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops after the
+// current case and the reports of what ran are written; a second signal ends
+// the program at once.
+extern "C" void OnStopSignal(int sig) {
+  if (moco::conformance::StopRequested() != 0) {
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+    return;
+  }
+  moco::conformance::RequestStop(sig);
+}
+
+void InstallStopHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a waiting poll() returns EINTR and sees the request
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
 }
 
 // The device model a session names ("dfmoco-uno" -> "dfmoco"), if registered.
@@ -115,7 +172,12 @@ int RunReplay(const std::string& path, std::string target_text, const std::strin
   if (steps >= 0) options.position_steps = steps;
   if (ms >= 0) options.time_ms = ms;
   const ReplayResult r = Replay(session, *proto, *target, options);
-  std::cout << "mococheck replay: " << path << " -> " << target->Name() << "\n" << ReplayText(r);
+  std::cout << "mococheck replay: " << path << " -> " << target->Name() << "\n"
+            << ReplayText(r) << std::flush;
+  if (const auto lost = target->LinkLost()) {
+    return Fail("target error: " + target->Name() + ": " + *lost +
+                "; the comparison proves nothing about the device");
+  }
   return r.ok() ? 0 : 1;
 }
 
@@ -204,12 +266,17 @@ int RunFuzzCommand(const std::vector<std::string>& paths, std::string target_tex
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A closed pipe or socket is a failed write (EPIPE), handled where it
+  // happens, never a silent death: a TCP target that hangs up is a target
+  // error with the reports written, and `| head` only loses console text.
+  std::signal(SIGPIPE, SIG_IGN);
+  using moco::cli::AddNumber;
   CLI::App app{
       "mococheck: conformance runner for motion-control devices.\n"
       "Plays Dragonframe-style traffic (DMC v2, DFMoco or StackShot 3X) at a device and checks\n"
       "every byte against the rules in docs/rules.md. Exit status: 0 when every MUST rule passed, "
       "1 when one failed,\n"
-      "2 on a usage or target error.\n\n"
+      "2 on a usage or target error or when a signal cut the run short (docs/exit-codes.md).\n\n"
       "Examples:\n"
       "  mococheck run --target in-process:dmc16\n"
       "  mococheck run --target pty:/tmp/dmc16 --baud 115200 --junit report.xml\n"
@@ -237,15 +304,14 @@ int main(int argc, char** argv) {
   run->add_option("--protocol", protocol,
                   "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "
                   "in-process model's protocol, else dmc");
-  run->add_option("--profile", profile, "Device profile (JSON) for an in-process target");
+  run->add_option("--profile", profile, "Device profile (JSON) for an in-process target")
+      ->check(CLI::ExistingFile);
   run->add_option("--rules", rules_glob,
                   "Only check rules whose id matches: globs separated by commas, e.g. 'DMC-HI-*'");
   run->add_option("--cases", cases_glob,
                   "Only run cases matching suite/name globs, e.g. 'motor/*,rt/*'");
-  run->add_option("--seed", seed, "Seed of the random sequence suite")->capture_default_str();
-  run->add_option("--steps", steps, "Requests in the random sequence")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  AddNumber(run, "--seed", seed, uint64_t{0}, UINT64_MAX, "Seed of the random sequence suite");
+  AddNumber(run, "--steps", steps, 1, 100000, "Requests in the random sequence");
   run->add_option("--junit", junit,
                   "Write a JUnit XML report here (one testcase per rule and case)");
   run->add_option("--json", json_path, "Write a JSON report here");
@@ -255,24 +321,19 @@ int main(int argc, char** argv) {
       "Write a self-contained HTML report here (evidence, transcripts, position plots)");
   run->add_option("--shard", shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
-  run->add_option("--baud", baud,
-                  "Baud rate of a pty:/serial: target (default: the protocol's: DMC v2 115200, "
-                  "DFMoco 57600, StackShot 38400)");
-  run->add_option("--deadline-ms", deadline_ms, "DMC-DL-* answer deadline")
-      ->check(CLI::Range(int64_t{1}, int64_t{600000}))
-      ->capture_default_str();
+  AddNumber(run, "--baud", baud, uint32_t{0}, uint32_t{4000000},
+            "Baud rate of a pty:/serial: target (default 0: the protocol's: DMC v2 115200, "
+            "DFMoco 57600, StackShot 38400)");
+  AddNumber(run, "--deadline-ms", deadline_ms, int64_t{1}, int64_t{600000},
+            "DMC-DL-* answer deadline");
   std::vector<std::string> deadlines;
   run->add_option("--deadline", deadlines,
                   "Per-kind deadline KIND=MS (kinds: hi, query, command, upload, rt); repeatable, "
                   "overrides --deadline-ms for that kind");
-  run->add_option("--answer-timeout-ms", answer_timeout_ms,
-                  "DMC-ACK-001: a request unanswered after this has no answer")
-      ->check(CLI::Range(int64_t{1}, int64_t{600000}))
-      ->capture_default_str();
-  run->add_option("--position-gap-ms", position_gap_ms,
-                  "DMC-POS-002: the largest gap between position updates while moving")
-      ->check(CLI::Range(int64_t{1}, int64_t{600000}))
-      ->capture_default_str();
+  AddNumber(run, "--answer-timeout-ms", answer_timeout_ms, int64_t{1}, int64_t{600000},
+            "DMC-ACK-001: a request unanswered after this has no answer");
+  AddNumber(run, "--position-gap-ms", position_gap_ms, int64_t{1}, int64_t{600000},
+            "DMC-POS-002: the largest gap between position updates while moving");
   run->add_option("--save-session", session_path,
                   "Save a failing random sequence here (JSON Lines, docs/sessions.md)");
   run->add_flag("-v,--verbose", verbose, "List passing rules and every case's log");
@@ -301,18 +362,17 @@ int main(int argc, char** argv) {
   replay->add_option("--target", replay_target,
                      "in-process:MODEL (default: the session's device), pty:PATH, serial:PATH or "
                      "tcp:HOST:PORT");
-  replay->add_option("--profile", replay_profile, "Device profile for an in-process target");
-  replay->add_option("--baud", replay_baud,
-                     "Baud rate of a pty:/serial: target (default: the protocol's)");
-  replay
-      ->add_option("--position-tolerance", replay_steps,
-                   "Steps a reported position may differ (default: the session's, else 0)")
-      ->check(CLI::Range(int64_t{0}, int64_t{1} << 31));
-  replay
-      ->add_option("--time-tolerance-ms", replay_ms,
-                   "How far a device message may arrive from its recorded time (default: the "
-                   "session's, else 0 in-process and 50 on a real link)")
-      ->check(CLI::Range(int64_t{0}, int64_t{3600000}));
+  replay->add_option("--profile", replay_profile, "Device profile for an in-process target")
+      ->check(CLI::ExistingFile);
+  AddNumber(replay, "--baud", replay_baud, uint32_t{0}, uint32_t{4000000},
+            "Baud rate of a pty:/serial: target (default 0: the protocol's)");
+  AddNumber(replay, "--position-tolerance", replay_steps, int64_t{0}, int64_t{1} << 31,
+            "Steps a reported position may differ (default: the session's, else 0)")
+      ->default_str("the session's");
+  AddNumber(replay, "--time-tolerance-ms", replay_ms, int64_t{0}, int64_t{3600000},
+            "How far a device message may arrive from its recorded time (default: the "
+            "session's, else 0 in-process and 50 on a real link)")
+      ->default_str("the session's");
 
   // --- fuzz ---
   CLI::App* fuzz = app.add_subcommand(
@@ -326,19 +386,17 @@ int main(int argc, char** argv) {
       ->required();
   fuzz->add_option("--target", fuzz_target,
                    "in-process:MODEL (default: the first session's device)");
-  fuzz->add_option("--profile", fuzz_profile, "Device profile for the in-process device");
-  fuzz->add_option("--seed", fuzz_seed, "Seed of the mutator")->capture_default_str();
-  fuzz->add_option("--runs", fuzz_runs, "Mutants to run (0: run for --seconds)")
-      ->capture_default_str();
-  fuzz->add_option("--seconds", fuzz_seconds, "Time budget when --runs is 0")
-      ->check(CLI::Range(0.0, 86400.0))
-      ->capture_default_str();
+  fuzz->add_option("--profile", fuzz_profile, "Device profile for the in-process device")
+      ->check(CLI::ExistingFile);
+  AddNumber(fuzz, "--seed", fuzz_seed, uint64_t{0}, UINT64_MAX, "Seed of the mutator");
+  AddNumber(fuzz, "--runs", fuzz_runs, uint64_t{0}, uint64_t{1000000000000},
+            "Mutants to run (0: run for --seconds)");
+  AddNumber(fuzz, "--seconds", fuzz_seconds, 0.0, 86400.0, "Time budget when --runs is 0");
   fuzz->add_option("--crashes", fuzz_crashes,
                    "Directory for failing mutants (session files that replay reruns)")
       ->capture_default_str();
-  fuzz->add_option("--max-failures", fuzz_max_failures, "Stop after this many distinct failures")
-      ->check(CLI::Range(size_t{1}, size_t{1000}))
-      ->capture_default_str();
+  AddNumber(fuzz, "--max-failures", fuzz_max_failures, size_t{1}, size_t{1000},
+            "Stop after this many distinct failures");
 
   try {
     app.parse(argc, argv);
@@ -419,6 +477,16 @@ int main(int argc, char** argv) {
                   " rule; see 'mococheck rules'");
     }
   }
+  if (!cases_glob.empty()) {
+    bool any = false;
+    for (const CaseInfo& k : runner->cases())
+      any = any || GlobMatch(cases_glob, k.suite + "/" + k.name);
+    if (!any) {
+      return Fail("--cases " + cases_glob + " selects no " + std::string(ProtocolTitle(proto)) +
+                  " case; see the case names with 'mococheck cases --protocol " +
+                  std::string(ProtocolName(proto)) + "'");
+    }
+  }
   options.rules = rules_glob;
   options.cases = cases_glob;
   options.host.deadline_ns = deadline_ms * moco::sim::kNsPerMs;
@@ -428,15 +496,14 @@ int main(int argc, char** argv) {
     bool known = false;
     for (const char* k : kDeadlineKinds) known = known || kind == k;
     int64_t ms = 0;
-    try {
-      ms = eq == std::string::npos ? 0 : std::stoll(d.substr(eq + 1));
-    } catch (const std::exception&) {
-      ms = 0;
-    }
-    if (!known || ms <= 0) {
+    const std::string problem = eq == std::string::npos
+                                    ? "no '='"
+                                    : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1),
+                                                             int64_t{1}, int64_t{600000}, ms);
+    if (!known || !problem.empty()) {
       return Fail("--deadline " + d +
-                  ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS > 0, "
-                  "e.g. --deadline rt=500");
+                  ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS a whole "
+                  "number in 1..600000, e.g. --deadline rt=500");
     }
     options.host.deadline_by_kind_ns[kind] = ms * moco::sim::kNsPerMs;
   }
@@ -458,6 +525,9 @@ int main(int argc, char** argv) {
       const auto& [option, path] = outputs[i];
       if (path.empty()) continue;
       if (auto err = moco::base::CheckOutputPath(path, option)) return Fail(*err);
+      if (std::string problem = ReportPathProblem(option, path); !problem.empty()) {
+        return Fail(problem);
+      }
       if (!profile.empty() && moco::base::SameFile(path, profile)) {
         return Fail(option + " " + path + " is the --profile; writing it would destroy the " +
                     "profile: choose another path for " + option);
@@ -470,21 +540,47 @@ int main(int argc, char** argv) {
       }
     }
   }
+  // From here a signal stops the run and the reports of what ran are written.
+  InstallStopHandlers();
   auto made = MakeTarget(ts, profile, baud ? baud : DefaultBaud(proto));
   if (const auto* err = std::get_if<std::string>(&made)) return Fail(*err);
   std::unique_ptr<Target> target = std::move(std::get<std::unique_ptr<Target>>(made));
   if (auto err = target->Open()) return Fail(*err);
 
-  const RunReport report = runner->run(*target, options);
-  if (report.device.empty() && !target->VirtualClock()) {
-    std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a "
-              << ProtocolTitle(proto) << " device there, at this baud rate?\n";
+  // The console streams: the title now, the device once it answered, each
+  // case's verdict as it ends (flushed, whatever stdout is), the summary last.
+  if (!quiet) {
+    std::cout << ConsoleTitle(target->Name(), std::string(ProtocolName(proto))) << std::flush;
+  }
+  bool device_printed = false;
+  size_t printed = 0;
+  auto print_device = [&](const RunReport& so_far) {
+    if (device_printed) return;
+    device_printed = true;
+    if (so_far.device.empty() && !target->VirtualClock()) {
+      std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a "
+                << ProtocolTitle(proto) << " device there, at this baud rate?" << std::endl;
+    }
+    if (!quiet) std::cout << ConsoleDevice(so_far) << std::flush;
+  };
+  options.on_progress = [&](const RunReport& so_far) {
+    print_device(so_far);
+    for (; printed < so_far.cases.size(); ++printed) {
+      if (!quiet) std::cout << ConsoleCase(so_far.cases[printed], verbose) << std::flush;
+    }
+  };
+  RunReport report = runner->run(*target, options);
+  options.on_progress(report);  // whatever the runner did not announce
+  if (const auto lost = target->LinkLost()) report.target_error = *lost;
+  if (!report.target_error.empty()) {
+    std::cerr << "mococheck: target error: " << target->Name() << ": " << report.target_error
+              << "; the outcomes prove nothing about the device" << std::endl;
   }
   if (quiet) {
-    const std::string text = ConsoleReport(report, false);
-    std::cout << text.substr(text.rfind("result:"));
+    const std::string text = ConsoleSummary(report, false);
+    std::cout << text.substr(text.rfind("result:")) << std::flush;
   } else {
-    std::cout << ConsoleReport(report, verbose);
+    std::cout << ConsoleSummary(report, verbose) << std::flush;
   }
   if (!junit.empty()) {
     if (auto err = WriteAtomically(junit, JunitReport(report)); !err.empty()) return Fail(err);

@@ -4,6 +4,7 @@
 
 #include <cinttypes>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "base/file_io.h"
+#include "cli_numbers.h"
 #include "control/control_channel.h"
 #include "control/scenario.h"
 #include "control/session.h"
@@ -263,7 +265,15 @@ int Serve(moco::transport::EmulatorConfig config) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mocosim: emulated DMC-16, DFMoco Arduino and StackShot 3X devices"};
+  // A log line to a closed pipe (`mocosim ... 2>&1 | head -1`) is a failed
+  // write, ignored, not a SIGPIPE that kills the emulator before its
+  // recording is completed and its PTY symlink removed.
+  std::signal(SIGPIPE, SIG_IGN);
+  using moco::cli::AddNumber;
+  CLI::App app{
+      "mocosim: emulated DMC-16, DFMoco Arduino and StackShot 3X devices\n"
+      "Exit status (docs/exit-codes.md): 0 done, 1 a recording or plot could not be "
+      "completed, 2 a usage, file or set-up error"};
   app.set_version_flag("--version", "mocosim 0.1.0");
   app.require_subcommand(1);
 
@@ -299,18 +309,20 @@ int main(int argc, char** argv) {
       ->required();
   plot->add_option("--profile", plot_args.profile_path,
                    "DMC-16 profile with a physical_rig, e.g. fixtures/profiles/dmc16-boom.json")
-      ->required();
+      ->required()
+      ->check(CLI::ExistingFile);
   plot->add_option("-o,--output", plot_args.out_path,
                    "SVG file to write, atomically (default: the session's path with .svg)");
-  plot->add_option("--every-ms", plot_args.every_ms, "Sample period in ms (default 10)");
+  AddNumber(plot, "--every-ms", plot_args.every_ms, 0.001, 3.6e6, "Sample period in ms");
   double from_s = 0, to_s = 0;
   auto* from_opt =
-      plot->add_option("--from-s", from_s, "Plot from this time, s since power-on (default: 0)");
-  auto* to_opt =
-      plot->add_option("--to-s", to_s, "Plot up to this time, s (default: the end of the session)");
-  plot->add_option("--tail-s", plot_args.tail_s,
-                   "Keep sampling this long after the last entry while the rig settles; "
-                   "ends earlier once it is at rest (default 2)");
+      AddNumber(plot, "--from-s", from_s, 0.0, 1e6, "Plot from this time, s since power-on");
+  auto* to_opt = AddNumber(plot, "--to-s", to_s, 0.0, 1e6,
+                           "Plot up to this time, s (default: the end of the session)");
+  to_opt->default_str("the end");
+  AddNumber(plot, "--tail-s", plot_args.tail_s, 0.0, 3600.0,
+            "Keep sampling this long after the last entry while the rig settles; "
+            "ends earlier once it is at rest");
   plot->add_option("--title", plot_args.title,
                    "Title of the plot (default: the rig's name and the session file's name)");
 
@@ -341,7 +353,8 @@ int main(int argc, char** argv) {
           "--wifi", o->wifi_spec,
           "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
           "connect to its TCP port. ADDRESS[:UDP_PORT[:HOST_TCP_PORT]], default "
-          "0.0.0.0:24869:24870 (give \"\" for the defaults)");
+          "127.0.0.1:24869:24870, loopback like --tcp (give \"\" for the defaults, 0.0.0.0 to "
+          "hear FINDSTACK from every network)");
       wifi_opt->excludes(pty_opt)->excludes(tcp_opt);
     }
     o->cmd
@@ -390,7 +403,20 @@ int main(int argc, char** argv) {
 
   auto* models = app.add_subcommand("models", "List the device models that can be emulated");
 
-  CLI11_PARSE(app, argc, argv);
+  // Every parse error (an unknown option, a missing or unreadable file, a
+  // number out of range) is a usage error, exit 2; --help and --version exit 0.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  }
 
   if (decode->parsed()) return Decode(session_path, !no_time, strict);
   if (plot->parsed()) {

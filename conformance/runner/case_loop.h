@@ -28,8 +28,13 @@ template <class Host, class CaseT, class NotApplicable, class GreetAndRun, class
 void RunCases(Target& target, const RunOptions& options, const std::vector<CaseT>& cases,
               RunReport& report, NotApplicable not_applicable, GreetAndRun greet_and_run,
               TranscriptFn transcript) {
+  if (options.on_progress) options.on_progress(report);
   for (size_t i = 0; i < cases.size(); ++i) {
     const CaseT& k = cases[i];
+    if (const int sig = StopRequested(); sig != 0) {
+      report.interrupted_by = sig;
+      break;
+    }
     if (i % options.shard_count != options.shard_index) continue;
     if (!options.cases.empty() && !GlobMatch(options.cases, k.suite + "/" + k.name)) continue;
     CaseResult result;
@@ -40,6 +45,7 @@ void RunCases(Target& target, const RunOptions& options, const std::vector<CaseT
       result.applicable = false;
       result.not_applicable_because = std::move(why);
       report.cases.push_back(std::move(result));
+      if (options.on_progress) options.on_progress(report);
       continue;
     }
     const auto c0 = std::chrono::steady_clock::now();
@@ -58,6 +64,13 @@ void RunCases(Target& target, const RunOptions& options, const std::vector<CaseT
     result.outcomes = verdicts.outcomes();
     result.KeepTraffic(host.traffic());
     report.cases.push_back(std::move(result));
+    // A case cut short by a stop request is not a verdict on the device.
+    if (const int sig = StopRequested(); sig != 0) {
+      report.cases.pop_back();
+      report.interrupted_by = sig;
+      break;
+    }
+    if (options.on_progress) options.on_progress(report);
   }
 }
 

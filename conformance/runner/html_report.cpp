@@ -205,9 +205,14 @@ std::string HtmlReport(const RunReport& report) {
        "b.bad{color:#c62828}blockquote{margin:.3em 0 .3em 1em;color:#555}"
        "details{margin:.3em 0}\n</style></head><body>\n";
   s += "<h1>mococheck conformance report</h1>\n";
-  s += "<p><span class=\"verdict " +
-       std::string(failed ? "ko\">FAIL: a MUST rule failed" : "ok\">PASS: every MUST rule held") +
-       "</span></p>\n";
+  const std::string verdict =
+      !report.target_error.empty()
+          ? "ko\">TARGET ERROR: " + Esc(report.target_error) + " (no verdict on the device)"
+      : report.interrupted_by != 0
+          ? "ko\">INTERRUPTED by signal " + std::to_string(report.interrupted_by) + " (no verdict)"
+      : failed ? "ko\">FAIL: a MUST rule failed"
+               : "ok\">PASS: every MUST rule held";
+  s += "<p><span class=\"verdict " + verdict + "</span></p>\n";
   s += "<table><tr><th>target</th><td>" + Esc(report.target) + "</td></tr>\n";
   s += "<tr><th>protocol</th><td>" + Esc(report.protocol) + "</td></tr>\n";
   s += "<tr><th>device</th><td>" +

@@ -25,18 +25,31 @@ std::string EvidenceText(const Evidence& e) {
 
 }  // namespace
 
+std::string ConsoleTitle(const std::string& target, const std::string& protocol_name) {
+  const auto protocol = ParseProtocol(protocol_name);
+  return "mococheck: " + target + " (" +
+         std::string(protocol ? ProtocolTitle(*protocol) : protocol_name) + ")\n";
+}
+
+std::string ConsoleDevice(const RunReport& report) {
+  return (report.device.empty() ? "device: no answer to the introduction\n"
+                                : "device: " + report.device + "\n") +
+         "\n";
+}
+
 std::string ConsoleReport(const RunReport& report, bool verbose) {
-  const auto protocol = ParseProtocol(report.protocol);
-  std::string s = "mococheck: " + report.target + " (" +
-                  std::string(protocol ? ProtocolTitle(*protocol) : report.protocol) + ")\n";
-  s += report.device.empty() ? "device: no answer to the introduction\n"
-                             : "device: " + report.device + "\n";
-  s += "\n";
-  for (const CaseResult& c : report.cases) {
+  std::string s = ConsoleTitle(report.target, report.protocol) + ConsoleDevice(report);
+  for (const CaseResult& c : report.cases) s += ConsoleCase(c, verbose);
+  return s + ConsoleSummary(report, verbose);
+}
+
+std::string ConsoleCase(const CaseResult& c, bool verbose) {
+  std::string s;
+  {
     const std::string full = c.suite + "/" + c.name;
     if (!c.applicable) {
       s += "  n/a   " + full + " (" + c.not_applicable_because + ")\n";
-      continue;
+      return s;
     }
     size_t failed = 0, passed = 0, noted = 0;
     for (const auto& [id, o] : c.outcomes) {
@@ -86,6 +99,11 @@ std::string ConsoleReport(const RunReport& report, bool verbose) {
       s += "        " + indented + (indented.empty() || indented.back() != '\n' ? "\n" : "");
     }
   }
+  return s;
+}
+
+std::string ConsoleSummary(const RunReport& report, bool verbose) {
+  std::string s;
   const auto counts = report.RuleCounts();
   auto count = [&](Status st) {
     auto it = counts.find(st);
@@ -110,8 +128,18 @@ std::string ConsoleReport(const RunReport& report, bool verbose) {
   }
   char wall[64];
   std::snprintf(wall, sizeof wall, "%.2f s", report.wall_s);
-  s += std::string("result: ") + (report.MustFailed() ? "FAIL (a MUST rule failed)" : "PASS") +
-       " in " + wall + "\n";
+  if (!report.target_error.empty()) {
+    s += "target error: " + report.target_error + "\n";
+  }
+  if (report.interrupted_by != 0) {
+    s += "interrupted by signal " + std::to_string(report.interrupted_by) + " after " +
+         std::to_string(report.cases.size()) + " case(s); the rest did not run\n";
+  }
+  const char* verdict = !report.target_error.empty() ? "TARGET ERROR (no verdict on the device)"
+                        : report.interrupted_by != 0 ? "INTERRUPTED (no verdict)"
+                        : report.MustFailed()        ? "FAIL (a MUST rule failed)"
+                                                     : "PASS";
+  s += std::string("result: ") + verdict + " in " + wall + "\n";
   return s;
 }
 
@@ -169,6 +197,8 @@ nlohmann::json JsonReport(const RunReport& report) {
   }
   j["rules"] = rules;
   j["must_failed"] = report.MustFailed();
+  j["target_error"] = report.target_error.empty() ? json(nullptr) : json(report.target_error);
+  j["interrupted_by_signal"] = report.interrupted_by;
   j["exit_code"] = ExitCode(report);
   j["wall_s"] = report.wall_s;
   return j;
@@ -209,12 +239,27 @@ std::string JunitReport(const RunReport& report) {
       body += "    </testcase>\n";
     }
   }
+  // A run without a verdict is an error of the whole suite, not a passing one.
+  size_t errors = 0;
+  const std::string no_verdict =
+      !report.target_error.empty() ? "target error: " + report.target_error
+      : report.interrupted_by != 0
+          ? "interrupted by signal " + std::to_string(report.interrupted_by)
+          : std::string();
+  if (!no_verdict.empty()) {
+    ++tests;
+    ++errors;
+    body += "    <testcase classname=\"mococheck." + report.protocol +
+            "\" name=\"(run)\" time=\"0\">\n      <error message=\"" + XmlEscape(no_verdict) +
+            "\"/>\n    </testcase>\n";
+  }
   std::string s = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   s += "<testsuites name=\"mococheck\" tests=\"" + std::to_string(tests) + "\" failures=\"" +
-       std::to_string(failures) + "\">\n";
+       std::to_string(failures) + "\" errors=\"" + std::to_string(errors) + "\">\n";
   s += "  <testsuite name=\"mococheck." + report.protocol + "\" tests=\"" + std::to_string(tests) +
-       "\" failures=\"" + std::to_string(failures) + "\" skipped=\"" + std::to_string(skipped) +
-       "\" time=\"" + std::to_string(report.wall_s) + "\">\n";
+       "\" failures=\"" + std::to_string(failures) + "\" errors=\"" + std::to_string(errors) +
+       "\" skipped=\"" + std::to_string(skipped) + "\" time=\"" + std::to_string(report.wall_s) +
+       "\">\n";
   s += "    <properties><property name=\"target\" value=\"" + XmlEscape(report.target) +
        "\"/><property name=\"seed\" value=\"" + std::to_string(report.options.random.seed) +
        "\"/></properties>\n";

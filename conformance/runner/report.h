@@ -15,6 +15,13 @@ namespace moco::conformance {
 // Per case and failing rule with its evidence, then the rule summary.
 // `verbose` also lists the rules that passed in each case.
 std::string ConsoleReport(const RunReport& report, bool verbose);
+// The same in the pieces mococheck streams as the run goes on:
+// ConsoleTitle() before the run, ConsoleDevice() once the device introduced
+// itself, ConsoleCase() per finished case, ConsoleSummary() at the end.
+std::string ConsoleTitle(const std::string& target, const std::string& protocol_name);
+std::string ConsoleDevice(const RunReport& report);
+std::string ConsoleCase(const CaseResult& c, bool verbose);
+std::string ConsoleSummary(const RunReport& report, bool verbose);
 nlohmann::json JsonReport(const RunReport& report);
 std::string JunitReport(const RunReport& report);
 // A self-contained HTML page (html_report.cpp): verdict, rule table, per case

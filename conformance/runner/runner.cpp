@@ -38,7 +38,10 @@ void CaseResult::KeepTraffic(const std::vector<Chunk>& all) {
                  all.begin() + static_cast<ptrdiff_t>(std::min(all.size(), kMaxTrafficChunks)));
 }
 
-int ExitCode(const RunReport& report) { return report.MustFailed() ? 1 : 0; }
+int ExitCode(const RunReport& report) {
+  if (!report.target_error.empty() || report.interrupted_by != 0) return 2;
+  return report.MustFailed() ? 1 : 0;
+}
 
 RunReport RunDmc(Target& target, const RunOptions& options) {
   const auto wall0 = std::chrono::steady_clock::now();

@@ -20,6 +20,9 @@
 
 namespace moco::conformance {
 
+struct RunReport;
+struct CaseResult;
+
 struct RunOptions {
   std::string rules;         // GlobMatch over rule ids; empty: all
   std::string cases;         // GlobMatch over "suite/name"; empty: all
@@ -27,6 +30,10 @@ struct RunOptions {
   uint32_t shard_count = 1;
   HostOptions host;
   RandomOptions random;
+  // Called once the device has introduced itself (report.device is set, no
+  // case has run yet) and again after each case is appended to report.cases:
+  // the console streams its verdicts from here. May be empty.
+  std::function<void(const RunReport& report)> on_progress;
 };
 
 struct CaseResult {
@@ -66,6 +73,12 @@ struct RunReport {
   std::vector<CaseResult> cases;
   std::map<std::string, RuleSummary, std::less<>> rules;  // every rule within the filter
   double wall_s = 0;
+  // Set by the caller when the link to the device was lost for good (what
+  // happened); the outcomes then prove nothing about the device.
+  std::string target_error;
+  // The signal (SIGINT, SIGTERM, SIGHUP) that stopped the run before every
+  // case ran; 0 when it ran to the end.
+  int interrupted_by = 0;
 
   bool MustFailed() const;
   // Counts of rules by status.
@@ -107,7 +120,8 @@ struct ProtocolRunner {
 // nullptr when the protocol has no runner.
 const ProtocolRunner* FindRunner(Protocol p);
 
-// 0 when every MUST rule passed, 1 when one failed.
+// 2 when the run has no verdict (a target error, or it was interrupted),
+// else 0 when every MUST rule passed, 1 when one failed (docs/exit-codes.md).
 int ExitCode(const RunReport& report);
 
 }  // namespace moco::conformance

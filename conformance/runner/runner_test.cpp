@@ -125,6 +125,45 @@ TEST(Runner, InProcessCasesRunFast) {
   EXPECT_LT(s, 60.0);
 }
 
+TEST(Reports, TheStreamedPiecesAddUpToTheConsoleReport) {
+  RunOptions options;
+  options.cases = "connect/*,motor/*";
+  std::string streamed;
+  size_t calls = 0;
+  options.on_progress = [&](const RunReport& so_far) {
+    if (calls++ == 0) {
+      EXPECT_TRUE(so_far.cases.empty()) << "the first call comes before any case";
+      streamed += ConsoleDevice(so_far);
+      return;
+    }
+    ASSERT_FALSE(so_far.cases.empty());
+    streamed += ConsoleCase(so_far.cases.back(), false);
+  };
+  const RunReport r = RunInProcess(options);
+  ASSERT_GT(r.cases.size(), 1u);
+  EXPECT_EQ(calls, r.cases.size() + 1) << "once after the introduction, once per case";
+  EXPECT_EQ(ConsoleTitle(r.target, r.protocol) + streamed + ConsoleSummary(r, false),
+            ConsoleReport(r, false));
+}
+
+TEST(Reports, ARunWithoutAVerdictSaysSoInEveryReport) {
+  RunReport lost = RunInProcess();
+  lost.target_error = "the device closed the connection";
+  EXPECT_EQ(ExitCode(lost), 2);
+  EXPECT_NE(ConsoleReport(lost, false).find("result: TARGET ERROR"), std::string::npos);
+  EXPECT_EQ(JsonReport(lost)["exit_code"], 2);
+  EXPECT_EQ(JsonReport(lost)["target_error"], "the device closed the connection");
+  EXPECT_NE(JunitReport(lost).find("<error message=\"target error: the device closed"),
+            std::string::npos);
+  EXPECT_NE(HtmlReport(lost).find("TARGET ERROR"), std::string::npos);
+  RunReport stopped = RunInProcess();
+  stopped.interrupted_by = 1;
+  EXPECT_EQ(ExitCode(stopped), 2);
+  EXPECT_NE(ConsoleReport(stopped, false).find("result: INTERRUPTED"), std::string::npos);
+  EXPECT_EQ(JsonReport(stopped)["interrupted_by_signal"], 1);
+  EXPECT_NE(JunitReport(stopped).find("errors=\"1\""), std::string::npos);
+}
+
 TEST(Reports, JsonAndJunitCarryEveryCaseAndRule) {
   const RunReport r = RunInProcess();
   const nlohmann::json j = JsonReport(r);
@@ -163,6 +202,11 @@ TEST(Targets, ParseTargetSpecNamesTheProblem) {
   ASSERT_TRUE(std::holds_alternative<TargetSpec>(ok));
   EXPECT_EQ(std::get<TargetSpec>(ok).kind, TargetSpec::Kind::kTcp);
   EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("pty:/tmp/x")).address, "/tmp/x");
+  // The scheme is kept as written, so a serial: target is not labelled pty:.
+  EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")).scheme, "serial");
+  auto serial = MakeTarget(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")), "", 9600);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<Target>>(serial));
+  EXPECT_EQ(std::get<std::unique_ptr<Target>>(serial)->Name(), "serial:/dev/ttyUSB0 @9600");
   EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("in-process:dmc16")).kind,
             TargetSpec::Kind::kInProcess);
   for (const char* bad : {"tcp:5000", "tcp:host:port", "ftp:x", "pty:", "dmc16"}) {
@@ -170,7 +214,8 @@ TEST(Targets, ParseTargetSpecNamesTheProblem) {
     ASSERT_TRUE(std::holds_alternative<std::string>(r)) << bad;
     EXPECT_NE(std::get<std::string>(r).find("in-process:MODEL"), std::string::npos) << bad;
   }
-  auto unknown = MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster"}, "", 115200);
+  auto unknown =
+      MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster", "in-process"}, "", 115200);
   ASSERT_TRUE(std::holds_alternative<std::string>(unknown));
   EXPECT_NE(std::get<std::string>(unknown).find("dmc16"), std::string::npos);
 }

@@ -3,7 +3,13 @@
 // suites pass on the steady clock; unusable addresses are clear errors.
 #include <gtest/gtest.h>
 
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include "conformance/runner/report.h"
@@ -97,6 +103,75 @@ TEST(FdTarget, UnusableAddressesAreClearErrors) {
   err = tcp.Open();
   ASSERT_TRUE(err.has_value());
   EXPECT_NE(err->find("127.0.0.1:1"), std::string::npos);
+}
+
+TEST(FdTarget, APathThatIsNotADeviceIsRefusedAndNeverWritten) {
+  const fs::path dir = TempDir();
+  const fs::path file = dir / "not-a-port";
+  { std::ofstream(file) << "precious"; }
+  for (const char* scheme : {"serial", "pty"}) {
+    FdTarget t(FdTarget::Kind::kSerial, file.string(), 115200, scheme);
+    const auto err = t.Open();
+    ASSERT_TRUE(err.has_value()) << scheme;
+    EXPECT_NE(err->find(std::string(scheme) + ":" + file.string() + " is a regular file"),
+              std::string::npos)
+        << *err;
+    EXPECT_FALSE(t.Send(wire::Bytes{1, 2, 3}));
+  }
+  std::ifstream in(file);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "precious");
+  FdTarget d(FdTarget::Kind::kSerial, dir.string(), 115200, "serial");
+  const auto err = d.Open();
+  ASSERT_TRUE(err.has_value());
+  EXPECT_NE(err->find("is a directory"), std::string::npos) << *err;
+  fs::remove_all(dir);
+}
+
+TEST(FdTarget, APeerThatHangsUpIsALostLinkNotASigpipe) {
+  const int listener = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(listen(listener, 1), 0);
+  socklen_t len = sizeof a;
+  getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
+  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  ASSERT_FALSE(t.Open().has_value());
+  EXPECT_EQ(t.Name().rfind("tcp:127.0.0.1:", 0), 0u) << t.Name();
+  close(accept(listener, nullptr, nullptr));  // the device hangs up at once
+  close(listener);
+  EXPECT_FALSE(t.LinkLost().has_value());
+  // Writing to the closed connection soon fails (EPIPE after the peer's
+  // reset); without MSG_NOSIGNAL the SIGPIPE would have ended this test.
+  const wire::Bytes frame(4096, 0x55);
+  bool failed = false;
+  for (int i = 0; i < 100000 && !failed; ++i) failed = !t.Send(frame);
+  EXPECT_TRUE(failed);
+  ASSERT_TRUE(t.LinkLost().has_value());
+  EXPECT_NE(t.LinkLost()->find("writing to the device failed"), std::string::npos) << *t.LinkLost();
+  wire::Bytes got;
+  EXPECT_FALSE(t.Receive(t.Now() + 2'000'000'000, got));
+}
+
+TEST(FdTarget, APeerThatClosesIsALostLink) {
+  const int listener = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  ASSERT_EQ(listen(listener, 1), 0);
+  socklen_t len = sizeof a;
+  getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
+  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  ASSERT_FALSE(t.Open().has_value());
+  close(accept(listener, nullptr, nullptr));
+  close(listener);
+  wire::Bytes got;
+  EXPECT_FALSE(t.Receive(t.Now() + 2'000'000'000, got));
+  ASSERT_TRUE(t.LinkLost().has_value());
+  EXPECT_NE(t.LinkLost()->find("closed the connection"), std::string::npos) << *t.LinkLost();
+  EXPECT_FALSE(t.Send(wire::Bytes{1}));
 }
 
 }  // namespace

@@ -8,10 +8,12 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -27,6 +29,9 @@
 
 namespace moco::conformance {
 namespace {
+
+std::atomic<int> g_stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "RequestStop runs in a signal handler");
 
 int64_t SteadyNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -58,6 +63,9 @@ std::optional<speed_t> BaudConstant(uint32_t baud) {
 }
 
 }  // namespace
+
+void RequestStop(int signal_number) { g_stop_signal.store(signal_number); }
+int StopRequested() { return g_stop_signal.load(); }
 
 // --- InProcessTarget ----------------------------------------------------------------
 
@@ -143,8 +151,8 @@ bool InProcessTarget::SetEStop(bool engaged) {
 
 // --- FdTarget ------------------------------------------------------------------------
 
-FdTarget::FdTarget(Kind kind, std::string address, uint32_t baud)
-    : kind_(kind), address_(std::move(address)), baud_(baud) {}
+FdTarget::FdTarget(Kind kind, std::string address, uint32_t baud, std::string scheme)
+    : kind_(kind), address_(std::move(address)), baud_(baud), scheme_(std::move(scheme)) {}
 
 FdTarget::~FdTarget() {
   if (fd_ >= 0) close(fd_);
@@ -152,7 +160,23 @@ FdTarget::~FdTarget() {
 
 std::string FdTarget::Name() const {
   if (kind_ == Kind::kTcp) return "tcp:" + address_;
-  return "pty:" + address_ + " @" + std::to_string(baud_);
+  return scheme_ + ":" + address_ + " @" + std::to_string(baud_);
+}
+
+bool FdTarget::Lose(std::string why) {
+  if (!lost_) lost_ = std::move(why);
+  return false;
+}
+
+std::string FdTarget::NotADevice(const struct stat& st) const {
+  const char* what = S_ISREG(st.st_mode)    ? "a regular file"
+                     : S_ISDIR(st.st_mode)  ? "a directory"
+                     : S_ISFIFO(st.st_mode) ? "a FIFO"
+                     : S_ISBLK(st.st_mode)  ? "a block device"
+                                            : "not a terminal";
+  return scheme_ + ":" + address_ + " is " + what +
+         ", not a serial port, PTY or socket; nothing was written to it. Give the device's "
+         "port (e.g. /dev/ttyUSB0) or the PTY path mocosim printed";
 }
 
 std::optional<std::string> FdTarget::Open() {
@@ -162,10 +186,23 @@ std::optional<std::string> FdTarget::Open() {
       return "unsupported baud rate " + std::to_string(baud_) +
              "; use one of 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600";
     }
+    // Never O_CREAT or O_TRUNC, and nothing is written before the path is
+    // known to be a terminal, a character device or a socket: a regular file
+    // given by mistake is left as it was.
+    struct stat st {};
+    if (stat(address_.c_str(), &st) == 0 && !S_ISCHR(st.st_mode) && !S_ISSOCK(st.st_mode)) {
+      return NotADevice(st);
+    }
     fd_ = open(address_.c_str(), O_RDWR | O_NOCTTY | O_CLOEXEC | O_NONBLOCK);
     if (fd_ < 0) {
       return "cannot open " + address_ + ": " + std::strerror(errno) +
              "; check the path (is the device or mocosim running?) and its permissions";
+    }
+    if (fstat(fd_, &st) != 0 ||
+        !(isatty(fd_) != 0 || S_ISCHR(st.st_mode) || S_ISSOCK(st.st_mode))) {
+      close(fd_);
+      fd_ = -1;
+      return NotADevice(st);
     }
     termios t{};
     if (tcgetattr(fd_, &t) == 0) {
@@ -216,10 +253,14 @@ void FdTarget::Restart() {
 TimeNs FdTarget::Now() const { return SteadyNs() - origin_ns_; }
 
 bool FdTarget::Send(wire::ByteView bytes) {
-  if (fd_ < 0) return false;
+  if (fd_ < 0 || lost_) return false;
   size_t done = 0;
   while (done < bytes.size()) {
-    const ssize_t w = write(fd_, bytes.data() + done, bytes.size() - done);
+    if (StopRequested() != 0) return false;
+    // MSG_NOSIGNAL: a peer that closed is an EPIPE here, never a SIGPIPE.
+    const ssize_t w = kind_ == Kind::kTcp
+                          ? send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL)
+                          : write(fd_, bytes.data() + done, bytes.size() - done);
     if (w > 0) {
       done += static_cast<size_t>(w);
       continue;
@@ -229,24 +270,30 @@ bool FdTarget::Send(wire::ByteView bytes) {
       poll(&p, 1, 100);
       continue;
     }
-    return false;
+    // EIO on a PTY whose other side is closed for now: the device may reopen it.
+    if (w < 0 && errno == EIO && kind_ == Kind::kSerial) return false;
+    return Lose(std::string("writing to the device failed: ") +
+                (w < 0 ? std::strerror(errno) : "nothing written"));
   }
   return true;
 }
 
 bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
-  if (fd_ < 0) return false;
+  if (fd_ < 0 || lost_) return false;
   for (;;) {
+    if (StopRequested() != 0) return false;
     uint8_t buf[4096];
     const ssize_t r = read(fd_, buf, sizeof buf);
     if (r > 0) {
       out.insert(out.end(), buf, buf + r);
       return true;
     }
-    if (r == 0) return false;
+    if (r == 0) return Lose("the device closed the connection");
     // EIO: a PTY whose other side is closed for now (the device may reopen it).
     const bool hung_up = errno == EIO;
-    if (errno != EAGAIN && errno != EINTR && !hung_up) return false;
+    if (errno != EAGAIN && errno != EINTR && !hung_up) {
+      return Lose(std::string("reading from the device failed: ") + std::strerror(errno));
+    }
     const TimeNs left_ns = deadline_ns - Now();
     if (left_ns <= 0) return true;
     const int wait_ms = static_cast<int>((left_ns + sim::kNsPerMs - 1) / sim::kNsPerMs);
@@ -270,15 +317,17 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
       "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH, tcp:HOST:PORT or "
       "simavr:PATH.elf[@MCU[:HZ]]";
   if (rest.empty()) return "--target \"" + std::string(text) + "\" names no address" + usage;
-  if (scheme == "in-process") return TargetSpec{TargetSpec::Kind::kInProcess, rest};
+  if (scheme == "in-process") return TargetSpec{TargetSpec::Kind::kInProcess, rest, "in-process"};
   if (scheme == "simavr") {
     const auto parsed = ParseSimavrAddress(rest);
     if (const auto* err = std::get_if<std::string>(&parsed)) {
       return "--target \"" + std::string(text) + "\": " + *err;
     }
-    return TargetSpec{TargetSpec::Kind::kSimavr, rest};
+    return TargetSpec{TargetSpec::Kind::kSimavr, rest, "simavr"};
   }
-  if (scheme == "pty" || scheme == "serial") return TargetSpec{TargetSpec::Kind::kSerial, rest};
+  if (scheme == "pty" || scheme == "serial") {
+    return TargetSpec{TargetSpec::Kind::kSerial, rest, std::string(scheme)};
+  }
   if (scheme == "tcp") {
     const size_t c = rest.rfind(':');
     if (c == std::string::npos || c == 0 || c + 1 == rest.size()) {
@@ -289,7 +338,7 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
         return "--target \"" + std::string(text) + "\": the port is not a number" + usage;
       }
     }
-    return TargetSpec{TargetSpec::Kind::kTcp, rest};
+    return TargetSpec{TargetSpec::Kind::kTcp, rest, "tcp"};
   }
   return "--target \"" + std::string(text) + "\": unknown kind \"" + std::string(scheme) + "\"" +
          usage;
@@ -339,8 +388,8 @@ std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& 
       return std::unique_ptr<Target>(InProcessTarget::ForModel(spec.address, profile_path));
     }
     case TargetSpec::Kind::kSerial:
-      return std::unique_ptr<Target>(
-          std::make_unique<FdTarget>(FdTarget::Kind::kSerial, spec.address, baud));
+      return std::unique_ptr<Target>(std::make_unique<FdTarget>(
+          FdTarget::Kind::kSerial, spec.address, baud, spec.scheme.empty() ? "pty" : spec.scheme));
     case TargetSpec::Kind::kTcp:
       return std::unique_ptr<Target>(
           std::make_unique<FdTarget>(FdTarget::Kind::kTcp, spec.address, baud));

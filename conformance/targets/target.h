@@ -12,6 +12,8 @@
 #include <string_view>
 #include <variant>
 
+#include <sys/stat.h>
+
 #include "devices/device.h"
 #include "sim/scheduler.h"
 #include "wire/bytes.h"
@@ -51,7 +53,19 @@ class Target {
   // Presses (true) or releases the device's e-stop button, where the runner
   // can reach it (in-process only). False when it cannot.
   virtual bool SetEStop(bool /*engaged*/) { return false; }
+
+  // Why the link is gone for good (the device closed the connection, a
+  // write or read failed), or nullopt while it is up. A lost link makes the
+  // run a target error: what follows proves nothing about the device.
+  virtual std::optional<std::string> LinkLost() const { return std::nullopt; }
 };
+
+// Asks a running conformance run to stop (from a SIGINT, SIGTERM or SIGHUP
+// handler: async-signal-safe). External targets' Send() and Receive() then
+// return false at once and the case loop runs no further case.
+void RequestStop(int signal_number);
+// The signal number given to RequestStop(), 0 when none was.
+int StopRequested();
 
 // Builds a device for an in-process target; it writes its output to `sink`.
 // `scheduler` and `sink` outlive the device.
@@ -107,7 +121,8 @@ class FdTarget final : public Target {
  public:
   enum class Kind { kSerial, kTcp };
   // kSerial: `address` is a path; kTcp: "host:port" (IPv4 literal or a name).
-  FdTarget(Kind kind, std::string address, uint32_t baud = 115200);
+  // `scheme` labels a kSerial target in Name() ("pty" or "serial", as given).
+  FdTarget(Kind kind, std::string address, uint32_t baud = 115200, std::string scheme = "pty");
   ~FdTarget() override;
   FdTarget(const FdTarget&) = delete;
   FdTarget& operator=(const FdTarget&) = delete;
@@ -120,11 +135,19 @@ class FdTarget final : public Target {
   TimeNs Now() const override;
   bool Send(wire::ByteView bytes) override;
   bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
+  std::optional<std::string> LinkLost() const override { return lost_; }
 
  private:
+  // Why a path that is not a terminal, character device or socket is refused.
+  std::string NotADevice(const struct stat& st) const;
+  // Marks the link lost for good (`why`: what happened) and returns false.
+  bool Lose(std::string why);
+
   Kind kind_;
   std::string address_;
   uint32_t baud_;
+  std::string scheme_;
+  std::optional<std::string> lost_;
   int fd_ = -1;
   int64_t origin_ns_ = 0;  // steady_clock at Open()
 };
@@ -135,6 +158,7 @@ struct TargetSpec {
   enum class Kind { kInProcess, kSerial, kTcp, kSimavr };
   Kind kind = Kind::kInProcess;
   std::string address;  // model, path, host:port, or PATH.elf[@MCU[:HZ]]
+  std::string scheme;   // as written: "in-process", "pty", "serial", "tcp" or "simavr"
 };
 
 // AVR firmware to run under simavr: the address of a "simavr:" target.

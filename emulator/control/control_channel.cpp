@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <set>
 #include <stdexcept>
 
 #include "sim/io.h"
@@ -938,6 +939,25 @@ json ControlChannel::Execute(const Command& command, std::string_view source, in
   return reply;
 }
 
+json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate) {
+  duplicate.clear();
+  std::vector<std::set<std::string, std::less<>>> keys;  // per open object
+  const json::parser_callback_t note_keys = [&keys, &duplicate](int, json::parse_event_t event,
+                                                                json& parsed) {
+    if (event == json::parse_event_t::object_start) {
+      keys.emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      if (!keys.empty()) keys.pop_back();
+    } else if (event == json::parse_event_t::key && !keys.empty() && parsed.is_string()) {
+      if (!keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
+        duplicate = parsed.get<std::string>();
+      }
+    }
+    return true;
+  };
+  return json::parse(text, note_keys);
+}
+
 std::string ControlChannel::Handle(std::string_view line, std::string_view source) {
   try {
     while (!line.empty() && (line.back() == '\r' || line.back() == '\n')) line.remove_suffix(1);
@@ -946,8 +966,11 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
           ErrorReply("empty request: send one JSON object per line, e.g. {\"cmd\":\"help\"}"));
     }
     json request;
+    // A key given twice in one object ({"engaged":true,"engaged":false}) is
+    // refused, not settled silently by the last one.
+    std::string duplicate;
     try {
-      request = json::parse(line);
+      request = ParseJsonNotingDuplicateKeys(line, duplicate);
     } catch (const json::parse_error& e) {
       return Dump(ErrorReply("malformed JSON at byte " + std::to_string(e.byte) +
                              ": send one JSON object per line, e.g. {\"cmd\":\"state\"}"));
@@ -960,6 +983,10 @@ std::string ControlChannel::Handle(std::string_view line, std::string_view sourc
     json id = nullptr;
     if (request.is_object()) {
       if (auto it = request.find("id"); it != request.end()) id = *it;
+    }
+    if (!duplicate.empty()) {
+      return Dump(ErrorReply(
+          "the key \"" + duplicate + "\" appears twice in one object; give each key once", id));
     }
     auto parsed = ParseCommand(request);
     if (auto* err = std::get_if<std::string>(&parsed)) return Dump(ErrorReply(*err, id));

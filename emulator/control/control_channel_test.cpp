@@ -384,6 +384,21 @@ TEST_F(ControlChannelTest, BadRequestsGetErrorsNamingTheProblemAndTheFix) {
   EXPECT_EQ(device_.the_gio().raw_inputs(), 0u);
 }
 
+TEST_F(ControlChannelTest, DuplicateKeysAreRefusedNamingTheKey) {
+  // The last "engaged" would have released the e-stop the first one pressed.
+  std::string e = ErrorOf(channel_, R"({"cmd":"estop","engaged":true,"engaged":false})");
+  EXPECT_TRUE(Contains(e, "\"engaged\" appears twice")) << e;
+  EXPECT_FALSE(device_.the_rig().estop_engaged());
+  e = ErrorOf(channel_, R"({"cmd":"estop","cmd":"state","engaged":true,"id":4})");
+  EXPECT_TRUE(Contains(e, "\"cmd\" appears twice")) << e;
+  EXPECT_FALSE(device_.the_rig().estop_engaged());
+  // The same key in two different objects is no duplicate.
+  EXPECT_EQ(Reply(channel_, R"({"cmd":"estop","engaged":true,"id":{"engaged":1}})")["ok"], true);
+  EXPECT_TRUE(device_.the_rig().estop_engaged());
+  // The id of a refused request is still echoed.
+  EXPECT_EQ(Reply(channel_, R"({"cmd":"state","cmd":"state","id":9})")["id"], 9);
+}
+
 TEST_F(ControlChannelTest, TheIdIsEchoedOnSuccessAndOnError) {
   EXPECT_EQ(Reply(channel_, R"({"cmd":"state","id":17})")["id"], 17);
   EXPECT_EQ(Reply(channel_, R"({"cmd":"estop","id":"a"})")["id"], "a");

@@ -88,14 +88,20 @@ Scenario Scenario::Load(const std::filesystem::path& path) {
 
 Scenario Scenario::Parse(std::string_view text, std::string where) {
   json doc;
+  std::string duplicate;
   try {
-    doc = json::parse(text);
+    doc = ParseJsonNotingDuplicateKeys(text, duplicate);
   } catch (const json::parse_error& e) {
     throw ScenarioError(where + ": malformed JSON at " +
                         LineColumn(text, e.byte > 0 ? e.byte - 1 : 0) +
                         ": write a JSON object such as " + kFormatExample);
   } catch (const json::exception&) {
     throw ScenarioError(where + ": malformed JSON: a number is out of range (beyond a double)");
+  }
+  if (!duplicate.empty()) {
+    throw ScenarioError(where + ": the key \"" + duplicate +
+                        "\" appears twice in one object; give each key once (the last one would "
+                        "silently win)");
   }
   if (!doc.is_object()) {
     throw ScenarioError(where + ": the scenario must be a JSON object, found " + TypeNameOf(doc) +

@@ -20,10 +20,11 @@ std::string TypeNameOf(const nlohmann::json& v) {
 
 }  // namespace
 
-ProfileReader::ProfileReader(const nlohmann::json& object, std::string where, std::string path)
-    : object_(object), where_(std::move(where)), path_(std::move(path)) {
+ProfileReader::ProfileReader(const nlohmann::json& object, std::string where, std::string path,
+                             std::string doc)
+    : object_(object), where_(std::move(where)), path_(std::move(path)), doc_(std::move(doc)) {
   if (!object_.is_object()) {
-    throw ProfileError(where_ + ": " + (path_.empty() ? std::string("the profile") : path_) +
+    throw ProfileError(where_ + ": " + (path_.empty() ? std::string("the top level") : path_) +
                        " must be a JSON object, found " + TypeNameOf(object_) +
                        "; write it as { \"field\": value, ... }");
   }
@@ -172,19 +173,19 @@ const nlohmann::json& ProfileReader::GetRaw(std::string_view key) {
 ProfileReader ProfileReader::Child(std::string_view key) {
   static const nlohmann::json kEmpty = nlohmann::json::object();
   const nlohmann::json* v = Find(key);
-  if (v == nullptr) return ProfileReader(kEmpty, where_, FieldName(key));
+  if (v == nullptr) return ProfileReader(kEmpty, where_, FieldName(key), doc_);
   if (!v->is_object()) {
     Fail(key, "must be an object, found " + TypeNameOf(*v),
          "write it as { \"field\": value, ... }");
   }
-  return ProfileReader(*v, where_, FieldName(key));
+  return ProfileReader(*v, where_, FieldName(key), doc_);
 }
 
 void ProfileReader::Finish() const {
   for (auto it = object_.begin(); it != object_.end(); ++it) {
     if (std::find(read_.begin(), read_.end(), it.key()) == read_.end()) {
       Fail(it.key(), "is not a known field",
-           "check its spelling against docs/profiles.md, or remove it");
+           "check its spelling against " + doc_ + ", or remove it");
     }
   }
 }
@@ -200,16 +201,44 @@ nlohmann::json ReadProfileFile(const std::string& path, std::string* where_out) 
 }
 
 nlohmann::json ParseProfileText(std::string_view text, const std::string& where) {
+  // The keys leading to the value being parsed, so that a value the parser
+  // refuses (1e400, beyond a double) is reported with its field's name.
+  std::vector<std::string> path;
+  const nlohmann::json::parser_callback_t track =
+      [&path](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        // `depth` counts the containers open around the event.
+        if (event == nlohmann::json::parse_event_t::key && depth >= 1 && parsed.is_string()) {
+          path.resize(static_cast<size_t>(depth));
+          path.back() = parsed.get<std::string>();
+        } else if (event == nlohmann::json::parse_event_t::array_start && depth >= 0) {
+          path.resize(static_cast<size_t>(depth) + 1);
+          path.back() = "[]";
+        }
+        return true;
+      };
   try {
-    nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), nullptr, true, true);
+    nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), track, true, true);
     if (!j.is_object()) {
-      throw ProfileError(where + ": the profile must be a JSON object { ... }, found " +
+      throw ProfileError(where + ": the file must be a JSON object { ... }, found " +
                          TypeNameOf(j));
     }
     return j;
   } catch (const nlohmann::json::parse_error& e) {
     throw ProfileError(where + ": not valid JSON at byte " + std::to_string(e.byte) +
                        "; fix the syntax there (" + e.what() + ")");
+  } catch (const nlohmann::json::exception&) {
+    // out_of_range 406: a number too large for a double, e.g. 1e400.
+    std::string field;
+    for (const std::string& k : path) {
+      if (k == "[]" || k.empty()) {
+        field += "[]";
+      } else {
+        field += (field.empty() ? "" : ".") + k;
+      }
+    }
+    throw ProfileError(where + ": " + (field.empty() ? "a value" : "field \"" + field + "\"") +
+                       " is a number beyond the range of a double (about 1.8e308); write a "
+                       "finite number within the field's range");
   }
 }
 

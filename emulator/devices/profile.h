@@ -30,8 +30,10 @@ class ProfileReader {
  public:
   // `where` prefixes messages, e.g. "profile fixtures/profiles/dmc16.json".
   // `path` is the object's location inside the document ("" for the root,
-  // "motors[2]" for a nested object). REQUIRES: `object` outlives the reader.
-  ProfileReader(const nlohmann::json& object, std::string where, std::string path = "");
+  // "motors[2]" for a nested object). `doc` is where the fields are described
+  // (a misspelt key points there). REQUIRES: `object` outlives the reader.
+  ProfileReader(const nlohmann::json& object, std::string where, std::string path = "",
+                std::string doc = "docs/profiles.md");
 
   bool Has(std::string_view key) const;
   int64_t GetInt(std::string_view key, int64_t def, int64_t min, int64_t max);
@@ -61,6 +63,7 @@ class ProfileReader {
   const nlohmann::json& object_;
   std::string where_;
   std::string path_;
+  std::string doc_;
   std::vector<std::string> read_;
 };
 

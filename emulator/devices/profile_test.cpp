@@ -89,5 +89,25 @@ TEST(ParseProfileText, SyntaxErrorGivesOffset) {
   EXPECT_EQ(ParseProfileText("// comment\n{\"a\": 1}", "p")["a"], 1);
 }
 
+TEST(ParseProfileText, NumberBeyondADoubleNamesTheFileAndTheField) {
+  std::string msg =
+      ErrorOf([] { ParseProfileText(R"({"motor_count": 1e400})", "profile x.json"); });
+  EXPECT_NE(msg.find("profile x.json: field \"motor_count\" is a number beyond the range"),
+            std::string::npos)
+      << msg;
+  msg = ErrorOf([] {
+    ParseProfileText(R"({"motors": [{"a": 1}, {"max_speed": -1e999}]})", "profile y.json");
+  });
+  EXPECT_NE(msg.find("profile y.json: field \"motors[].max_speed\""), std::string::npos) << msg;
+}
+
+TEST(ProfileReader, AMisspeltKeyPointsToTheDocumentGiven) {
+  const json j = json::parse(R"({"devics": []})");
+  ProfileReader r(j, "run file r.json", "", "docs/run-files.md");
+  const std::string msg = ErrorOf([&] { r.Finish(); });
+  EXPECT_NE(msg.find("docs/run-files.md"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find("profile"), std::string::npos) << msg;
+}
+
 }  // namespace
 }  // namespace moco::devices

@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <initializer_list>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -12,7 +13,8 @@ namespace {
 constexpr std::string_view kForms =
     "use pty:<path> (e.g. pty:/tmp/dmc16), tcp:<port> or tcp:<address>:<port> "
     "(e.g. tcp:127.0.0.1:5000, tcp:127.0.0.1:0 for a free port), or wifi: for a StackShot "
-    "on Wi-Fi (wifi:[address[:udp port[:host tcp port]]], default 0.0.0.0:24869:24870)";
+    "on Wi-Fi (wifi:[address[:udp port[:host tcp port]]], default 127.0.0.1:24869:24870; give "
+    "0.0.0.0 to hear FINDSTACK from every network)";
 
 // Concatenates pieces (also avoids g++ 12's false -Wrestrict on
 // "literal" + std::string at -O2).
@@ -116,7 +118,9 @@ DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeO
     // No serial line on Wi-Fi: bytes are not paced; output with no host is dropped.
     lo.pacing = false;
     lo.hold_while_closed = false;
-    const std::string address = spec_.address.value_or("0.0.0.0");
+    // Loopback unless asked: on 0.0.0.0 any machine that sends FINDSTACK
+    // makes the emulator connect out to it.
+    const std::string address = spec_.address.value_or(options.bind_address);
     lo.name = "wifi " + address + ":" + std::to_string(spec_.port);
     link_ = std::make_unique<Link>(driver, std::move(lo));
     wifi_ = std::make_unique<WifiPort>(*link_, address, spec_.port, spec_.host_tcp_port);
@@ -124,8 +128,20 @@ DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeO
     lo.hold_while_closed = false;
     const std::string address = spec_.address.value_or(options.bind_address);
     lo.name = "tcp " + address + ":" + std::to_string(spec_.port);
+    // The link's log lines name the endpoint actually bound: port 0 asks for
+    // any free port, and "tcp 127.0.0.1:0" tells the reader nothing.
+    const std::string asked = lo.name;
+    auto bound = std::make_shared<std::string>(asked);
+    lo.log = [asked, bound, inner = std::move(lo.log)](std::string_view line) {
+      if (line.starts_with(asked)) {
+        inner(*bound + std::string(line.substr(asked.size())));
+      } else {
+        inner(line);
+      }
+    };
     link_ = std::make_unique<Link>(driver, std::move(lo));
     tcp_ = std::make_unique<TcpPort>(*link_, address, spec_.port);
+    *bound = "tcp " + tcp_->Where();
   }
 }
 

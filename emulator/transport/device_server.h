@@ -28,7 +28,7 @@ namespace moco::transport {
 //   tcp:<address>:<port>    TCP on <address>; IPv6 as tcp:[::1]:5000
 //   wifi:[<address>[:<udp port>[:<host tcp port>]]]
 //                           a StackShot on Wi-Fi: hears FINDSTACK on UDP
-//                           (default 0.0.0.0:24869), connects to the host's
+//                           (default 127.0.0.1:24869, the bind address), connects to the host's
 //                           TCP port (default 24870)
 // Port 0 asks for an ephemeral port.
 struct EndpointSpec {

@@ -86,8 +86,8 @@ class PtyPort::MasterStream final : public AsioByteStream<asio::posix::stream_de
   int slave_fd_;  // owned by the PtyPort
 };
 
-PtyPort::PtyPort(Link& link, std::string link_path)
-    : link_(link), link_path_(std::move(link_path)) {
+PtyPort::PtyPort(Link& link, std::string link_path, std::chrono::nanoseconds link_check_period)
+    : link_(link), link_path_(std::move(link_path)), link_check_period_(link_check_period) {
   if (link_path_.empty())
     throw std::runtime_error("the PTY link path is empty: give a path such as /tmp/dmc16");
   char name[256] = {};
@@ -181,6 +181,45 @@ void PtyPort::Start() {
     inotify_ = std::make_unique<asio::posix::stream_descriptor>(io, inotify_fd_);
     WatchHost();
   }
+  if (link_check_period_.count() > 0) {
+    link_timer_ = std::make_unique<asio::steady_timer>(io);
+    ScheduleLinkCheck();
+  }
+}
+
+void PtyPort::ScheduleLinkCheck() {
+  link_timer_->expires_after(link_check_period_);
+  link_timer_->async_wait([this, weak = std::weak_ptr<bool>(alive_)](const ErrorCode& ec) {
+    if (weak.expired() || ec || stopped_) return;
+    CheckLink();
+    ScheduleLinkCheck();
+  });
+}
+
+void PtyPort::CheckLink() {
+  struct stat st {};
+  if (lstat(link_path_.c_str(), &st) == 0) {
+    const bool ours = S_ISLNK(st.st_mode) && ReadLinkText(link_path_) == slave_name_;
+    if (!ours && !link_foreign_) {
+      link_.Log("the PTY link " + link_path_ +
+                " was replaced by something else; leaving it alone (the PTY is still " +
+                slave_name_ + ")");
+    }
+    link_foreign_ = !ours;
+    return;
+  }
+  if (errno != ENOENT) return;
+  // symlink() itself fails with EEXIST when something appeared meanwhile:
+  // nothing is ever replaced here.
+  if (symlink(slave_name_.c_str(), link_path_.c_str()) == 0) {
+    link_created_ = true;
+    link_foreign_ = false;
+    link_.Log("the PTY link " + link_path_ + " was deleted; created it again -> " + slave_name_);
+  } else if (errno != EEXIST) {
+    link_.Log("the PTY link " + link_path_ + " was deleted and cannot be created again: " +
+              ErrnoText(errno) + " (the PTY is still " + slave_name_ + ")");
+    link_created_ = false;
+  }
 }
 
 void PtyPort::WatchHost() {
@@ -227,6 +266,7 @@ void PtyPort::Stop() {
     close(inotify_fd_);
   }
   inotify_fd_ = -1;
+  if (link_timer_) link_timer_->cancel();
   if (link_created_ && ReadLinkText(link_path_) == slave_name_) unlink(link_path_.c_str());
   link_created_ = false;
   if (started_) {

@@ -6,6 +6,7 @@
 #define MOCO_TRANSPORT_PTY_PORT_H_
 
 #include <array>
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -30,15 +31,23 @@ namespace moco::transport {
 // partial line is discarded by the kernel's line discipline). Without inotify
 // the host is assumed present and nothing is reported to the device.
 //
+// The symlink: every `link_check_period` the port checks (lstat) that the
+// path still exists; when it is gone (deleted while serving) the port logs it
+// and creates the symlink again. Whatever else appeared at the path (a file,
+// another symlink) is logged once and left alone, never replaced.
+//
 // The Link must outlive the port.
 class PtyPort {
  public:
+  static constexpr std::chrono::milliseconds kDefaultLinkCheckPeriod{1000};
+
   // Opens the PTY, sets raw mode and slave mode 0600, and creates the symlink
   // `link_path` -> the slave. A symlink already at link_path is replaced when
   // dangling (left by an earlier run); anything else there is refused.
   // Throws std::runtime_error with a message a user can act on (path exists,
   // directory missing or not writable, no PTYs available).
-  PtyPort(Link& link, std::string link_path);
+  PtyPort(Link& link, std::string link_path,
+          std::chrono::nanoseconds link_check_period = kDefaultLinkCheckPeriod);
   ~PtyPort();
   PtyPort(const PtyPort&) = delete;
   PtyPort& operator=(const PtyPort&) = delete;
@@ -61,6 +70,8 @@ class PtyPort {
   void CreateLink();
   void WatchHost();
   void OnInotify(const ErrorCode& ec, size_t n);
+  void ScheduleLinkCheck();
+  void CheckLink();
 
   Link& link_;
   std::string link_path_;
@@ -69,6 +80,9 @@ class PtyPort {
   int slave_fd_ = -1;
   int inotify_fd_ = -1;  // owned by inotify_ once Start()ed
   bool link_created_ = false;
+  bool link_foreign_ = false;  // something else took the path; reported once
+  std::chrono::nanoseconds link_check_period_;
+  std::unique_ptr<asio::steady_timer> link_timer_;
   bool started_ = false;
   bool stopped_ = false;
   int host_opens_ = 0;

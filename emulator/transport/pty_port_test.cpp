@@ -97,7 +97,7 @@ class PtyPortTest : public ::testing::Test {
     device_ = std::make_unique<EchoDevice>(*link_);
     device_->PowerOn();
     link_->SetDevice(device_.get());
-    port_ = std::make_unique<PtyPort>(*link_, path_);
+    port_ = std::make_unique<PtyPort>(*link_, path_, link_check_period_);
     port_->Start();
     driver_.Start();
   }
@@ -111,6 +111,7 @@ class PtyPortTest : public ::testing::Test {
   std::string dir_;
   std::string path_;
   std::string log_;
+  std::chrono::nanoseconds link_check_period_ = PtyPort::kDefaultLinkCheckPeriod;
 };
 
 TEST_F(PtyPortTest, EchoesThroughTheSymlink) {
@@ -213,6 +214,56 @@ TEST_F(PtyPortTest, StopRemovesTheSymlink) {
   ASSERT_TRUE(fs::is_symlink(path_));
   port_->Stop();
   EXPECT_FALSE(fs::exists(fs::symlink_status(path_)));
+}
+
+TEST_F(PtyPortTest, ADeletedSymlinkIsLoggedAndCreatedAgain) {
+  link_check_period_ = std::chrono::milliseconds(10);
+  Serve(false);
+  ASSERT_TRUE(fs::is_symlink(path_));
+  fs::remove(path_);
+  ASSERT_TRUE(RunUntil(io_, [&] { return fs::is_symlink(fs::symlink_status(path_)); }))
+      << "the link was not created again; log:\n"
+      << log_;
+  EXPECT_EQ(fs::read_symlink(path_).string(), port_->slave_name());
+  EXPECT_NE(log_.find("the PTY link " + path_ + " was deleted; created it again"),
+            std::string::npos)
+      << log_;
+  // The recreated link still reaches the device.
+  Host host(path_);
+  ASSERT_TRUE(host.is_open());
+  host.Write("ping");
+  ASSERT_TRUE(RunUntil(io_, [&] {
+    host.Poll();
+    return host.got == "ping";
+  }));
+  host.Close();
+  port_->Stop();
+  EXPECT_FALSE(fs::exists(fs::symlink_status(path_))) << "Stop removes the recreated link";
+}
+
+TEST_F(PtyPortTest, WhatAppearsAtTheLinkPathIsNeverReplaced) {
+  link_check_period_ = std::chrono::milliseconds(10);
+  Serve(false);
+  fs::remove(path_);
+  { std::ofstream(path_) << "keep me"; }
+  ASSERT_TRUE(RunUntil(io_, [&] {
+    return log_.find("replaced by something else") != std::string::npos;
+  })) << log_;
+  // Several more checks: still reported once and left alone.
+  const size_t checks_before = log_.size();
+  for (int i = 0; i < 5; ++i) {
+    auto t = asio::steady_timer(io_, std::chrono::milliseconds(10));
+    bool fired = false;
+    t.async_wait([&](const ErrorCode&) { fired = true; });
+    ASSERT_TRUE(RunUntil(io_, [&] { return fired; }));
+  }
+  EXPECT_EQ(log_.size(), checks_before) << log_;
+  port_->Stop();
+  ASSERT_TRUE(fs::is_regular_file(path_));
+  std::ifstream in(path_);
+  std::string text;
+  std::getline(in, text);
+  EXPECT_EQ(text, "keep me");
 }
 
 TEST_F(PtyPortTest, ReplacesAStaleSymlink) {

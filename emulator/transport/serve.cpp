@@ -292,10 +292,14 @@ void Emulator::Start() {
             (s->default_state ? " (the default for this name; --state PATH for another)" : ""));
   }
   driver_.Kick();
-  signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM);
+  // SIGHUP (the terminal closed) stops as cleanly as SIGINT and SIGTERM:
+  // recordings completed, symlinks and the control socket removed.
+  signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM, SIGHUP);
   signals_->async_wait([this](const ErrorCode& ec, int sig) {
     if (ec) return;
-    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                                        : sig == SIGHUP ? "SIGHUP"
+                                                                        : "SIGTERM"));
     Stop();
   });
   if (hooks_.on_started) hooks_.on_started();
@@ -346,7 +350,7 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
     return fp.is_absolute() ? p : (std::filesystem::path(base_dir) / fp).string();
   };
   try {
-    devices::ProfileReader r(j, where);
+    devices::ProfileReader r(j, where, "", "docs/run-files.md");
     c.control_path = path_of(r.GetString("control", ""));
     c.scenario_path = path_of(r.GetString("scenario", ""));
     c.bind_address = r.GetString("bind", c.bind_address);
@@ -363,7 +367,8 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
              "\"pty:/tmp/dmc16\"}]");
     }
     for (size_t i = 0; i < devs.size(); ++i) {
-      devices::ProfileReader d(devs[i], where, "devices[" + std::to_string(i) + "]");
+      devices::ProfileReader d(devs[i], where, "devices[" + std::to_string(i) + "]",
+                               "docs/run-files.md");
       DeviceConfig dc;
       dc.model = d.GetString("model", "dmc16");
       if (devices::FindDeviceModel(dc.model) == nullptr) {

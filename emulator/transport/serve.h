@@ -1,7 +1,7 @@
 // Serving emulated devices in one process (`mocosim dmc16`, `mocosim run`):
 // the io_context, the real-time driver of the one clock, one DeviceServer per
 // device, session recordings, the control socket and scenario, and a clean
-// shutdown on SIGINT/SIGTERM (symlinks removed, recordings closed).
+// shutdown on SIGINT/SIGTERM/SIGHUP (symlinks removed, recordings closed).
 #ifndef MOCO_TRANSPORT_SERVE_H_
 #define MOCO_TRANSPORT_SERVE_H_
 
@@ -90,7 +90,7 @@ class Emulator {
 
   // Powers every device on and starts the clock; logs where each one is.
   void Start();
-  // Runs the io loop until Stop() or SIGINT/SIGTERM; returns the exit code
+  // Runs the io loop until Stop() or SIGINT/SIGTERM/SIGHUP; returns the exit code
   // (0, or 1 when a recording could not be completed).
   int Run();
   // Stops serving: endpoints closed, symlinks removed, recordings completed.

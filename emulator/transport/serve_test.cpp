@@ -342,6 +342,51 @@ TEST(Serve, Stackshot3xWifiAnswersFindstackConnectsAndReconnects) {
   fs::remove_all(dir);
 }
 
+TEST(Serve, TcpLogLinesNameTheBoundPortNotPortZero) {
+  std::mutex mu;
+  std::vector<std::string> lines;
+  EmulatorConfig config;
+  DeviceConfig d;
+  d.endpoint = "tcp:127.0.0.1:0";
+  config.devices = {d};
+  Emulator e(config, [&](std::string_view l) {
+    std::lock_guard<std::mutex> lock(mu);
+    lines.emplace_back(l);
+  });
+  const std::string bound = "tcp 127.0.0.1:" + std::to_string(e.server(0).tcp_port());
+  e.Start();
+  std::thread io([&] { e.Run(); });
+  Exercise(e, 0);  // a host connects and disconnects: the link logs both
+  asio::post(e.io(), [&] { e.Stop(); });
+  io.join();
+  bool connected = false;
+  for (const std::string& l : lines) {
+    EXPECT_EQ(l.find("127.0.0.1:0"), std::string::npos) << l;
+    connected = connected || (l.find(bound + ": host connected") != std::string::npos);
+  }
+  EXPECT_TRUE(connected) << "no \"" << bound << ": host connected\" line";
+}
+
+TEST(Serve, WifiWithoutAnAddressListensOnLoopbackAndSaysSo) {
+  const fs::path dir = TempDir();
+  std::vector<std::string> lines;
+  EmulatorConfig config;
+  DeviceConfig d;
+  d.model = "stackshot3x";
+  d.endpoint = "wifi::0";  // the default address, any free UDP port
+  d.state_path = (dir / "nvm.json").string();
+  config.devices = {d};
+  Emulator e(config, [&](std::string_view l) { lines.emplace_back(l); });
+  EXPECT_NE(e.server(0).Where().find("udp 127.0.0.1:"), std::string::npos) << e.server(0).Where();
+  e.Start();
+  bool logged = false;
+  for (const std::string& l : lines)
+    logged = logged || l.find("udp 127.0.0.1:") != std::string::npos;
+  EXPECT_TRUE(logged) << "the start-up line names the address listened on";
+  e.Stop();
+  fs::remove_all(dir);
+}
+
 TEST(Serve, TakenTcpPortIsAClearErrorAndLeavesNothingOpen) {
   const fs::path dir = TempDir();
   EmulatorConfig first;
@@ -610,6 +655,26 @@ TEST(ServeFiles, RunFilesAreReadBoundedAndDevicesRefused) {
     EXPECT_NE(std::string(e.what()).find("4 MiB"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);
+}
+
+TEST(RunConfig, ErrorsSpeakOfTheRunFileAndItsDocumentNotAProfile) {
+  auto error_of = [](const char* text) {
+    try {
+      ParseRunConfig(nlohmann::json::parse(text), "run file r.json", "/b");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  for (const char* text : {R"({"devices": [{"endpoint": "tcp:1"}], "devics": 1})",
+                           R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})", R"([1])"}) {
+    const std::string e = error_of(text);
+    EXPECT_NE(e.find("run file r.json"), std::string::npos) << e;
+    EXPECT_EQ(e.find("profile"), std::string::npos) << e;
+    if (text[0] == '{') {
+      EXPECT_NE(e.find("docs/run-files.md"), std::string::npos) << e;
+    }
+  }
 }
 
 }  // namespace

@@ -1,0 +1,143 @@
+#!/bin/sh
+# mocosim's command line against hostile input and hostile surroundings
+# (issue 13): each test is one function, run as
+#   mocosim_cli_test.sh TEST MOCOSIM WORKDIR SOURCE_DIR
+# and registered with CTest under its own name (emulator/CMakeLists.txt).
+# Waits are bounded polls for an event (a log line, a file), never timings.
+set -u
+test_name=$1
+sim=$2
+work=$3/$test_name
+src=$4
+rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+
+pids=""
+cleanup() {
+  for p in $pids; do kill -9 "$p" 2>/dev/null; done
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*" >&2
+  for f in *.txt *.log; do [ -f "$f" ] && { echo "--- $f" >&2; cat "$f" >&2; }; done
+  cleanup
+  exit 1
+}
+# wait_for CMD...: polls CMD up to 600 times, 0.1 s apart.
+wait_for() {
+  i=0
+  while ! "$@" >/dev/null 2>&1; do
+    i=$((i + 1))
+    [ $i -gt 600 ] && return 1
+    sleep 0.1
+  done
+}
+expect_rc() {
+  want=$1
+  shift
+  "$@" >out.txt 2>err.txt
+  got=$?
+  [ "$got" = "$want" ] || fail "exit $got, not $want: $*"
+}
+
+case "$test_name" in
+
+# SIGHUP (a closed terminal) stops like SIGTERM: exit 0, the recording
+# completed, the PTY symlink and the control socket removed.
+mocosim_cli_sighup_stops_cleanly_like_sigterm)
+  for sig in HUP TERM INT; do
+    rm -f rec.jsonl
+    "$sim" dmc16 --pty "$work/dev" --record rec.jsonl --control "$work/ctl.sock" >sim.log 2>&1 &
+    p=$!
+    pids="$pids $p"
+    wait_for test -S "$work/ctl.sock" || fail "SIG$sig: no control socket"
+    wait_for test -L "$work/dev" || fail "SIG$sig: no PTY link"
+    kill -$sig "$p"
+    wait "$p"
+    rc=$?
+    [ "$rc" = 0 ] || fail "SIG$sig: exit $rc, not 0"
+    test -s rec.jsonl || fail "SIG$sig: no recording"
+    test ! -e rec.jsonl.partial || fail "SIG$sig: recording left partial"
+    test ! -L "$work/dev" || fail "SIG$sig: PTY link left behind"
+    test ! -e "$work/ctl.sock" || fail "SIG$sig: control socket left behind"
+    grep -q "stopping on SIG$sig" sim.log || fail "SIG$sig: not logged"
+  done
+  ;;
+
+# A log line to a closed pipe does not kill mocosim: after the reader of its
+# stderr is gone it still stops cleanly and completes its recording.
+mocosim_cli_closed_log_pipe_does_not_kill_it)
+  mkfifo log.fifo
+  head -n 1 <log.fifo >first.txt &
+  reader=$!
+  "$sim" dmc16 --pty "$work/dev" --record rec.jsonl >log.fifo 2>&1 &
+  p=$!
+  pids="$pids $p"
+  wait "$reader"
+  test -s first.txt || fail "head read nothing"
+  wait_for test -L "$work/dev" || fail "no PTY link"
+  # The stop logs several lines, each now a write to a closed pipe.
+  kill -TERM "$p"
+  wait "$p"
+  rc=$?
+  [ "$rc" = 0 ] || fail "exit $rc, not 0 (141 is death by SIGPIPE)"
+  test -s rec.jsonl || fail "no recording"
+  test ! -e rec.jsonl.partial || fail "recording left partial"
+  test ! -L "$work/dev" || fail "PTY link left behind"
+  ;;
+
+# Every parse error is 2, never CLI11's own codes (105 for a missing or
+# directory file); --help and --version are 0.
+mocosim_cli_parse_errors_exit_2_and_help_exits_0)
+  mkdir adir
+  s=$src/fixtures/sessions/dmc16-boom-move.jsonl
+  p=$src/fixtures/profiles/dmc16-boom.json
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --profile adir
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --profile missing.json
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --scenario adir
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --scenario missing.json
+  expect_rc 2 "$sim" decode adir
+  expect_rc 2 "$sim" decode missing.jsonl
+  expect_rc 2 "$sim" run adir
+  expect_rc 2 "$sim" run missing.json
+  expect_rc 2 "$sim" dmc16 --no-such-option
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --log-level loud
+  expect_rc 2 "$sim"
+  for args in "--every-ms nan" "--every-ms 0" "--from-s inf" "--to-s -1" "--tail-s 1e400" \
+              "--tail-s 3601"; do
+    opt=${args%% *}
+    # shellcheck disable=SC2086
+    expect_rc 2 "$sim" plot "$s" --profile "$p" -o x.svg $args
+    grep -q -- "$opt" err.txt || fail "the message does not name $opt"
+  done
+  test ! -e x.svg || fail "a plot was written"
+  test ! -L "$work/dev" || fail "a PTY link was left"
+  expect_rc 0 "$sim" --help
+  expect_rc 0 "$sim" dmc16 --help
+  expect_rc 0 "$sim" --version
+  ;;
+
+# A number beyond a double in a profile names the file and the field; a run
+# file's errors speak of the run file and docs/run-files.md.
+mocosim_cli_profile_and_run_file_errors_name_the_file_and_field)
+  printf '{"motor_count": 1e400}\n' >big.json
+  expect_rc 2 "$sim" dmc16 --pty "$work/dev" --profile big.json
+  grep -q 'big.json' err.txt || fail "no file name"
+  grep -q '"motor_count"' err.txt || fail "no field name"
+  grep -q 'json.exception' err.txt && fail "a raw json exception"
+  printf '{"devices": [{"endpoint": "tcp:0", "modle": "dmc16"}]}\n' >run.json
+  expect_rc 2 "$sim" run run.json
+  grep -q 'run file' err.txt || fail "does not say run file"
+  grep -q 'docs/run-files.md' err.txt || fail "does not point to docs/run-files.md"
+  grep -q 'profile' err.txt && fail "speaks of a profile"
+  printf '{"devices": [{"endpoint": "tcp:0", "no_pacing": 1e999}]}\n' >run2.json
+  expect_rc 2 "$sim" run run2.json
+  grep -q 'devices\[\].no_pacing' err.txt || fail "run file: no field name"
+  ;;
+
+*)
+  echo "unknown test $test_name" >&2
+  exit 1
+  ;;
+esac
+cleanup
+exit 0
