@@ -313,12 +313,15 @@ int main(int argc, char** argv) {
   AddNumber(run, "--seed", seed, uint64_t{0}, UINT64_MAX, "Seed of the random sequence suite");
   AddNumber(run, "--steps", steps, 1, 100000, "Requests in the random sequence");
   run->add_option("--junit", junit,
-                  "Write a JUnit XML report here (one testcase per rule and case)");
-  run->add_option("--json", json_path, "Write a JSON report here");
+                  "Write a JUnit XML report here (one testcase per rule and case)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--json", json_path, "Write a JSON report here")
+      ->check(moco::cli::NonEmptyPath());
   std::string html_path;
   run->add_option(
       "--html", html_path,
-      "Write a self-contained HTML report here (evidence, transcripts, position plots)");
+      "Write a self-contained HTML report here (evidence, transcripts, position plots)")
+      ->check(moco::cli::NonEmptyPath());
   run->add_option("--shard", shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
   AddNumber(run, "--baud", baud, uint32_t{0}, uint32_t{4000000},
@@ -335,7 +338,8 @@ int main(int argc, char** argv) {
   AddNumber(run, "--position-gap-ms", position_gap_ms, int64_t{1}, int64_t{600000},
             "DMC-POS-002: the largest gap between position updates while moving");
   run->add_option("--save-session", session_path,
-                  "Save a failing random sequence here (JSON Lines, docs/sessions.md)");
+                  "Save a failing random sequence here (JSON Lines, docs/sessions.md)")
+      ->check(moco::cli::NonEmptyPath());
   run->add_flag("-v,--verbose", verbose, "List passing rules and every case's log");
   run->add_flag("-q,--quiet", quiet, "Print only the summary line");
 

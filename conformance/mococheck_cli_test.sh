@@ -180,6 +180,11 @@ mococheck_cli_report_paths_are_checked_before_the_run)
     grep -q -- '--' err.txt || fail "the message names no option: $args"
   done
   test ! -e r.xml && test ! -e r.json || fail "a report was written"
+  # An empty report path (an unset shell variable) is refused, not ignored.
+  for opt in --junit --json --html --save-session; do
+    expect_rc 2 "$m" run --target in-process:dmc16 $opt ""
+    grep -q -- "$opt: needs a path" err.txt || fail "empty $opt accepted"
+  done
   if [ "$(id -u)" != 0 ]; then
     mkdir ro && chmod 555 ro
     expect_rc 2 "$m" run --target in-process:dmc16 --json ro/r.json

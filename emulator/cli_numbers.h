@@ -1,4 +1,5 @@
-// Numeric command-line options of mocosim and mococheck, read strictly: the
+// Numeric command-line options of mocosim and mococheck, read strictly (and
+// file options that refuse an empty path): the
 // whole argument must be one finite number within the option's range, or the
 // parse fails (a usage error, exit 2) with a message naming the option and the
 // range. CLI11's own conversions let "-1" and "1e23" become 2^64-1 for an
@@ -90,6 +91,18 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& value, T min, 
   opt->type_name(std::is_floating_point_v<T> ? "NUMBER" : "INT");
   opt->default_str(def.str());
   return opt;
+}
+
+// A file option given an empty value (`--json ""`, often an unset shell
+// variable) would silently mean "not given": refuse it as a usage error.
+inline CLI::Validator NonEmptyPath() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        return value.empty() ? "needs a path; an empty one is not a file (leave the option out "
+                               "to write nothing)"
+                             : "";
+      },
+      "", "NonEmptyPath");
 }
 
 }  // namespace moco::cli

@@ -312,7 +312,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   plot->add_option("-o,--output", plot_args.out_path,
-                   "SVG file to write, atomically (default: the session's path with .svg)");
+                   "SVG file to write, atomically (default: the session's path with .svg)")
+      ->check(moco::cli::NonEmptyPath());
   AddNumber(plot, "--every-ms", plot_args.every_ms, 0.001, 3.6e6, "Sample period in ms");
   double from_s = 0, to_s = 0;
   auto* from_opt =
@@ -364,16 +365,19 @@ int main(int argc, char** argv) {
         ->check(CLI::ExistingFile);
     o->cmd->add_option("--record", o->config.record_path,
                        "Record every byte in and out with its time and decoded message to this "
-                       "session file (.jsonl, docs/sessions.md; completed on exit)");
+                       "session file (.jsonl, docs/sessions.md; completed on exit)")
+        ->check(moco::cli::NonEmptyPath());
     o->cmd->add_option("--control", o->control_path,
                        "Serve the JSON-lines control socket at this path (e-stop, limits, "
-                       "inputs, power, faults, state; docs/control.md)");
+                       "inputs, power, faults, state; docs/control.md)")
+        ->check(moco::cli::NonEmptyPath());
     if (model.keeps_state) {
       o->cmd->add_option(
           "--state", o->config.state_path,
           "File keeping the device's NVM (settings, slots, serial number, log) "
           "across runs, written atomically (default: "
-          "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)");
+          "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)")
+        ->check(moco::cli::NonEmptyPath());
     }
     o->cmd
         ->add_option("--scenario", o->scenario_path,

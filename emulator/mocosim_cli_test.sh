@@ -101,6 +101,12 @@ mocosim_cli_parse_errors_exit_2_and_help_exits_0)
   expect_rc 2 "$sim" run missing.json
   expect_rc 2 "$sim" dmc16 --no-such-option
   expect_rc 2 "$sim" dmc16 --pty "$work/dev" --log-level loud
+  # An empty file option (an unset shell variable) is refused, not ignored.
+  for args in "--record" "--control"; do
+    expect_rc 2 "$sim" dmc16 --pty "$work/dev" $args ""
+    grep -q -- "$args: needs a path" err.txt || fail "empty $args accepted"
+  done
+  expect_rc 2 "$sim" stackshot3x --pty "$work/dev" --state ""
   expect_rc 2 "$sim"
   for args in "--every-ms nan" "--every-ms 0" "--from-s inf" "--to-s -1" "--tail-s 1e400" \
               "--tail-s 3601"; do

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <netinet/in.h>
+#include <pty.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -172,6 +173,46 @@ TEST(FdTarget, APeerThatClosesIsALostLink) {
   ASSERT_TRUE(t.LinkLost().has_value());
   EXPECT_NE(t.LinkLost()->find("closed the connection"), std::string::npos) << *t.LinkLost();
   EXPECT_FALSE(t.Send(wire::Bytes{1}));
+}
+
+// The emulator serving a PTY dies mid-run: reading the PTY then gives end of
+// file, and the link is lost at once (the run ends as a target error).
+TEST(FdTarget, APtyWhoseEmulatorDiedIsALostLink) {
+  int master = -1;
+  int slave = -1;
+  char name[256] = {};
+  ASSERT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
+  FdTarget t(FdTarget::Kind::kSerial, name, 115200, "pty");
+  ASSERT_FALSE(t.Open().has_value());
+  close(slave);
+  close(master);
+  wire::Bytes got;
+  EXPECT_FALSE(t.Receive(t.Now() + 10 * sim::kNsPerSecond, got));
+  ASSERT_TRUE(t.LinkLost().has_value());
+  EXPECT_NE(t.LinkLost()->find("closed the connection"), std::string::npos) << *t.LinkLost();
+}
+
+// Writing to a PTY whose far end is closed fails with EIO. A short hang-up is
+// waited out (the far end may reopen), one that lasts the grace period loses
+// the link, so a host that only writes does not retry forever.
+TEST(FdTarget, WritesToAPtyClosedForTheGracePeriodLoseTheLink) {
+  int master = -1;
+  int slave = -1;
+  char name[256] = {};
+  ASSERT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
+  FdTarget t(FdTarget::Kind::kSerial, name, 115200, "pty");
+  ASSERT_FALSE(t.Open().has_value());
+  close(slave);
+  close(master);
+  EXPECT_FALSE(t.Send(wire::Bytes{1}));
+  EXPECT_FALSE(t.LinkLost().has_value()) << "a fresh hang-up is not yet a lost link";
+  const TimeNs deadline = t.Now() + 3 * FdTarget::kHangUpGraceNs;
+  while (!t.LinkLost() && t.Now() < deadline) {
+    EXPECT_FALSE(t.Send(wire::Bytes{1}));
+    usleep(20'000);
+  }
+  ASSERT_TRUE(t.LinkLost().has_value()) << "writes into a closed PTY were retried for good";
+  EXPECT_NE(t.LinkLost()->find("has been closed"), std::string::npos) << *t.LinkLost();
 }
 
 }  // namespace

@@ -262,6 +262,7 @@ bool FdTarget::Send(wire::ByteView bytes) {
                           ? send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL)
                           : write(fd_, bytes.data() + done, bytes.size() - done);
     if (w > 0) {
+      hung_up_since_ns_.reset();
       done += static_cast<size_t>(w);
       continue;
     }
@@ -271,7 +272,10 @@ bool FdTarget::Send(wire::ByteView bytes) {
       continue;
     }
     // EIO on a PTY whose other side is closed for now: the device may reopen it.
-    if (w < 0 && errno == EIO && kind_ == Kind::kSerial) return false;
+    if (w < 0 && errno == EIO && kind_ == Kind::kSerial) {
+      HungUp();
+      return false;
+    }
     return Lose(std::string("writing to the device failed: ") +
                 (w < 0 ? std::strerror(errno) : "nothing written"));
   }
@@ -285,12 +289,15 @@ bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
     uint8_t buf[4096];
     const ssize_t r = read(fd_, buf, sizeof buf);
     if (r > 0) {
+      hung_up_since_ns_.reset();
       out.insert(out.end(), buf, buf + r);
       return true;
     }
     if (r == 0) return Lose("the device closed the connection");
     // EIO: a PTY whose other side is closed for now (the device may reopen it).
     const bool hung_up = errno == EIO;
+    if (hung_up && !HungUp()) return false;
+    if (!hung_up) hung_up_since_ns_.reset();
     if (errno != EAGAIN && errno != EINTR && !hung_up) {
       return Lose(std::string("reading from the device failed: ") + std::strerror(errno));
     }
@@ -304,6 +311,15 @@ bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       poll(&p, 1, wait_ms);
     }
   }
+}
+
+bool FdTarget::HungUp() {
+  const TimeNs now = Now();
+  if (!hung_up_since_ns_) hung_up_since_ns_ = now;
+  if (now - *hung_up_since_ns_ < kHangUpGraceNs) return true;
+  return Lose("the far end of " + address_ + " has been closed for " +
+              std::to_string(kHangUpGraceNs / sim::kNsPerSecond) +
+              " s (the emulator serving it stopped, or the adapter was unplugged)");
 }
 
 // --- parsing -------------------------------------------------------------------------

@@ -137,7 +137,16 @@ class FdTarget final : public Target {
   bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
   std::optional<std::string> LinkLost() const override { return lost_; }
 
+  // A PTY or serial port whose far end has been closed (EIO on every read and
+  // write) for this long is lost: the emulator serving it died or the adapter
+  // was unplugged. Shorter hang-ups are waited out (a device that reopens).
+  static constexpr TimeNs kHangUpGraceNs = 3 * sim::kNsPerSecond;
+
  private:
+  // Notes an EIO (the far end closed) at Now(); loses the link once the
+  // hang-up has lasted kHangUpGraceNs. Returns false when it did.
+  bool HungUp();
+
   // Why a path that is not a terminal, character device or socket is refused.
   std::string NotADevice(const struct stat& st) const;
   // Marks the link lost for good (`why`: what happened) and returns false.
@@ -150,6 +159,7 @@ class FdTarget final : public Target {
   std::optional<std::string> lost_;
   int fd_ = -1;
   int64_t origin_ns_ = 0;  // steady_clock at Open()
+  std::optional<TimeNs> hung_up_since_ns_;  // first EIO of the current hang-up
 };
 
 // A parsed --target: "in-process:MODEL", "pty:PATH" (also "serial:PATH"),

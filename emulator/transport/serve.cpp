@@ -223,7 +223,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
         h.protocol = model->protocol;
         h.device = std::string(model->name);
         h.clock = "virtual";
-        h.note = "recorded by mocosim from " + d.endpoint;
+        h.note = "recorded by mocosim from " + s->server->Where();  // the bound port, not :0
         s->writer = std::make_unique<control::SessionWriter>(d.record_path, h);
         s->tap = std::make_unique<SessionTap>(*s->writer, model->protocol);
         s->tee.Add(s->tap.get());

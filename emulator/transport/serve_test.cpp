@@ -367,6 +367,30 @@ TEST(Serve, TcpLogLinesNameTheBoundPortNotPortZero) {
   EXPECT_TRUE(connected) << "no \"" << bound << ": host connected\" line";
 }
 
+TEST(Serve, ARecordingsHeaderNamesTheBoundPortNotPortZero) {
+  const fs::path dir = TempDir();
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig d;
+  d.endpoint = "tcp:127.0.0.1:0";
+  d.record_path = (dir / "rec.jsonl").string();
+  config.devices = {d};
+  uint16_t port = 0;
+  {
+    Emulator e(config, [](std::string_view) {});
+    port = e.server(0).tcp_port();
+    e.Start();
+    asio::post(e.io(), [&] { e.Stop(); });
+    e.Run();
+  }
+  std::ifstream in(dir / "rec.jsonl");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_NE(header.find("127.0.0.1:" + std::to_string(port)), std::string::npos) << header;
+  EXPECT_EQ(header.find("127.0.0.1:0\""), std::string::npos) << header;
+  fs::remove_all(dir);
+}
+
 TEST(Serve, WifiWithoutAnAddressListensOnLoopbackAndSaysSo) {
   const fs::path dir = TempDir();
   std::vector<std::string> lines;
