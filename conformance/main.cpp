@@ -402,15 +402,8 @@ int main(int argc, char** argv) {
   AddNumber(fuzz, "--max-failures", fuzz_max_failures, size_t{1}, size_t{1000},
             "Stop after this many distinct failures");
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return kExitUsage;
+  if (const auto exit_code = moco::cli::ParseCommandLine(app, argc, argv, kExitUsage)) {
+    return *exit_code;
   }
 
   if (*cases) {

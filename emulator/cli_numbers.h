@@ -93,6 +93,27 @@ CLI::Option* AddNumber(CLI::App* app, const std::string& name, T& value, T min, 
   return opt;
 }
 
+// Parses the command line. Every parse error (an unknown option, a missing or
+// unreadable file, a number out of range) is a usage error: the message is
+// printed and `usage_exit` returned; --help and --version print and return 0.
+// nullopt: parsed, go on.
+inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv,
+                                           int usage_exit = 2) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return usage_exit;
+  }
+  return std::nullopt;
+}
+
 // A file option given an empty value (`--json ""`, often an unset shell
 // variable) would silently mean "not given": refuse it as a usage error.
 inline CLI::Validator NonEmptyPath() {

@@ -407,20 +407,8 @@ int main(int argc, char** argv) {
 
   auto* models = app.add_subcommand("models", "List the device models that can be emulated");
 
-  // Every parse error (an unknown option, a missing or unreadable file, a
-  // number out of range) is a usage error, exit 2; --help and --version exit 0.
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return 2;
-  }
+  // A parse error is a usage error, exit 2; --help and --version exit 0.
+  if (const auto exit_code = moco::cli::ParseCommandLine(app, argc, argv)) return *exit_code;
 
   if (decode->parsed()) return Decode(session_path, !no_time, strict);
   if (plot->parsed()) {

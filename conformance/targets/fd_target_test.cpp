@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <thread>
 
 #include "conformance/runner/report.h"
@@ -175,17 +176,26 @@ TEST(FdTarget, APeerThatClosesIsALostLink) {
   EXPECT_FALSE(t.Send(wire::Bytes{1}));
 }
 
-// The emulator serving a PTY dies mid-run: reading the PTY then gives end of
-// file, and the link is lost at once (the run ends as a target error).
-TEST(FdTarget, APtyWhoseEmulatorDiedIsALostLink) {
+// A target opened on a new PTY's slave, whose far end is then closed (as an
+// emulator that died).
+std::unique_ptr<FdTarget> TargetOnAClosedPty() {
   int master = -1;
   int slave = -1;
   char name[256] = {};
-  ASSERT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
-  FdTarget t(FdTarget::Kind::kSerial, name, 115200, "pty");
-  ASSERT_FALSE(t.Open().has_value());
+  if (openpty(&master, &slave, name, nullptr, nullptr) != 0) return nullptr;
+  auto t = std::make_unique<FdTarget>(FdTarget::Kind::kSerial, name, 115200, "pty");
+  const bool opened = !t->Open().has_value();
   close(slave);
   close(master);
+  return opened ? std::move(t) : nullptr;
+}
+
+// The emulator serving a PTY dies mid-run: reading the PTY then gives end of
+// file, and the link is lost at once (the run ends as a target error).
+TEST(FdTarget, APtyWhoseEmulatorDiedIsALostLink) {
+  const std::unique_ptr<FdTarget> target = TargetOnAClosedPty();
+  ASSERT_NE(target, nullptr);
+  FdTarget& t = *target;
   wire::Bytes got;
   EXPECT_FALSE(t.Receive(t.Now() + 10 * sim::kNsPerSecond, got));
   ASSERT_TRUE(t.LinkLost().has_value());
@@ -196,14 +206,9 @@ TEST(FdTarget, APtyWhoseEmulatorDiedIsALostLink) {
 // waited out (the far end may reopen), one that lasts the grace period loses
 // the link, so a host that only writes does not retry forever.
 TEST(FdTarget, WritesToAPtyClosedForTheGracePeriodLoseTheLink) {
-  int master = -1;
-  int slave = -1;
-  char name[256] = {};
-  ASSERT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
-  FdTarget t(FdTarget::Kind::kSerial, name, 115200, "pty");
-  ASSERT_FALSE(t.Open().has_value());
-  close(slave);
-  close(master);
+  const std::unique_ptr<FdTarget> target = TargetOnAClosedPty();
+  ASSERT_NE(target, nullptr);
+  FdTarget& t = *target;
   EXPECT_FALSE(t.Send(wire::Bytes{1}));
   EXPECT_FALSE(t.LinkLost().has_value()) << "a fresh hang-up is not yet a lost link";
   const TimeNs deadline = t.Now() + 3 * FdTarget::kHangUpGraceNs;
