@@ -14,15 +14,17 @@
 
 namespace moco::devices::testing {
 
-// Records each Write as one chunk with its time.
-class RecordingSink final : public ByteSink {
+// Records each Write as one chunk with its time (named apart from the DMC-16
+// tests' frame-decoding RecordingSink: two classes of one name in one
+// namespace would break the one-definition rule in a binary holding both).
+class ChunkRecordingSink final : public ByteSink {
  public:
   struct Chunk {
     sim::TimeNs t_ns = 0;
     std::string bytes;
     bool operator==(const Chunk&) const = default;
   };
-  explicit RecordingSink(const sim::Scheduler& scheduler) : scheduler_(scheduler) {}
+  explicit ChunkRecordingSink(const sim::Scheduler& scheduler) : scheduler_(scheduler) {}
   void Write(wire::ByteView bytes) override {
     chunks.push_back(Chunk{scheduler_.Now(), std::string(bytes.begin(), bytes.end())});
   }
@@ -59,7 +61,7 @@ struct Bench {
   std::vector<TimedLine> TakeLines() {
     std::vector<TimedLine> out;
     for (; taken < sink.chunks.size(); ++taken) {
-      const RecordingSink::Chunk& c = sink.chunks[taken];
+      const ChunkRecordingSink::Chunk& c = sink.chunks[taken];
       pending += c.bytes;
       size_t pos = 0;
       while ((pos = pending.find("\r\n")) != std::string::npos) {
@@ -76,7 +78,7 @@ struct Bench {
   }
 
   sim::Scheduler sched;
-  RecordingSink sink;
+  ChunkRecordingSink sink;
   DfmocoArduino dev;
   size_t taken = 0;
   std::string pending;
