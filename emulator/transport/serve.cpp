@@ -13,6 +13,7 @@
 #include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
+#include "transport/file_state_store.h"
 #include "transport/link_faults.h"
 #include "transport/session_tap.h"
 #include "wire/transcript.h"
@@ -122,7 +123,7 @@ std::string DefaultStatePath(const std::string& name) {
 struct Emulator::Served {
   DeviceConfig config;
   bool default_state = false;  // state_path is DefaultStatePath(name)
-  std::unique_ptr<devices::FileStateStore> store;  // outlives `device`
+  std::unique_ptr<FileStateStore> store;  // outlives `device`
   std::unique_ptr<control::SessionWriter> writer;
   std::unique_ptr<SessionTap> tap;
   std::unique_ptr<DebugTap> debug;
@@ -202,7 +203,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
         throw std::runtime_error(d.name + ": " + e.what());
       }
       if (model->keeps_state) {
-        s->store = std::make_unique<devices::FileStateStore>(s->config.state_path);
+        s->store = std::make_unique<FileStateStore>(s->config.state_path);
         devices::StateLoad first;
         if (auto error = s->store->Open(&first)) throw ConfigError(d.name + ": " + *error);
         if (first.status == devices::StateLoad::Status::kCorrupt) {
