@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "conformance/runner/runner.h"
-#include "wire/xml_escape.h"
+#include "base/xml_escape.h"
 
 namespace moco::conformance {
 
@@ -29,8 +29,8 @@ std::string JunitReport(const RunReport& report);
 // failure, and a plot of reported motor positions.
 std::string HtmlReport(const RunReport& report);
 
-// XML/HTML escaping for the reports (wire/xml_escape.h).
-using wire::XmlEscape;
+// XML/HTML escaping for the reports (base/xml_escape.h).
+using base::XmlEscape;
 
 // Writes `text` as the whole file at `path` (base::WriteFileAtomically: a
 // regular file is replaced atomically, a device or FIFO such as /dev/null is

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "wire/xml_escape.h"
+#include "base/xml_escape.h"
 
 namespace moco::physics {
 namespace {
@@ -96,7 +96,7 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
 
   out += "<g id=\"" + id + "\">\n";
   out += "<text x=\"" + Num(left + width / 2) + "\" y=\"" + Num(top - 8) +
-         "\" text-anchor=\"middle\" font-size=\"13\">" + wire::XmlEscape(panel_title) + "</text>\n";
+         "\" text-anchor=\"middle\" font-size=\"13\">" + base::XmlEscape(panel_title) + "</text>\n";
   out += "<rect x=\"" + Num(left) + "\" y=\"" + Num(top) + "\" width=\"" + Num(width) +
          "\" height=\"" + Num(height) + "\" fill=\"none\" stroke=\"#888\"/>\n";
   const double step_x = NiceStep(rx.hi - rx.lo);
@@ -121,11 +121,11 @@ void Panel(std::string& out, const std::string& id, double left, double top, dou
            Num(std::abs(t) < step_y / 1e6 ? 0.0 : t, "%.4g") + "</text>\n";
   }
   out += "<text x=\"" + Num(left + width / 2) + "\" y=\"" + Num(top + height + 36) +
-         "\" text-anchor=\"middle\">" + wire::XmlEscape(x_title) + "</text>\n";
+         "\" text-anchor=\"middle\">" + base::XmlEscape(x_title) + "</text>\n";
   const double ty = top + height / 2;
   out += "<text x=\"" + Num(left - 48) + "\" y=\"" + Num(ty) + "\" text-anchor=\"middle\"" +
          " transform=\"rotate(-90 " + Num(left - 48) + " " + Num(ty) + ")\">" +
-         wire::XmlEscape(y_title) + "</text>\n";
+         base::XmlEscape(y_title) + "</text>\n";
   for (const Series& s : series) {
     std::string d;
     const size_t n = s.xs.size();
@@ -165,10 +165,10 @@ std::string RigPathSvg(const std::vector<RigPathSample>& samples, std::string_vi
   out += "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + Num(kWidth, "%.0f") +
          "\" height=\"" + Num(kHeight, "%.0f") + "\" viewBox=\"0 0 " + Num(kWidth, "%.0f") + " " +
          Num(kHeight, "%.0f") + "\" font-family=\"sans-serif\" font-size=\"11\">\n";
-  out += "<title>" + wire::XmlEscape(title) + "</title>\n";
+  out += "<title>" + base::XmlEscape(title) + "</title>\n";
   out += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   out += "<text x=\"" + Num(kWidth / 2) + "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" +
-         wire::XmlEscape(title) + "</text>\n";
+         base::XmlEscape(title) + "</text>\n";
   // Legend.
   out += "<g id=\"legend\">\n";
   out += std::string("<line x1=\"360\" y1=\"40\" x2=\"400\" y2=\"40\" stroke=\"") +

@@ -1,7 +1,7 @@
 // XML/HTML text escaping (xml_escape.h).
-#include "wire/xml_escape.h"
+#include "base/xml_escape.h"
 
-namespace moco::wire {
+namespace moco::base {
 
 std::string XmlEscape(std::string_view s) {
   std::string out;
@@ -35,4 +35,4 @@ std::string XmlEscape(std::string_view s) {
   return out;
 }
 
-}  // namespace moco::wire
+}  // namespace moco::base

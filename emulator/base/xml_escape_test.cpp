@@ -1,13 +1,13 @@
 // XmlEscape (xml_escape.h): entities for markup, '?' for the control
 // characters XML 1.0 forbids, everything else unchanged.
-#include "wire/xml_escape.h"
+#include "base/xml_escape.h"
 
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
 #include <string>
 
-namespace moco::wire {
+namespace moco::base {
 namespace {
 
 TEST(XmlEscape, MarkupBecomesEntities) {
@@ -63,4 +63,4 @@ RC_GTEST_PROP(XmlEscape, OutputIsSafeAndUnescapesToTheInput, (const std::string&
 }
 
 }  // namespace
-}  // namespace moco::wire
+}  // namespace moco::base
