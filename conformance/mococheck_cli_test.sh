@@ -10,27 +10,9 @@ m=$2
 sim=$3
 work=$4/$test_name
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+# shellcheck source=../tools/cli_test_lib.sh
+. "$5/tools/cli_test_lib.sh"
 
-fail() {
-  echo "FAIL: $*" >&2
-  for f in *.txt *.log; do [ -f "$f" ] && { echo "--- $f" >&2; cat "$f" >&2; }; done
-  cleanup
-  exit 1
-}
-pids=""
-cleanup() {
-  for p in $pids; do kill -9 "$p" 2>/dev/null; done
-}
-trap cleanup EXIT
-# wait_for CMD...: polls CMD up to 600 times, 0.1 s apart.
-wait_for() {
-  i=0
-  while ! "$@" >/dev/null 2>&1; do
-    i=$((i + 1))
-    [ $i -gt 600 ] && return 1
-    sleep 0.1
-  done
-}
 # Starts `mocosim dmc16 --tcp 127.0.0.1:0` logging to sim.log; sets sim_pid, port.
 start_device() {
   "$sim" dmc16 --tcp 127.0.0.1:0 --no-pacing "$@" >sim.log 2>&1 &
@@ -39,14 +21,6 @@ start_device() {
   wait_for grep -q ' on tcp 127.0.0.1:' sim.log || fail "mocosim did not start"
   port=$(sed -n 's/.* on tcp 127\.0\.0\.1:\([0-9]*\).*/\1/p' sim.log | head -1)
   [ -n "$port" ] || fail "no port in the log"
-}
-# expect_rc WANT CMD...: runs CMD (stdout out.txt, stderr err.txt), checks its status.
-expect_rc() {
-  want=$1
-  shift
-  "$@" >out.txt 2>err.txt
-  got=$?
-  [ "$got" = "$want" ] || fail "exit $got, not $want: $*"
 }
 
 case "$test_name" in

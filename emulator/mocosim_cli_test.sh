@@ -10,34 +10,8 @@ sim=$2
 work=$3/$test_name
 src=$4
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
-
-pids=""
-cleanup() {
-  for p in $pids; do kill -9 "$p" 2>/dev/null; done
-}
-trap cleanup EXIT
-fail() {
-  echo "FAIL: $*" >&2
-  for f in *.txt *.log; do [ -f "$f" ] && { echo "--- $f" >&2; cat "$f" >&2; }; done
-  cleanup
-  exit 1
-}
-# wait_for CMD...: polls CMD up to 600 times, 0.1 s apart.
-wait_for() {
-  i=0
-  while ! "$@" >/dev/null 2>&1; do
-    i=$((i + 1))
-    [ $i -gt 600 ] && return 1
-    sleep 0.1
-  done
-}
-expect_rc() {
-  want=$1
-  shift
-  "$@" >out.txt 2>err.txt
-  got=$?
-  [ "$got" = "$want" ] || fail "exit $got, not $want: $*"
-}
+# shellcheck source=../tools/cli_test_lib.sh
+. "$src/tools/cli_test_lib.sh"
 
 case "$test_name" in
 
