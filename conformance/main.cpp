@@ -14,7 +14,6 @@
 #include <map>
 #include <set>
 
-#include <sys/stat.h>
 #include <unistd.h>
 #include <string>
 
@@ -53,38 +52,6 @@ bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
   index = *i - 1;
   count = *n;
   return true;
-}
-
-// Why a report cannot be written at `path` ("" when it can, as far as can be
-// told before the run): a directory, a missing or unwritable directory to
-// create it in, or an existing special file that is not writable.
-std::string ReportPathProblem(const std::string& option, const std::string& path) {
-  namespace fs = std::filesystem;
-  if (path.empty()) return option + " needs a file name";
-  struct stat st {};
-  if (stat(path.c_str(), &st) == 0) {
-    if (S_ISDIR(st.st_mode)) {
-      return option + " " + path + " is a directory; give a file name, e.g. " +
-             (fs::path(path) / "report").string();
-    }
-    if (!S_ISREG(st.st_mode)) {
-      return access(path.c_str(), W_OK) == 0
-                 ? ""
-                 : option + " " + path + " cannot be written: " + std::strerror(errno);
-    }
-  }
-  // A regular file is replaced through a temporary file beside it.
-  const fs::path parent = fs::path(path).parent_path();
-  const std::string dir = parent.empty() ? "." : parent.string();
-  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    return option + " " + path + ": the directory " + dir +
-           " does not exist; create it first or give another path";
-  }
-  if (access(dir.c_str(), W_OK | X_OK) != 0) {
-    return option + " " + path + ": the directory " + dir + " is not writable (" +
-           std::strerror(errno) + "); give a path in a writable directory";
-  }
-  return "";
 }
 
 // SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops after the
@@ -318,9 +285,8 @@ int main(int argc, char** argv) {
   run->add_option("--json", json_path, "Write a JSON report here")
       ->check(moco::cli::NonEmptyPath());
   std::string html_path;
-  run->add_option(
-      "--html", html_path,
-      "Write a self-contained HTML report here (evidence, transcripts, position plots)")
+  run->add_option("--html", html_path,
+                  "Write a self-contained HTML report here (evidence, transcripts, position plots)")
       ->check(moco::cli::NonEmptyPath());
   run->add_option("--shard", shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
@@ -516,15 +482,14 @@ int main(int argc, char** argv) {
   // Every output is checked before the run, not after it (docs/files.md).
   {
     const std::vector<std::pair<std::string, std::string>> outputs = {
-        {"--junit", junit}, {"--html", html_path}, {"--json", json_path},
+        {"--junit", junit},
+        {"--html", html_path},
+        {"--json", json_path},
         {"--save-session", session_path}};
     for (size_t i = 0; i < outputs.size(); ++i) {
       const auto& [option, path] = outputs[i];
       if (path.empty()) continue;
       if (auto err = moco::base::CheckOutputPath(path, option)) return Fail(*err);
-      if (std::string problem = ReportPathProblem(option, path); !problem.empty()) {
-        return Fail(problem);
-      }
       if (!profile.empty() && moco::base::SameFile(path, profile)) {
         return Fail(option + " " + path + " is the --profile; writing it would destroy the " +
                     "profile: choose another path for " + option);

@@ -141,9 +141,16 @@ std::optional<std::string> ResolveOutput(const std::string& path, OutputTarget* 
 }
 
 std::optional<std::string> CheckOutputPath(const std::string& path, std::string_view what) {
+  const std::string prefix = std::string(what) + (what.empty() ? "" : " ");
   OutputTarget target;
-  if (auto error = ResolveOutput(path, &target)) {
-    return std::string(what) + (what.empty() ? "" : " ") + *error;
+  if (auto error = ResolveOutput(path, &target)) return prefix + *error;
+  // A device or FIFO is written in place; a file is made beside its target.
+  const bool in_place = target.kind == PathKind::kCharDevice || target.kind == PathKind::kFifo;
+  const std::string need = in_place ? target.path : ParentOf(target.path);
+  if (::access(need.c_str(), in_place ? W_OK : W_OK | X_OK) != 0) {
+    const int e = errno;
+    return prefix + path + ": " + (in_place ? "" : "the directory ") + need + " is not writable (" +
+           Errno(e) + "); give a path " + (in_place ? "you can write" : "in a writable directory");
   }
   return std::nullopt;
 }
@@ -194,8 +201,7 @@ std::optional<std::string> OutputFile::Open(const std::string& path) {
   for (int attempt = 0; attempt < 100; ++attempt) {
     const std::string name = target_.path + ".partial-" + std::to_string(::getpid()) + "-" +
                              std::to_string(temporary_counter.fetch_add(1));
-    const int fd =
-        ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd < 0) {
       if (errno == EEXIST) continue;
       return "cannot write " + path + ": " + Errno(errno) + " (creating " + name + ")";
@@ -250,8 +256,8 @@ std::optional<std::string> OutputFile::Commit(bool sync) {
     return error;
   }
   if (::rename(temporary_.c_str(), target_.path.c_str()) != 0) {
-    error_ = "cannot write " + path_ + ": " + Errno(errno) + " (renaming " + temporary_ +
-             " to " + target_.path + ")";
+    error_ = "cannot write " + path_ + ": " + Errno(errno) + " (renaming " + temporary_ + " to " +
+             target_.path + ")";
     const std::string error = error_;
     Abandon();
     return error;
@@ -379,7 +385,8 @@ std::optional<std::string> ReadFileBounded(const std::string& path, std::string*
 // --- identity, copies, locks -------------------------------------------------------------------
 
 bool SameFile(const std::string& a, const std::string& b) {
-  struct stat sa {}, sb {};
+  struct stat sa {
+  }, sb{};
   const bool a_exists = ::stat(a.c_str(), &sa) == 0;
   const bool b_exists = ::stat(b.c_str(), &sb) == 0;
   if (a_exists && b_exists) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;

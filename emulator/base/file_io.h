@@ -39,7 +39,9 @@ struct OutputTarget {
 // loop, a new file in a directory that does not exist. Never throws.
 std::optional<std::string> ResolveOutput(const std::string& path, OutputTarget* out);
 
-// ResolveOutput without the result: the check every program makes at start,
+// ResolveOutput without the result, and the write permission it needs (the
+// target's directory for a file, the target itself for a device or FIFO):
+// the check every program makes at start,
 // before any run, for each file it will write (`what`: "--junit", ...).
 std::optional<std::string> CheckOutputPath(const std::string& path, std::string_view what);
 
@@ -76,8 +78,8 @@ class OutputFile {
   void Abandon();
 
   bool is_open() const { return fd_ >= 0; }
-  const std::string& path() const { return path_; }                // as given
-  const std::string& target() const { return target_.path; }       // symlinks followed
+  const std::string& path() const { return path_; }                 // as given
+  const std::string& target() const { return target_.path; }        // symlinks followed
   const std::string& temporary_path() const { return temporary_; }  // empty: in place
   bool in_place() const { return is_open() && temporary_.empty(); }
   // An existing regular file is (or was, once committed) replaced.
