@@ -293,7 +293,8 @@ bool FdTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       out.insert(out.end(), buf, buf + r);
       return true;
     }
-    if (r == 0) return Lose("the device closed the connection");
+    // A reset (a device killed with bytes still unread) is a close too.
+    if (r == 0 || (r < 0 && errno == ECONNRESET)) return Lose("the device closed the connection");
     // EIO: a PTY whose other side is closed for now (the device may reopen it).
     const bool hung_up = errno == EIO;
     if (hung_up && !HungUp()) return false;
