@@ -129,16 +129,28 @@ TEST(FdTarget, APathThatIsNotADeviceIsRefusedAndNeverWritten) {
   fs::remove_all(dir);
 }
 
-TEST(FdTarget, APeerThatHangsUpIsALostLinkNotASigpipe) {
+// A TCP listener on 127.0.0.1 at a free port (written to `port`); -1 on failure.
+int ListenOnLoopback(uint16_t* port) {
   const int listener = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  ASSERT_EQ(listen(listener, 1), 0);
   socklen_t len = sizeof a;
-  getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
-  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  if (listener < 0 || bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      listen(listener, 1) != 0 ||
+      getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    if (listener >= 0) close(listener);
+    return -1;
+  }
+  *port = ntohs(a.sin_port);
+  return listener;
+}
+
+TEST(FdTarget, APeerThatHangsUpIsALostLinkNotASigpipe) {
+  uint16_t port = 0;
+  const int listener = ListenOnLoopback(&port);
+  ASSERT_GE(listener, 0);
+  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(port));
   ASSERT_FALSE(t.Open().has_value());
   EXPECT_EQ(t.Name().rfind("tcp:127.0.0.1:", 0), 0u) << t.Name();
   close(accept(listener, nullptr, nullptr));  // the device hangs up at once
@@ -157,15 +169,10 @@ TEST(FdTarget, APeerThatHangsUpIsALostLinkNotASigpipe) {
 }
 
 TEST(FdTarget, APeerThatClosesIsALostLink) {
-  const int listener = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(bind(listener, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  ASSERT_EQ(listen(listener, 1), 0);
-  socklen_t len = sizeof a;
-  getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
-  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  uint16_t port = 0;
+  const int listener = ListenOnLoopback(&port);
+  ASSERT_GE(listener, 0);
+  FdTarget t(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(port));
   ASSERT_FALSE(t.Open().has_value());
   close(accept(listener, nullptr, nullptr));
   close(listener);

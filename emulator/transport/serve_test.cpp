@@ -466,15 +466,18 @@ TEST(RunConfig, ParsesDevicesAndResolvesRelativePaths) {
   EXPECT_TRUE(c.devices[1].no_pacing);
 }
 
+// The error ParseRunConfig gives for the run file `text` ("" if it takes it).
+std::string RunConfigErrorOf(const char* text) {
+  try {
+    ParseRunConfig(nlohmann::json::parse(text), "run file r.json", "/b");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(RunConfig, ErrorsNameTheField) {
-  auto error_of = [](const char* text) {
-    try {
-      ParseRunConfig(nlohmann::json::parse(text), "run file r.json", "/b");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto error_of = RunConfigErrorOf;
   EXPECT_NE(error_of(R"({})").find("\"devices\" is missing"), std::string::npos);
   EXPECT_NE(error_of(R"({"devices": [{"model": "dmc99", "endpoint": "tcp:1"}]})")
                 .find("devices[0].model"),
@@ -591,7 +594,8 @@ TEST(ServeFiles, ReplacingAnExistingRecordingIsLogged) {
     Emulator e(c, [&log](std::string_view l) { log.emplace_back(l); });
   }
   bool said = false;
-  for (const std::string& l : log) said |= l.find("rec.jsonl exists; the recording replaces it") != std::string::npos;
+  for (const std::string& l : log)
+    said |= l.find("rec.jsonl exists; the recording replaces it") != std::string::npos;
   EXPECT_TRUE(said);
   fs::remove_all(dir);
 }
@@ -634,7 +638,9 @@ TEST(ServeFiles, ACorruptStateFileIsWarnedOnTheConsoleAndKept) {
   d.state_path = (dir / "nvm.json").string();
   c.devices = {d};
   std::vector<std::string> log;
-  { Emulator e(c, [&log](std::string_view l) { log.emplace_back(l); }); }
+  {
+    Emulator e(c, [&log](std::string_view l) { log.emplace_back(l); });
+  }
   bool warned = false;
   for (const std::string& l : log) {
     warned |= l.find(d.state_path + " is not valid JSON") != std::string::npos &&
@@ -682,14 +688,7 @@ TEST(ServeFiles, RunFilesAreReadBoundedAndDevicesRefused) {
 }
 
 TEST(RunConfig, ErrorsSpeakOfTheRunFileAndItsDocumentNotAProfile) {
-  auto error_of = [](const char* text) {
-    try {
-      ParseRunConfig(nlohmann::json::parse(text), "run file r.json", "/b");
-    } catch (const ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto error_of = RunConfigErrorOf;
   for (const char* text : {R"({"devices": [{"endpoint": "tcp:1"}], "devics": 1})",
                            R"({"devices": [{"endpoint": "tcp:1", "x": 1}]})", R"([1])"}) {
     const std::string e = error_of(text);
