@@ -363,21 +363,23 @@ int main(int argc, char** argv) {
                      "Device profile (JSON; default: built-in, as " +
                          std::string(model.default_profile) + "; fields in docs/profiles.md)")
         ->check(CLI::ExistingFile);
-    o->cmd->add_option("--record", o->config.record_path,
-                       "Record every byte in and out with its time and decoded message to this "
-                       "session file (.jsonl, docs/sessions.md; completed on exit)")
+    o->cmd
+        ->add_option("--record", o->config.record_path,
+                     "Record every byte in and out with its time and decoded message to this "
+                     "session file (.jsonl, docs/sessions.md; completed on exit)")
         ->check(moco::cli::NonEmptyPath());
-    o->cmd->add_option("--control", o->control_path,
-                       "Serve the JSON-lines control socket at this path (e-stop, limits, "
-                       "inputs, power, faults, state; docs/control.md)")
+    o->cmd
+        ->add_option("--control", o->control_path,
+                     "Serve the JSON-lines control socket at this path (e-stop, limits, "
+                     "inputs, power, faults, state; docs/control.md)")
         ->check(moco::cli::NonEmptyPath());
     if (model.keeps_state) {
-      o->cmd->add_option(
-          "--state", o->config.state_path,
-          "File keeping the device's NVM (settings, slots, serial number, log) "
-          "across runs, written atomically (default: "
-          "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)")
-        ->check(moco::cli::NonEmptyPath());
+      o->cmd
+          ->add_option("--state", o->config.state_path,
+                       "File keeping the device's NVM (settings, slots, serial number, log) "
+                       "across runs, written atomically (default: "
+                       "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)")
+          ->check(moco::cli::NonEmptyPath());
     }
     o->cmd
         ->add_option("--scenario", o->scenario_path,

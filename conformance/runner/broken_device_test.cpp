@@ -5,9 +5,9 @@
 #include <rapidcheck/gtest.h>
 
 #include <cstdio>
-#include <fstream>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"

@@ -7,8 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "conformance/runner/runner.h"
 #include "base/xml_escape.h"
+#include "conformance/runner/runner.h"
 
 namespace moco::conformance {
 

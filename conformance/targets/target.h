@@ -158,7 +158,7 @@ class FdTarget final : public Target {
   std::string scheme_;
   std::optional<std::string> lost_;
   int fd_ = -1;
-  int64_t origin_ns_ = 0;  // steady_clock at Open()
+  int64_t origin_ns_ = 0;                   // steady_clock at Open()
   std::optional<TimeNs> hung_up_since_ns_;  // first EIO of the current hang-up
 };
 

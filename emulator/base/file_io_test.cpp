@@ -18,10 +18,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -62,9 +62,7 @@ std::string Read(const fs::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-void Put(const fs::path& p, const std::string& text) {
-  std::ofstream(p, std::ios::binary) << text;
-}
+void Put(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
 // Reads a FIFO to its end on a thread (opening it blocks until a writer comes).
 class FifoReader {
@@ -232,8 +230,8 @@ TEST(WriteFile, ASymlinkPlantedAtTheTemporaryNameIsSkippedNotFollowed) {
   const fs::path p = dir.path() / "rec.jsonl";
   const uint64_t next = internal::NextTemporaryNumber();
   for (uint64_t n = next; n < next + 5; ++n) {
-    fs::create_symlink(victim, p.string() + ".partial-" + std::to_string(::getpid()) + "-" +
-                                   std::to_string(n));
+    fs::create_symlink(
+        victim, p.string() + ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(n));
   }
   EXPECT_EQ(WriteFileAtomically(p.string(), "recording"), std::nullopt);
   EXPECT_EQ(Read(victim), "precious");
@@ -282,9 +280,9 @@ TEST(ReadFileBounded, ReadsAWholeFile) {
 TEST(ReadFileBounded, MissingDirectoryAndDeviceAreRefusedWithAReason) {
   TempDir dir;
   std::string text;
-  EXPECT_NE(ReadFileBounded((dir.path() / "none").string(), &text).value_or("").find(
-                "does not exist"),
-            std::string::npos);
+  EXPECT_NE(
+      ReadFileBounded((dir.path() / "none").string(), &text).value_or("").find("does not exist"),
+      std::string::npos);
   EXPECT_NE(ReadFileBounded(dir.path().string(), &text).value_or("").find("is a directory"),
             std::string::npos);
   // /dev/zero never ends: it is refused before a byte is read.
@@ -335,7 +333,8 @@ TEST(ReadFileBounded, ALineOverItsLimitIsRefusedNamingTheLine) {
   EXPECT_NE(error->find("line 3"), std::string::npos) << *error;
 }
 
-// --- identity, copies, locks ----------------------------------------------------------------------
+// --- identity, copies, locks
+// ----------------------------------------------------------------------
 
 TEST(SameFile, TheSameInodeByAnyNameAndTheSameNewPath) {
   TempDir dir;

@@ -278,8 +278,8 @@ TEST(SessionWriterFiles, ASymlinkPlantedAtThePartialNameIsNeverWrittenThrough) {
   const fs::path path = dir.path() / "s.jsonl";
   const uint64_t next = base::internal::NextTemporaryNumber();
   for (uint64_t n = next; n < next + 3; ++n) {
-    fs::create_symlink(victim, path.string() + ".partial-" + std::to_string(::getpid()) + "-" +
-                                   std::to_string(n));
+    fs::create_symlink(
+        victim, path.string() + ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(n));
   }
   // The old fixed name too.
   fs::create_symlink(victim, path.string() + ".partial");
@@ -304,8 +304,8 @@ TEST(SessionWriterFiles, ReplacingAnExistingRecordingIsKnownAtOpen) {
 
 TEST(SessionReaderFiles, DevicesDirectoriesAndEndlessLinesAreRefusedNotRead) {
   RecordDir dir;
-  for (const std::string& p : {std::string("/dev/zero"), dir.path().string(),
-                               (dir.path() / "missing.jsonl").string()}) {
+  for (const std::string& p :
+       {std::string("/dev/zero"), dir.path().string(), (dir.path() / "missing.jsonl").string()}) {
     const auto r = LoadSession(p);
     ASSERT_TRUE(std::holds_alternative<SessionError>(r)) << p;
     EXPECT_NE(std::get<SessionError>(r).message.find(p), std::string::npos)

@@ -29,8 +29,7 @@ const DeviceModel* FindDeviceModel(std::string_view name) {
 }
 
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
-                                     sim::Scheduler& scheduler, ByteSink& out,
-                                     StateStore* state) {
+                                     sim::Scheduler& scheduler, ByteSink& out, StateStore* state) {
   if (model == "dmc16") {
     Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
     return std::make_unique<Dmc16>(scheduler, out, std::move(profile));

@@ -13,14 +13,14 @@
 #include <sys/resource.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cerrno>
 #include <cstring>
-#include <optional>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -85,8 +85,8 @@ void ReadAnswers(int fd, const std::atomic<uint64_t>& sent, const std::atomic<bo
   for (;;) {
     auto f = reader.Next(200);
     if (!f) {
-      if (done.load() && (expect >= sent.load() ||
-                          Clock::now() - last_progress > std::chrono::seconds(3))) {
+      if (done.load() &&
+          (expect >= sent.load() || Clock::now() - last_progress > std::chrono::seconds(3))) {
         break;
       }
       continue;
@@ -191,7 +191,7 @@ long RecordingProblems(const std::filesystem::path& path, size_t* entries) {
   for (const auto& e : session->entries) {
     if (e.is_event) continue;
     count(decoder.Feed(e.from == moco::control::Origin::kHost ? moco::wire::Side::kHost
-                                                               : moco::wire::Side::kDevice,
+                                                              : moco::wire::Side::kDevice,
                        e.bytes));
   }
   count(decoder.Finish());
@@ -202,13 +202,14 @@ long RecordingProblems(const std::filesystem::path& path, size_t* entries) {
 }  // namespace
 
 int Usage() {
-  std::fprintf(stderr,
-               "usage: dmc16_soak [--seconds S] [--devices N] [--rate R]\n"
-               "       dmc16_soak --pacing [--ahead A] [--record] [--seconds S] [--devices N]\n"
-               "  --rate R    unpaced lines, R requests/s per device, one per write (default 2000)\n"
-               "  --pacing    lines paced at the device's baud rate; the host writes up to A\n"
-               "              unanswered requests ahead (default 2000), up to 500 per write\n"
-               "  --record    record every device's session and decode each strictly\n");
+  std::fprintf(
+      stderr,
+      "usage: dmc16_soak [--seconds S] [--devices N] [--rate R]\n"
+      "       dmc16_soak --pacing [--ahead A] [--record] [--seconds S] [--devices N]\n"
+      "  --rate R    unpaced lines, R requests/s per device, one per write (default 2000)\n"
+      "  --pacing    lines paced at the device's baud rate; the host writes up to A\n"
+      "              unanswered requests ahead (default 2000), up to 500 per write\n"
+      "  --record    record every device's session and decode each strictly\n");
   return 2;
 }
 
@@ -263,8 +264,10 @@ int main(int argc, char** argv) {
       return Usage();
     }
     if (!n) {
-      std::fprintf(stderr, "dmc16_soak: %s takes a whole number (devices 1..64, rate and ahead "
-                           "1..1000000)\n", a.c_str());
+      std::fprintf(stderr,
+                   "dmc16_soak: %s takes a whole number (devices 1..64, rate and ahead "
+                   "1..1000000)\n",
+                   a.c_str());
       return 2;
     }
   }
@@ -357,9 +360,10 @@ int main(int argc, char** argv) {
   }
   const uint64_t lost = all.sent - std::min(all.sent, all.answered);
   if (pacing) {
-    std::printf("dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, paced lines, host up to "
-                "%ld requests ahead\n",
-                devices, (devices + 1) / 2, devices / 2, elapsed, ahead);
+    std::printf(
+        "dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, paced lines, host up to "
+        "%ld requests ahead\n",
+        devices, (devices + 1) / 2, devices / 2, elapsed, ahead);
   } else {
     std::printf("dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, target %ld req/s each\n",
                 devices, (devices + 1) / 2, devices / 2, elapsed, rate);

@@ -26,7 +26,6 @@ using devices::testing::Write;
 using stackshot::Action;
 using stackshot::Command;
 
-
 class StateStoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -82,8 +81,7 @@ TEST_F(StateStoreTest, EveryCorruptFileIsKeptAsideNumberedNoneOverwritten) {
     FileStateStore store(path);
     const StateLoad l = store.Load();
     ASSERT_EQ(l.status, StateLoad::Status::kCorrupt) << texts[i];
-    const std::string copy =
-        store.CorruptPath().string() + (i == 0 ? "" : "." + std::to_string(i));
+    const std::string copy = store.CorruptPath().string() + (i == 0 ? "" : "." + std::to_string(i));
     EXPECT_NE(l.message.find(path.string()), std::string::npos) << l.message;
     EXPECT_NE(l.message.find(copy), std::string::npos) << l.message;
     EXPECT_FALSE(std::filesystem::exists(path));

@@ -124,8 +124,8 @@ std::string PassThroughLink(const std::string& data, const std::vector<size_t>& 
     if (write_next()) asio::post(io, trickle);
   };
   asio::post(io, trickle);
-  RunUntil(io, [&] { return device.received.size() >= data.size(); },
-           std::chrono::milliseconds(20000));
+  RunUntil(
+      io, [&] { return device.received.size() >= data.size(); }, std::chrono::milliseconds(20000));
   *overlapping = end.overlapping_reads;
   link.Stop();
   return device.received;
@@ -136,8 +136,8 @@ RC_GTEST_PROP(LinkOrderTest, EveryHostByteReachesTheDeviceOnceAndInOrderPacedOrN
   // writing it at once runs far ahead of the line rate.
   const auto size = *rc::gen::inRange<size_t>(1, 24 * 1024);
   const auto data = *rc::gen::container<std::string>(size, rc::gen::arbitrary<char>());
-  const auto write_sizes =
-      *rc::gen::nonEmpty(rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 9000)));
+  const auto write_sizes = *rc::gen::nonEmpty(
+      rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 9000)));
   const auto ahead = *rc::gen::inRange<size_t>(0, 64);
   const auto max_read = *rc::gen::elementOf(std::vector<size_t>{1, 7, 512, 4095, 4096, 65536});
   // 0: unpaced. Paced rates are high so that a case takes milliseconds; the
@@ -183,8 +183,8 @@ TEST(LinkOrderTest, RealSocketWrittenFarAheadOfThePacedLineArrivesIntact) {
       at += static_cast<size_t>(w);
     }
   });
-  const bool all = RunUntil(io, [&] { return device.received.size() >= data.size(); },
-                            std::chrono::milliseconds(30000));
+  const bool all = RunUntil(
+      io, [&] { return device.received.size() >= data.size(); }, std::chrono::milliseconds(30000));
   host.join();
   link.Stop();
   ::close(fds[1]);

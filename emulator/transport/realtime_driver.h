@@ -42,14 +42,14 @@ class RealtimeDriver {
   bool running() const { return started_ && !stopped_; }
 
   // Runs the events due by the wall clock (one slice), then arms the timer at
-  // the next pending event (at once when the slice left some due). Cheap when nothing changed. No-op before Start(), after
-  // Stop(), and inside a scheduler callback.
+  // the next pending event (at once when the slice left some due). Cheap when nothing changed.
+  // No-op before Start(), after Stop(), and inside a scheduler callback.
   void Kick();
 
   // Advances the scheduler to the wall clock (running the events due by then,
-  // at most one slice: see kMaxSliceEvents) and returns its Now(). Call before handing the device anything from
-  // outside the scheduler, so the device sees a current time. Inside a
-  // scheduler callback, returns the scheduler's Now() unchanged.
+  // at most one slice: see kMaxSliceEvents) and returns its Now(). Call before handing the device
+  // anything from outside the scheduler, so the device sees a current time. Inside a scheduler
+  // callback, returns the scheduler's Now() unchanged.
   sim::TimeNs Sync();
 
   // The scheduler time of the wall clock now: non-decreasing, and never less

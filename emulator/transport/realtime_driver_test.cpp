@@ -152,10 +152,10 @@ TEST(RealtimeDriverTest, ABacklogOfDueEventsYieldsToSignalsBetweenSlices) {
   ASSERT_EQ(::raise(SIGUSR1), 0);
   d.Start();
   EXPECT_LE(order.size(), RealtimeDriver::kMaxSliceEvents) << "Start ran past one slice";
-  ASSERT_TRUE(RunUntil(io, [&] { return order.size() == kEvents && ran_at_signal != SIZE_MAX; },
-                       std::chrono::milliseconds(30000)));
-  EXPECT_LT(ran_at_signal, static_cast<size_t>(kEvents / 2))
-      << "the signal waited for the backlog";
+  ASSERT_TRUE(RunUntil(
+      io, [&] { return order.size() == kEvents && ran_at_signal != SIZE_MAX; },
+      std::chrono::milliseconds(30000)));
+  EXPECT_LT(ran_at_signal, static_cast<size_t>(kEvents / 2)) << "the signal waited for the backlog";
   EXPECT_GT(d.catch_up_slices(), 0u);
   for (int i = 0; i < kEvents; ++i) ASSERT_EQ(order[static_cast<size_t>(i)], i);
 }

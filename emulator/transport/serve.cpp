@@ -91,7 +91,8 @@ void CheckFiles(const EmulatorConfig& c) {
     for (size_t j = i + 1; j < outputs.size(); ++j) {
       if (base::SameFile(outputs[i].path, outputs[j].path)) {
         throw ConfigError(outputs[j].path + " is both " + outputs[i].role + " and " +
-                          outputs[j].role + "; one would overwrite the other: give each its "
+                          outputs[j].role +
+                          "; one would overwrite the other: give each its "
                           "own file");
       }
     }
@@ -122,7 +123,7 @@ std::string DefaultStatePath(const std::string& name) {
 
 struct Emulator::Served {
   DeviceConfig config;
-  bool default_state = false;  // state_path is DefaultStatePath(name)
+  bool default_state = false;             // state_path is DefaultStatePath(name)
   std::unique_ptr<FileStateStore> store;  // outlives `device`
   std::unique_ptr<control::SessionWriter> writer;
   std::unique_ptr<SessionTap> tap;
@@ -331,9 +332,9 @@ void Emulator::Stop() {
         Log(LogLevel::kError, s->config.name + ": recording not completed: " + error);
         exit_code_ = 1;
       } else {
-        Log(LogLevel::kInfo, s->config.name + ": recorded " + s->writer->path().string() +
-                                 (s->writer->replaces_existing() ? " (replacing the previous file)"
-                                                                 : ""));
+        Log(LogLevel::kInfo,
+            s->config.name + ": recorded " + s->writer->path().string() +
+                (s->writer->replaces_existing() ? " (replacing the previous file)" : ""));
       }
     }
   }

@@ -12,15 +12,14 @@
 
 #include <nlohmann/json.hpp>
 
-
 namespace moco::devices {
 
 // The outcome of reading a store.
 struct StateLoad {
   enum class Status : uint8_t {
-    kEmpty,    // nothing stored yet: start from factory defaults
-    kLoaded,   // `state` holds what was saved
-    kCorrupt,  // something was stored but cannot be read; `message` says what
+    kEmpty,        // nothing stored yet: start from factory defaults
+    kLoaded,       // `state` holds what was saved
+    kCorrupt,      // something was stored but cannot be read; `message` says what
     kUnsupported,  // stored by a format version this program does not read; left
                    // untouched and never overwritten; `message` says what and the fix
   };
