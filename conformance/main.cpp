@@ -84,17 +84,8 @@ std::string ModelOfSessionDevice(const std::string& device) {
   return "";
 }
 
-uint32_t DefaultBaud(Protocol p) {
-  switch (p) {
-    case Protocol::kDfmoco:
-      return 57600;
-    case Protocol::kStackshot:
-      return 38400;
-    case Protocol::kDmc:
-      break;
-  }
-  return 115200;
-}
+// The protocol's own line rate when --baud is 0.
+uint32_t DefaultBaud(Protocol p) { return moco::wire::Info(p).line.baud; }
 
 int RunReplay(const std::string& path, std::string target_text, const std::string& profile,
               uint32_t baud, int64_t steps, int64_t ms) {
@@ -107,11 +98,11 @@ int RunReplay(const std::string& path, std::string target_text, const std::strin
   if (const std::string w = moco::control::SessionWarning(session); !w.empty()) {
     std::fprintf(stderr, "mococheck: %s: %s\n", path.c_str(), w.c_str());
   }
-  const auto proto = ParseProtocol(moco::wire::ProtocolName(session.header.protocol));
-  if (!proto) {
-    return Fail(path + ": protocol " +
-                std::string(moco::wire::ProtocolName(session.header.protocol)) +
-                " cannot be replayed; sessions in dmc, dfmoco or stackshot can");
+  const std::optional<Protocol> proto = session.header.protocol;
+  if (std::ranges::find(kAllProtocols, *proto) == std::end(kAllProtocols)) {
+    return Fail(path + ": protocol " + std::string(ProtocolName(*proto)) +
+                " cannot be replayed; sessions in " + moco::wire::NameList(kAllProtocols) +
+                " can");
   }
   if (target_text.empty()) {
     const std::string model = ModelOfSessionDevice(session.header.device);
@@ -126,7 +117,7 @@ int RunReplay(const std::string& path, std::string target_text, const std::strin
   const TargetSpec& ts = std::get<TargetSpec>(spec);
   if (ts.kind == TargetSpec::Kind::kInProcess) {
     const auto* m = moco::devices::FindDeviceModel(ts.address);
-    if (m != nullptr && ParseProtocol(moco::wire::ProtocolName(m->protocol)) != proto) {
+    if (m != nullptr && m->protocol != proto) {
       return Fail("in-process:" + ts.address + " does not speak the session's protocol " +
                   std::string(ProtocolName(*proto)));
     }
@@ -187,7 +178,7 @@ int RunFuzzCommand(const std::vector<std::string>& paths, std::string target_tex
       known += (known.empty() ? "" : ", ") + std::string(m.name);
     return Fail("unknown in-process model \"" + ts.address + "\"; the models are: " + known);
   }
-  if (ParseProtocol(moco::wire::ProtocolName(model->protocol)) != proto) {
+  if (model->protocol != proto) {
     return Fail("in-process:" + ts.address + " does not speak the sessions' protocol " +
                 std::string(ProtocolName(proto)));
   }
@@ -373,11 +364,11 @@ int main(int argc, char** argv) {
   }
 
   if (*cases) {
-    const auto p = ParseProtocol(cases_protocol);
+    const auto p = moco::wire::ParseProtocolOrAlias(cases_protocol);
     if (!p) return Fail("--protocol " + cases_protocol + ": give dmc, dfmoco or stackshot");
     const ProtocolRunner* runner = FindRunner(*p);
     if (runner == nullptr) {
-      return Fail("no suites for " + std::string(ProtocolTitle(*p)) + " yet");
+      return Fail("no suites for " + std::string(moco::wire::Info(*p).title) + " yet");
     }
     for (const CaseInfo& k : runner->cases()) {
       std::string name = k.suite + "/" + k.name;
@@ -408,11 +399,11 @@ int main(int argc, char** argv) {
   std::optional<Protocol> model_proto;
   if (ts.kind == TargetSpec::Kind::kInProcess) {
     if (const auto* m = moco::devices::FindDeviceModel(ts.address)) {
-      model_proto = ParseProtocol(moco::wire::ProtocolName(m->protocol));
+      model_proto = m->protocol;
     }
   }
   if (!protocol.empty()) {
-    const auto p = ParseProtocol(protocol);
+    const auto p = moco::wire::ParseProtocolOrAlias(protocol);
     if (!p) return Fail("--protocol " + protocol + ": give dmc, dfmoco or stackshot");
     if (model_proto && *model_proto != *p) {
       return Fail("--protocol " + protocol + " does not match in-process:" + ts.address +
@@ -425,7 +416,7 @@ int main(int argc, char** argv) {
   }
   const ProtocolRunner* runner = FindRunner(proto);
   if (runner == nullptr) {
-    return Fail(std::string(ProtocolTitle(proto)) +
+    return Fail(std::string(moco::wire::Info(proto).title) +
                 " has no conformance suites in this build; use a DMC v2 target");
   }
   RunOptions options;
@@ -436,7 +427,7 @@ int main(int argc, char** argv) {
     bool any = false;
     for (const Rule& r : RulesFor(proto)) any = any || GlobMatch(rules_glob, r.id);
     if (!any) {
-      return Fail("--rules " + rules_glob + " matches no " + std::string(ProtocolTitle(proto)) +
+      return Fail("--rules " + rules_glob + " matches no " + std::string(moco::wire::Info(proto).title) +
                   " rule; see 'mococheck rules'");
     }
   }
@@ -445,7 +436,7 @@ int main(int argc, char** argv) {
     for (const CaseInfo& k : runner->cases())
       any = any || GlobMatch(cases_glob, k.suite + "/" + k.name);
     if (!any) {
-      return Fail("--cases " + cases_glob + " selects no " + std::string(ProtocolTitle(proto)) +
+      return Fail("--cases " + cases_glob + " selects no " + std::string(moco::wire::Info(proto).title) +
                   " case; see the case names with 'mococheck cases --protocol " +
                   std::string(ProtocolName(proto)) + "'");
     }
@@ -521,7 +512,7 @@ int main(int argc, char** argv) {
     device_printed = true;
     if (so_far.device.empty() && !target->VirtualClock()) {
       std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a "
-                << ProtocolTitle(proto) << " device there, at this baud rate?" << std::endl;
+                << moco::wire::Info(proto).title << " device there, at this baud rate?" << std::endl;
     }
     if (!quiet) std::cout << ConsoleDevice(so_far) << std::flush;
   };

@@ -1,6 +1,7 @@
 // The fuzz campaign (see campaign.h).
 #include "conformance/fuzz/campaign.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <set>
@@ -10,32 +11,6 @@
 
 namespace moco::conformance {
 namespace {
-
-std::optional<Protocol> FromWire(control::Protocol p) {
-  switch (p) {
-    case control::Protocol::kDmc:
-      return Protocol::kDmc;
-    case control::Protocol::kDfmoco:
-      return Protocol::kDfmoco;
-    case control::Protocol::kStackshot:
-      return Protocol::kStackshot;
-    case control::Protocol::kStackshotDfmoco:
-      return std::nullopt;
-  }
-  return std::nullopt;
-}
-
-control::Protocol ToWire(Protocol p) {
-  switch (p) {
-    case Protocol::kDfmoco:
-      return control::Protocol::kDfmoco;
-    case Protocol::kStackshot:
-      return control::Protocol::kStackshot;
-    case Protocol::kDmc:
-      break;
-  }
-  return control::Protocol::kDmc;
-}
 
 // Drops messages while the mutant still fails, keeping at least one.
 Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violation) {
@@ -57,8 +32,8 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
            err->message;
   }
   const control::Session& s = std::get<control::Session>(loaded);
-  const auto protocol = FromWire(s.header.protocol);
-  if (!protocol) {
+  const std::optional<Protocol> protocol = s.header.protocol;
+  if (std::ranges::find(kAllProtocols, *protocol) == std::end(kAllProtocols)) {
     return path + ": protocol " + std::string(control::ProtocolName(s.header.protocol)) +
            " is not fuzzed; record the session in the device's packet protocol";
   }
@@ -72,7 +47,7 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
   seed.path = path;
   seed.protocol = *protocol;
   seed.device = s.header.device;
-  seed.messages = SplitHostStream(*protocol, host);
+  seed.messages = wire::SplitMessages(*protocol, wire::Side::kHost, host);
   seed.warning = control::SessionWarning(s);
   if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
   return seed;
@@ -82,7 +57,7 @@ std::string SaveMessages(const std::string& path, Protocol protocol, const std::
                          const std::string& note, const Messages& messages, TimeNs gap_ns) {
   try {
     control::SessionHeader h;
-    h.protocol = ToWire(protocol);
+    h.protocol = protocol;
     h.device = device;
     h.clock = "virtual";
     h.note = note;

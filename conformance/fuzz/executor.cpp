@@ -60,8 +60,11 @@ FuzzVerdict FuzzExecutor::Run(const Messages& messages) {
       return RunDfmoco(messages);
     case Protocol::kStackshot:
       return RunStackshot(messages);
+    case Protocol::kStackshotDfmoco:
+      break;
   }
-  return {};
+  return {false, "the " + std::string(wire::Info(protocol_).title) + " protocol is not fuzzed", 0,
+          0};
 }
 
 FuzzVerdict FuzzExecutor::RunDmc(const Messages& messages) {

@@ -43,7 +43,7 @@ control::Session SessionOrDie(const std::string& name) {
 RC_GTEST_PROP(SplitHostStream, JoinGivesTheStreamBackForEveryProtocol,
               (const std::vector<uint8_t>& stream, uint8_t which)) {
   const Protocol p = kAllProtocols[which % 3];
-  RC_ASSERT(JoinMessages(SplitHostStream(p, stream)) == stream);
+  RC_ASSERT(wire::JoinMessages(wire::SplitMessages(p, wire::Side::kHost, stream)) == stream);
 }
 
 TEST(SplitHostStream, RecordedDmcSessionIsWholeFramesThatDecode) {
@@ -62,7 +62,7 @@ TEST(SplitHostStream, RecordedDmcSessionIsWholeFramesThatDecode) {
 
 TEST(SplitHostStream, DfmocoLinesKeepTheirLineEnds) {
   const std::string text = "hi\r\nmm 1 200\r\nms";
-  const Messages m = SplitHostStream(Protocol::kDfmoco, wire::Bytes(text.begin(), text.end()));
+  const Messages m = wire::SplitMessages(Protocol::kDfmoco, wire::Side::kHost, wire::Bytes(text.begin(), text.end()));
   ASSERT_EQ(m.size(), 3u);
   EXPECT_EQ(std::string(m[1].begin(), m[1].end()), "mm 1 200\r\n");
   EXPECT_EQ(std::string(m[2].begin(), m[2].end()), "ms");  // unterminated, kept
@@ -79,7 +79,7 @@ RC_GTEST_PROP(RepairMessage, ADmcHeaderWithAnyLengthAndCheckDecodesAfterRepair,
   m.insert(m.end(), data.begin(), data.end());
   m.push_back(0x12);
   m.push_back(0x34);
-  RepairMessage(Protocol::kDmc, m);
+  wire::Info(Protocol::kDmc).repair(m);
   const auto f = dmc::DecodeFrame(m);
   RC_ASSERT(f.ok());
   RC_ASSERT(f.value().id == id);
@@ -93,7 +93,7 @@ RC_GTEST_PROP(RepairMessage, AStackshotPacketIsSealedWithTheRightLength,
                    static_cast<uint8_t>(command), action, static_cast<uint8_t>(n)};
   m.insert(m.end(), data.begin(), data.begin() + static_cast<ptrdiff_t>(n));
   m.push_back(0x00);  // a checksum that is most likely wrong
-  RepairMessage(Protocol::kStackshot, m);
+  wire::Info(Protocol::kStackshot).repair(m);
   const auto p = stackshot::DecodePacket(m);
   RC_ASSERT(p.ok());
   RC_ASSERT(p.value().command == command);

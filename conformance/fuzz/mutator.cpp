@@ -27,134 +27,21 @@ constexpr std::string_view kDfmNumbers[] = {
     "100",  "20000", "40000", "2147483647", "-2147483648", "2147483648", "99999999999",
     "1000", "-0",    "+5",    "0x10",       "1e3",         "3.5"};
 
-uint16_t Le16(const wire::Bytes& b, size_t at) {
-  return static_cast<uint16_t>(b[at] | (b[at + 1] << 8));
-}
-
-// The frame's data section when `m` starts with a whole DMC header.
+// The frame's ID, Type and data section when `m` starts with a whole DMC header.
 bool DmcParts(const wire::Bytes& m, uint32_t& id, uint16_t& type, wire::Bytes& data) {
-  if (m.size() < dmc::kHeaderSize || m[0] != dmc::kMarker0 || m[1] != dmc::kMarker1) return false;
-  id = static_cast<uint32_t>(m[2] | (m[3] << 8) | (m[4] << 16)) |
-       (static_cast<uint32_t>(m[5]) << 24);
-  type = Le16(m, dmc::kTypeOffset);
-  const size_t declared = Le16(m, dmc::kLengthOffset);
+  const auto h = dmc::PeekHeader(m);
+  if (!h) return false;
+  id = h->id;
+  type = h->type;
   const size_t have = m.size() - dmc::kHeaderSize;
   // Data runs to the declared length, or to what is there before the check bytes.
-  size_t n = std::min(declared, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0);
+  const size_t n = std::min<size_t>(h->length, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0);
   data.assign(m.begin() + dmc::kHeaderSize,
               m.begin() + static_cast<ptrdiff_t>(dmc::kHeaderSize + n));
   return true;
 }
 
-bool StackshotParts(const wire::Bytes& m, stackshot::Packet& p) {
-  if (m.size() < stackshot::kHeaderBytes || m[0] != stackshot::kSyncHost) return false;
-  p = stackshot::Packet{};
-  p.from_device = false;
-  p.command =
-      static_cast<uint16_t>((m[stackshot::kOffsetCommand] << 8) | m[stackshot::kOffsetCommand + 1]);
-  const uint8_t action = m[stackshot::kOffsetAction];
-  p.action = action & stackshot::kActionMask;
-  p.axis = static_cast<uint8_t>((action & stackshot::kAxisMask) >> stackshot::kAxisShift);
-  p.reserved_bit6 = (action & stackshot::kReservedBit6) != 0;
-  p.sub_item = (action & stackshot::kSubItemBit) != 0;
-  const size_t have = m.size() - stackshot::kHeaderBytes;
-  const size_t n = std::min<size_t>(m[stackshot::kOffsetLength],
-                                    have >= stackshot::kChecksumBytes ? have - 1 : 0);
-  p.data.assign(m.begin() + stackshot::kOffsetData,
-                m.begin() + static_cast<ptrdiff_t>(stackshot::kOffsetData + n));
-  return true;
-}
-
 }  // namespace
-
-Messages SplitHostStream(Protocol protocol, wire::ByteView stream) {
-  Messages out;
-  wire::Bytes noise;
-  auto flush_noise = [&] {
-    if (!noise.empty()) out.push_back(std::move(noise));
-    noise.clear();
-  };
-  size_t i = 0;
-  switch (protocol) {
-    case Protocol::kDmc:
-      while (i < stream.size()) {
-        if (i + dmc::kHeaderSize <= stream.size() && stream[i] == dmc::kMarker0 &&
-            stream[i + 1] == dmc::kMarker1) {
-          const size_t len = static_cast<size_t>(stream[i + 8] | (stream[i + 9] << 8));
-          const size_t total = dmc::kHeaderSize + len + dmc::kCheckSize;
-          if (len <= dmc::kMaxDataLength && i + total <= stream.size()) {
-            flush_noise();
-            out.emplace_back(stream.begin() + static_cast<ptrdiff_t>(i),
-                             stream.begin() + static_cast<ptrdiff_t>(i + total));
-            i += total;
-            continue;
-          }
-        }
-        noise.push_back(stream[i++]);
-      }
-      break;
-    case Protocol::kStackshot:
-      while (i < stream.size()) {
-        if (i + stackshot::kMinPacketBytes <= stream.size() && stream[i] == stackshot::kSyncHost) {
-          const size_t total = stackshot::kMinPacketBytes + stream[i + stackshot::kOffsetLength];
-          if (i + total <= stream.size()) {
-            flush_noise();
-            out.emplace_back(stream.begin() + static_cast<ptrdiff_t>(i),
-                             stream.begin() + static_cast<ptrdiff_t>(i + total));
-            i += total;
-            continue;
-          }
-        }
-        noise.push_back(stream[i++]);
-      }
-      break;
-    case Protocol::kDfmoco:
-      while (i < stream.size()) {
-        noise.push_back(stream[i]);
-        if (stream[i++] == '\n') flush_noise();
-      }
-      break;
-  }
-  flush_noise();
-  return out;
-}
-
-wire::Bytes JoinMessages(const Messages& messages) {
-  wire::Bytes out;
-  for (const wire::Bytes& m : messages) out.insert(out.end(), m.begin(), m.end());
-  return out;
-}
-
-void RepairMessage(Protocol protocol, wire::Bytes& m) {
-  switch (protocol) {
-    case Protocol::kDmc: {
-      uint32_t id = 0;
-      uint16_t type = 0;
-      wire::Bytes data;
-      if (!DmcParts(m, id, type, data)) return;
-      if (data.size() > dmc::kMaxDataLength) data.resize(dmc::kMaxDataLength);
-      m.clear();
-      dmc::EncodeFrame(id, type, data, m);
-      return;
-    }
-    case Protocol::kStackshot: {
-      stackshot::Packet p;
-      if (!StackshotParts(m, p)) return;
-      if (p.data.size() > stackshot::kMaxDataBytes) p.data.resize(stackshot::kMaxDataBytes);
-      stackshot::Seal(p, stackshot::kDefaultChecksum);
-      m.clear();
-      stackshot::EncodePacket(p, m);
-      return;
-    }
-    case Protocol::kDfmoco:
-      if (m.empty() || m.back() != '\n') {
-        if (!m.empty() && m.back() == '\r') m.pop_back();
-        m.push_back('\r');
-        m.push_back('\n');
-      }
-      return;
-  }
-}
 
 SessionMutator::SessionMutator(Protocol protocol, uint64_t seed)
     : protocol_(protocol), state_(seed ^ 0x9e3779b97f4a7c15ULL) {}
@@ -251,12 +138,13 @@ void SessionMutator::MutateDmc(wire::Bytes& m) {
 }
 
 void SessionMutator::MutateStackshot(wire::Bytes& m) {
-  stackshot::Packet p;
-  if (!StackshotParts(m, p)) {
+  auto peeked = stackshot::PeekHostPacket(m);
+  if (!peeked) {
     if (!m.empty()) m[Below(m.size())] ^= static_cast<uint8_t>(1u << Below(8));
     last_.push_back("noise-flip");
     return;
   }
+  stackshot::Packet& p = *peeked;
   switch (Below(5)) {
     case 0: {
       const auto all = stackshot::AllCommands();
@@ -348,17 +236,7 @@ void SessionMutator::MutateDfmoco(wire::Bytes& m) {
 }
 
 void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& donors) {
-  if (messages.empty()) {
-    messages.push_back(protocol_ == Protocol::kDfmoco ? wire::Bytes{'h', 'i', '\r', '\n'}
-                                                      : wire::Bytes{});
-    if (protocol_ == Protocol::kDmc) dmc::EncodeFrame(1, 0x0001, {}, messages.back());
-    if (protocol_ == Protocol::kStackshot) {
-      stackshot::Packet p;
-      p.command = 0x110b;
-      stackshot::Seal(p, stackshot::kDefaultChecksum);
-      stackshot::EncodePacket(p, messages.back());
-    }
-  }
+  if (messages.empty()) messages.push_back(wire::Info(protocol_).greeting());
   const uint64_t pick = Below(100);
   const size_t at = Below(messages.size());
   if (pick < 60) {
@@ -370,6 +248,7 @@ void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& 
         MutateStackshot(messages[at]);
         break;
       case Protocol::kDfmoco:
+      case Protocol::kStackshotDfmoco:
         MutateDfmoco(messages[at]);
         break;
     }

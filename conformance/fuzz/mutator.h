@@ -15,6 +15,7 @@
 
 #include "conformance/rules/catalogue.h"
 #include "wire/bytes.h"
+#include "wire/protocol.h"
 
 namespace moco::conformance {
 
@@ -22,12 +23,9 @@ namespace moco::conformance {
 // line end, a StackShot packet; or bytes that frame as nothing (noise).
 using Messages = std::vector<wire::Bytes>;
 
-// Cuts a host byte stream into messages: DMC frames (from the 'D' 'F' marker,
-// by the Length field; bytes that start no frame are one noise message), DFMoco
-// lines (each up to and including its '\n'; a last unterminated line is kept),
-// StackShot packets (from the 0x55 sync byte, by the length byte).
-Messages SplitHostStream(Protocol protocol, wire::ByteView stream);
-wire::Bytes JoinMessages(const Messages& messages);
+// A host byte stream is cut into messages, and a message repaired, by the
+// protocol table: wire::SplitMessages(p, wire::Side::kHost, stream),
+// wire::JoinMessages, wire::Info(p).repair (wire/protocol.h).
 
 // Deterministic (seeded) structure-aware mutator.
 class SessionMutator {
@@ -63,13 +61,6 @@ class SessionMutator {
   uint64_t state_;
   std::vector<std::string> last_;
 };
-
-// Makes `message` frame correctly again: DMC Length and Fletcher checksum set
-// from the data (data cut to kMaxDataLength); StackShot length byte and
-// checksum sealed (data cut to 255 bytes); DFMoco: line end "\r\n" appended
-// when missing. Bytes that cannot start a message (no marker/sync byte) are
-// left as they are.
-void RepairMessage(Protocol protocol, wire::Bytes& message);
 
 }  // namespace moco::conformance
 

@@ -14,53 +14,14 @@
 
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"
-#include "wire/stackshot_constants.h"
+#include "wire/protocol.h"
 #include "wire/transcript.h"
 
 namespace moco::conformance {
 namespace {
 
-control::Protocol ToWire(Protocol p) {
-  switch (p) {
-    case Protocol::kDfmoco:
-      return control::Protocol::kDfmoco;
-    case Protocol::kStackshot:
-      return control::Protocol::kStackshot;
-    case Protocol::kDmc:
-      break;
-  }
-  return control::Protocol::kDmc;
-}
-
-// The length of the message starting at `at`, or 0 when none starts there.
-size_t MessageAt(Protocol protocol, const wire::Bytes& b, size_t at) {
-  const size_t left = b.size() - at;
-  switch (protocol) {
-    case Protocol::kDmc:
-      if (left >= dmc::kHeaderSize && b[at] == dmc::kMarker0 && b[at + 1] == dmc::kMarker1) {
-        const size_t len = static_cast<size_t>(b[at + 8] | (b[at + 9] << 8));
-        const size_t total = dmc::kHeaderSize + len + dmc::kCheckSize;
-        if (len <= dmc::kMaxDataLength && total <= left) return total;
-      }
-      return 0;
-    case Protocol::kStackshot:
-      if (left >= stackshot::kMinPacketBytes && b[at] == stackshot::kSyncDevice) {
-        const size_t total = stackshot::kMinPacketBytes + b[at + stackshot::kOffsetLength];
-        if (total <= left) return total;
-      }
-      return 0;
-    case Protocol::kDfmoco: {
-      for (size_t i = at; i < b.size(); ++i) {
-        if (b[i] == '\n') return i + 1 - at;
-      }
-      return 0;
-    }
-  }
-  return 0;
-}
-
 std::string Describe(Protocol protocol, const wire::Bytes& bytes) {
-  wire::TranscriptDecoder d(ToWire(protocol));
+  wire::TranscriptDecoder d(protocol);
   std::string s;
   for (const auto& l : d.Feed(wire::Side::kDevice, bytes)) s += (s.empty() ? "" : "; ") + l.text;
   for (const auto& l : d.Finish()) s += (s.empty() ? "" : "; ") + l.text;
@@ -166,23 +127,11 @@ std::vector<TimedMessage> SplitDeviceChunks(Protocol protocol,
     return it == ends.end() ? (ends.empty() ? TimeNs{0} : ends.back().second) : it->second;
   };
   std::vector<TimedMessage> out;
-  wire::Bytes noise;
-  size_t noise_end = 0;
-  size_t i = 0;
-  while (i < all.size()) {
-    const size_t n = MessageAt(protocol, all, i);
-    if (n == 0) {
-      noise.push_back(all[i++]);
-      noise_end = i;
-      continue;
-    }
-    if (!noise.empty()) out.push_back({time_of_end(noise_end), std::move(noise)});
-    noise.clear();
-    out.push_back({time_of_end(i + n), wire::Bytes(all.begin() + static_cast<ptrdiff_t>(i),
-                                                   all.begin() + static_cast<ptrdiff_t>(i + n))});
-    i += n;
+  size_t end = 0;
+  for (wire::Bytes& m : wire::SplitMessages(protocol, wire::Side::kDevice, all)) {
+    end += m.size();
+    out.push_back({time_of_end(end), std::move(m)});
   }
-  if (!noise.empty()) out.push_back({time_of_end(noise_end), std::move(noise)});
   return out;
 }
 
@@ -232,12 +181,8 @@ ReplayResult Replay(const control::Session& session, Protocol protocol, Target& 
     if (e.is_event || e.from != control::Origin::kHost) continue;
     if (!pump_until(origin + (e.t_ns - base))) break;
     if (protocol == Protocol::kDmc) {
-      for (const wire::Bytes& m : SplitHostStream(Protocol::kDmc, e.bytes)) {
-        if (m.size() >= 6 && m[0] == dmc::kMarker0) {
-          host_ids.emplace(static_cast<uint32_t>(m[2] | (m[3] << 8) | (m[4] << 16)) |
-                               (static_cast<uint32_t>(m[5]) << 24),
-                           e.t_ns - base);
-        }
+      for (const wire::Bytes& m : wire::SplitMessages(protocol, wire::Side::kHost, e.bytes)) {
+        if (const auto h = dmc::PeekHeader(m)) host_ids.emplace(h->id, e.t_ns - base);
       }
     }
     if (!target.Send(e.bytes)) break;
@@ -291,6 +236,9 @@ ReplayResult Replay(const control::Session& session, Protocol protocol, Target& 
           break;
         case Protocol::kStackshot:
           why = "the packet differs";
+          break;
+        case Protocol::kStackshotDfmoco:
+          why = "the line differs";
           break;
       }
     }

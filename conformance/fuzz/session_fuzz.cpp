@@ -1,16 +1,19 @@
 // libFuzzer entry over the session mutator and the fuzz executor (see
 // mutator.h, executor.h), for ClusterFuzzLite / OSS-Fuzz: an input is a host
-// byte stream of one protocol (MOCO_FUZZ_PROTOCOL: 0 DMC v2, 1 DFMoco,
-// 2 StackShot 3X), cut into messages and played against a fresh in-process
+// byte stream of one protocol (MOCO_FUZZ_PROTOCOL: its name in the wire
+// protocol table, "dmc", "dfmoco" or "stackshot"), cut into messages and played against a fresh in-process
 // device; a broken invariant aborts with its description. The custom
 // mutator is the structure-aware one `mococheck fuzz` uses, so mutants keep
 // valid lengths and checksums and reach the device's message logic.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/mutator.h"
+#include "devices/registry.h"
+#include "wire/protocol.h"
 
 namespace {
 
@@ -20,22 +23,36 @@ using moco::conformance::Messages;
 using moco::conformance::Protocol;
 using moco::conformance::SessionMutator;
 
-#if MOCO_FUZZ_PROTOCOL == 0
-constexpr Protocol kProtocol = Protocol::kDmc;
-constexpr const char* kModel = "dmc16";
-#elif MOCO_FUZZ_PROTOCOL == 1
-constexpr Protocol kProtocol = Protocol::kDfmoco;
-constexpr const char* kModel = "dfmoco";
-#else
-constexpr Protocol kProtocol = Protocol::kStackshot;
-constexpr const char* kModel = "stackshot3x";
+#ifndef MOCO_FUZZ_PROTOCOL
+#define MOCO_FUZZ_PROTOCOL "dmc"
 #endif
+
+// The protocol by its name in the wire table, and the first emulated device
+// model that speaks it.
+Protocol FuzzedProtocol() {
+  const auto p = moco::wire::ParseProtocol(MOCO_FUZZ_PROTOCOL);
+  if (!p) {
+    std::fprintf(stderr, "session_fuzz: unknown protocol %s\n", MOCO_FUZZ_PROTOCOL);
+    std::abort();
+  }
+  return *p;
+}
+
+std::string ModelFor(Protocol p) {
+  for (const auto& m : moco::devices::DeviceModels()) {
+    if (m.protocol == p) return std::string(m.name);
+  }
+  std::fprintf(stderr, "session_fuzz: no device model speaks %s\n", MOCO_FUZZ_PROTOCOL);
+  std::abort();
+}
+
+const Protocol kProtocol = FuzzedProtocol();
 
 constexpr size_t kMaxInput = 64 * 1024;
 
 FuzzExecutor& Executor() {
   static FuzzExecutor* executor = [] {
-    auto* e = new FuzzExecutor(kProtocol, InProcessTarget::ForModel(kModel, ""));
+    auto* e = new FuzzExecutor(kProtocol, InProcessTarget::ForModel(ModelFor(kProtocol), ""));
     if (auto err = e->Open()) {
       std::fprintf(stderr, "session_fuzz: %s\n", err->c_str());
       std::abort();
@@ -49,7 +66,7 @@ FuzzExecutor& Executor() {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size > kMaxInput) return -1;
-  Messages messages = moco::conformance::SplitHostStream(kProtocol, {data, size});
+  Messages messages = moco::wire::SplitMessages(kProtocol, moco::wire::Side::kHost, {data, size});
   if (messages.size() > SessionMutator::kMaxMessages) return -1;
   const auto verdict = Executor().Run(messages);
   if (!verdict.ok) {
@@ -61,10 +78,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
 extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max_size,
                                           unsigned int seed) {
-  Messages messages = moco::conformance::SplitHostStream(kProtocol, {data, size});
+  Messages messages = moco::wire::SplitMessages(kProtocol, moco::wire::Side::kHost, {data, size});
   SessionMutator mutator(kProtocol, seed);
   mutator.Mutate(messages, {});
-  moco::wire::Bytes out = moco::conformance::JoinMessages(messages);
+  moco::wire::Bytes out = moco::wire::JoinMessages(messages);
   if (out.size() > max_size) out.resize(max_size);
   if (!out.empty()) std::memcpy(data, out.data(), out.size());
   return out.size();

@@ -550,49 +550,6 @@ std::string_view NeedsText(Needs needs) {
   return "?";
 }
 
-std::string_view ProtocolName(Protocol p) {
-  switch (p) {
-    case Protocol::kDmc:
-      return "dmc";
-    case Protocol::kDfmoco:
-      return "dfmoco";
-    case Protocol::kStackshot:
-      return "stackshot";
-  }
-  return "?";
-}
-
-std::string_view ProtocolTitle(Protocol p) {
-  switch (p) {
-    case Protocol::kDmc:
-      return "DMC v2";
-    case Protocol::kDfmoco:
-      return "DFMoco";
-    case Protocol::kStackshot:
-      return "StackShot 3X";
-  }
-  return "?";
-}
-
-std::string_view RuleIdPrefix(Protocol p) {
-  switch (p) {
-    case Protocol::kDmc:
-      return "DMC-";
-    case Protocol::kDfmoco:
-      return "DFM-";
-    case Protocol::kStackshot:
-      return "SS-";
-  }
-  return "?";
-}
-
-std::optional<Protocol> ParseProtocol(std::string_view text) {
-  if (text == "dmc" || text == "dmc2") return Protocol::kDmc;
-  if (text == "dfmoco") return Protocol::kDfmoco;
-  if (text == "stackshot" || text == "stackshot3x") return Protocol::kStackshot;
-  return std::nullopt;
-}
-
 const std::vector<Rule>& DmcRules() { return kRules; }
 
 const std::vector<Rule>& RulesFor(Protocol p) {
@@ -739,7 +696,7 @@ std::string RulesMarkdown() {
     for (const Rule& r : rules) {
       (r.level == Level::kMust ? pm : r.level == Level::kShould ? ps : pn)++;
     }
-    s += "\n## " + std::string(ProtocolTitle(p)) + " (" + std::to_string(rules.size()) +
+    s += "\n## " + std::string(wire::Info(p).title) + " (" + std::to_string(rules.size()) +
          " rules: " + std::to_string(pm) + " MUST, " + std::to_string(ps) + " SHOULD, " +
          std::to_string(pn) + " NOTE)\n\n";
     s += "| id | level | applies when | rule | spec clause | where |\n";

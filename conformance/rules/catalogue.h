@@ -12,18 +12,16 @@
 #include <vector>
 
 #include "wire/dmc.h"
+#include "wire/protocol.h"
 
 namespace moco::conformance {
 
-// The protocols mococheck checks.
-enum class Protocol { kDmc, kDfmoco, kStackshot };
+// A protocol is the wire table's (names, titles, rule prefixes: wire/protocol.h).
+using wire::Protocol;
+using wire::ProtocolName;
+// The protocols with rules, in the catalogue's order.
 inline constexpr Protocol kAllProtocols[] = {Protocol::kDmc, Protocol::kDfmoco,
                                              Protocol::kStackshot};
-std::string_view ProtocolName(Protocol p);   // "dmc", "dfmoco", "stackshot"
-std::string_view ProtocolTitle(Protocol p);  // "DMC v2", "DFMoco", "StackShot 3X"
-std::string_view RuleIdPrefix(Protocol p);   // "DMC-", "DFM-", "SS-"
-// Accepts the names above (and "dmc2", "stackshot3x"); nullopt otherwise.
-std::optional<Protocol> ParseProtocol(std::string_view text);
 
 // MUST failures fail the run (exit 1); SHOULD failures are reported only;
 // NOTE marks a reading the spec leaves open (ERRATA) and never fails.

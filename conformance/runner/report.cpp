@@ -26,9 +26,9 @@ std::string EvidenceText(const Evidence& e) {
 }  // namespace
 
 std::string ConsoleTitle(const std::string& target, const std::string& protocol_name) {
-  const auto protocol = ParseProtocol(protocol_name);
+  const auto protocol = wire::ParseProtocol(protocol_name);
   return "mococheck: " + target + " (" +
-         std::string(protocol ? ProtocolTitle(*protocol) : protocol_name) + ")\n";
+         std::string(protocol ? wire::Info(*protocol).title : protocol_name) + ")\n";
 }
 
 std::string ConsoleDevice(const RunReport& report) {

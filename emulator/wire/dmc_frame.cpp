@@ -229,6 +229,24 @@ uint16_t LoadU16(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1] <
 
 }  // namespace
 
+std::optional<FrameHeader> PeekHeader(ByteView b) {
+  if (b.size() < kHeaderSize || b[0] != kMarker0 || b[1] != kMarker1) return std::nullopt;
+  FrameHeader h;
+  h.id = static_cast<uint32_t>(b[kIdOffset]) | (static_cast<uint32_t>(b[kIdOffset + 1]) << 8) |
+         (static_cast<uint32_t>(b[kIdOffset + 2]) << 16) |
+         (static_cast<uint32_t>(b[kIdOffset + 3]) << 24);
+  h.type = static_cast<uint16_t>(b[kTypeOffset] | (b[kTypeOffset + 1] << 8));
+  h.length = static_cast<uint16_t>(b[kLengthOffset] | (b[kLengthOffset + 1] << 8));
+  return h;
+}
+
+size_t WholeFrameAt(ByteView b) {
+  const auto h = PeekHeader(b);
+  if (!h || h->length > kMaxDataLength) return 0;
+  const size_t total = kHeaderSize + h->length + kCheckSize;
+  return total <= b.size() ? total : 0;
+}
+
 Result<Frame> DecodeFrame(ByteView bytes) {
   using Kind = DecodeError::Kind;
   if (bytes.size() < kHeaderSize + kCheckSize) {

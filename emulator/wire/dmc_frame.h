@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <memory>
 #include <type_traits>
 #include <utility>
@@ -71,6 +72,20 @@ Bytes EncodeFrame(const Frame& f);
 // appended since (cut to 0xffff) and appends the check bytes.
 size_t BeginFrame(uint32_t id, uint16_t type, Bytes& out);
 void EndFrame(size_t start, Bytes& out);
+
+// The header fields of a frame that starts at bytes[0] (marker 'D' 'F' and a
+// whole header present), whatever follows; nullopt otherwise. For tools that
+// take messages apart without judging them (the fuzz mutator, replay).
+struct FrameHeader {
+  uint32_t id = 0;
+  uint16_t type = 0;
+  uint16_t length = 0;  // as declared
+};
+std::optional<FrameHeader> PeekHeader(ByteView bytes);
+// The size of the whole frame at bytes[0]: a header whose Length is at most
+// kMaxDataLength and every byte through the check bytes present; 0 otherwise.
+// The checksum is not verified.
+size_t WholeFrameAt(ByteView bytes);
 
 // Decodes exactly one complete frame. Errors (offsets from the first byte of
 // `bytes`): kTruncated (fewer than header + Length + 2 bytes), kBadValue

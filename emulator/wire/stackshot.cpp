@@ -747,6 +747,22 @@ Packet PacketFromFrame(const uint8_t* f, size_t data_len) {
 }
 }  // namespace
 
+std::optional<Packet> PeekHostPacket(ByteView m) {
+  if (m.size() < kHeaderBytes || m[0] != kSyncHost) return std::nullopt;
+  Packet p;
+  p.from_device = false;
+  p.command = static_cast<uint16_t>((m[kOffsetCommand] << 8) | m[kOffsetCommand + 1]);
+  const uint8_t action = m[kOffsetAction];
+  p.action = action & kActionMask;
+  p.axis = static_cast<uint8_t>((action & kAxisMask) >> kAxisShift);
+  p.reserved_bit6 = (action & kReservedBit6) != 0;
+  p.sub_item = (action & kSubItemBit) != 0;
+  const size_t have = m.size() - kHeaderBytes;
+  const size_t n = std::min<size_t>(m[kOffsetLength], have >= kChecksumBytes ? have - 1 : 0);
+  p.data.assign(m.begin() + kOffsetData, m.begin() + static_cast<ptrdiff_t>(kOffsetData + n));
+  return p;
+}
+
 Result<Packet> DecodePacket(ByteView frame) {
   if (frame.empty()) return DecodeError{DecodeError::Kind::kTruncated, 0, "empty frame"};
   if (frame[0] != kSyncHost && frame[0] != kSyncDevice) {

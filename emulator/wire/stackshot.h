@@ -107,6 +107,12 @@ bool EncodePacket(const Packet& p, Bytes& out);
 // (no sync byte), kTruncated, kTrailing. The checksum is not verified.
 Result<Packet> DecodePacket(ByteView frame);
 
+// The packet that starts at bytes[0] taken apart without judging it (for the
+// fuzz mutator): a host packet (sync 0x55) with a whole header; its data runs
+// to the length byte or to what is there before the checksum byte. nullopt
+// when no host packet header starts there.
+std::optional<Packet> PeekHostPacket(ByteView bytes);
+
 // One packet cut from a byte stream.
 struct DecodedPacket {
   Packet packet;

@@ -11,28 +11,6 @@
 
 namespace moco::wire {
 
-std::string_view ProtocolName(Protocol p) {
-  switch (p) {
-    case Protocol::kDmc:
-      return "dmc";
-    case Protocol::kDfmoco:
-      return "dfmoco";
-    case Protocol::kStackshot:
-      return "stackshot";
-    case Protocol::kStackshotDfmoco:
-      return "stackshot-dfmoco";
-  }
-  return "?";
-}
-
-std::optional<Protocol> ParseProtocol(std::string_view name) {
-  for (Protocol p :
-       {Protocol::kDmc, Protocol::kDfmoco, Protocol::kStackshot, Protocol::kStackshotDfmoco}) {
-    if (ProtocolName(p) == name) return p;
-  }
-  return std::nullopt;
-}
-
 namespace {
 
 std::string IdPrefix(uint32_t id) { return "#" + std::to_string(id) + " "; }

@@ -11,16 +11,9 @@
 #include <vector>
 
 #include "wire/bytes.h"
+#include "wire/protocol.h"
 
 namespace moco::wire {
-
-enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
-
-// "dmc", "dfmoco", "stackshot", "stackshot-dfmoco".
-std::string_view ProtocolName(Protocol p);
-std::optional<Protocol> ParseProtocol(std::string_view name);
-
-enum class Side { kHost, kDevice };
 
 // One decoded item: a message, or a framing/checksum/parse problem.
 struct TranscriptLine {

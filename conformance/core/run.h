@@ -1,0 +1,136 @@
+// The one runner every protocol uses (ARCHITECTURE "conformance"): learns
+// what the device is, runs the selected and applicable cases of the
+// protocol's suites on the target, each with a restart (when the target can)
+// and a fresh host that greets the device first, and rolls the rule outcomes
+// up over the run. What differs per protocol is its traits type
+// (conformance/protocols/*/..._protocol.h):
+//
+//   struct Traits {
+//     static constexpr wire::Protocol kProtocol;
+//     using Host;    // constructed as Host(target, verdicts, host_options)
+//     using Device;  // what the device says of itself
+//     using Case;    // CaseOf<CaseContextOf<Host, Device>>
+//     static const std::vector<Case>& Cases();
+//     static const std::vector<Rule>& Rules();
+//     // Asks the device what it is; nullopt when it did not answer.
+//     static std::optional<Device> Discover(Host& probe);
+//     // The console line and JSON fields of report.device / device_info.
+//     static void Describe(const Device& device, RunReport& report);
+//     // Whether a rule or case with `needs` applies to the device.
+//     static bool Applies(Needs needs, const Device& device);
+//     // Greets the device at the start of a case; what it answered, or
+//     // nullopt (the host has judged the silence).
+//     static std::optional<Device> Greet(Host& host, Target& target, const Device& discovered);
+//   };
+//
+// A device that did not introduce itself is treated the same for every
+// protocol: the cases and rules that need nothing still run (their greeting
+// goes unanswered, which fails the run), the others are not applicable.
+#ifndef MOCO_CONFORMANCE_CORE_RUN_H_
+#define MOCO_CONFORMANCE_CORE_RUN_H_
+
+#include <algorithm>
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "conformance/core/cases.h"
+#include "conformance/core/run_report.h"
+#include "conformance/core/transcript.h"
+#include "conformance/rules/catalogue.h"
+#include "conformance/targets/target.h"
+
+namespace moco::conformance {
+
+// Why a case or rule with `needs` cannot run on `device` ("" when it can).
+template <typename Traits>
+std::string NotApplicableBecause(Needs needs, const std::optional<typename Traits::Device>& device) {
+  if (needs == Needs::kNothing) return "";
+  if (!device) return "the device did not introduce itself";
+  if (Traits::Applies(needs, *device)) return "";
+  return "the device does not advertise " + std::string(NeedsText(needs));
+}
+
+template <typename Traits>
+RunReport Run(Target& target, const RunOptions& options) {
+  using Host = typename Traits::Host;
+  using Device = typename Traits::Device;
+  using Case = typename Traits::Case;
+  const auto wall0 = std::chrono::steady_clock::now();
+  RunReport report;
+  report.target = target.Name();
+  report.protocol = std::string(wire::ProtocolName(Traits::kProtocol));
+  report.options = options;
+
+  std::optional<Device> device;
+  {
+    Verdicts probe;
+    Host host(target, probe, options.host);
+    device = Traits::Discover(host);
+    host.Close();
+  }
+  if (device) Traits::Describe(*device, report);
+
+  if (options.on_progress) options.on_progress(report);
+  const std::vector<Case>& cases = Traits::Cases();
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& k = cases[i];
+    if (const int sig = StopRequested(); sig != 0) {
+      report.interrupted_by = sig;
+      break;
+    }
+    if (i % options.shard_count != options.shard_index) continue;
+    if (!options.cases.empty() && !GlobMatch(options.cases, k.suite + "/" + k.name)) continue;
+    CaseResult result;
+    result.suite = k.suite;
+    result.name = k.name;
+    result.summary = k.summary;
+    if (std::string why = NotApplicableBecause<Traits>(k.needs, device); !why.empty()) {
+      result.applicable = false;
+      result.not_applicable_because = std::move(why);
+      report.cases.push_back(std::move(result));
+      if (options.on_progress) options.on_progress(report);
+      continue;
+    }
+    const auto c0 = std::chrono::steady_clock::now();
+    if (target.CanRestart()) target.Restart();
+    Verdicts verdicts(options.rules);
+    Host host(target, verdicts, options.host);
+    const TimeNs t0 = host.Now();
+    const std::optional<Device> seen = Traits::Greet(host, target, device.value_or(Device{}));
+    if (seen && !host.link_lost()) {
+      typename Case::Context ctx{host, verdicts, *seen, target, options.host, options.random,
+                                 result.log};
+      k.run(ctx);
+    }
+    host.Close();
+    if (host.link_lost()) result.log.push_back("the link to the device was lost");
+    // The random suite saves a shrunk session of its own instead.
+    if (verdicts.MustFailed() && k.suite != "random") {
+      result.log.push_back("transcript:\n" + Transcript(Traits::kProtocol, host.traffic()));
+    }
+    result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
+    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+    result.outcomes = verdicts.outcomes();
+    result.KeepTraffic(host.traffic());
+    report.cases.push_back(std::move(result));
+    // A case cut short by a stop request is not a verdict on the device.
+    if (const int sig = StopRequested(); sig != 0) {
+      report.cases.pop_back();
+      report.interrupted_by = sig;
+      break;
+    }
+    if (options.on_progress) options.on_progress(report);
+  }
+
+  SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
+    return NotApplicableBecause<Traits>(rule.needs, device).empty();
+  });
+  report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return report;
+}
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_CORE_RUN_H_

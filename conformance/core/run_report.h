@@ -1,0 +1,97 @@
+// What a mococheck run produces, whatever the protocol: the options it ran
+// with, how the device introduced itself, each case's rule outcomes and
+// traffic, the roll-up per rule, and the exit code (docs/exit-codes.md).
+#ifndef MOCO_CONFORMANCE_CORE_RUN_REPORT_H_
+#define MOCO_CONFORMANCE_CORE_RUN_REPORT_H_
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "conformance/core/cases.h"
+#include "conformance/core/host_link.h"
+#include "conformance/core/verdicts.h"
+#include "conformance/rules/catalogue.h"
+
+namespace moco::conformance {
+
+struct RunReport;
+
+struct RunOptions {
+  std::string rules;         // GlobMatch over rule ids; empty: all
+  std::string cases;         // GlobMatch over "suite/name"; empty: all
+  uint32_t shard_index = 0;  // 0-based; this run takes cases i, i+n, i+2n, ...
+  uint32_t shard_count = 1;
+  HostOptions host;
+  RandomOptions random;
+  // Called once the device has introduced itself (report.device is set, no
+  // case has run yet) and again after each case is appended to report.cases:
+  // the console streams its verdicts from here. May be empty.
+  std::function<void(const RunReport& report)> on_progress;
+};
+
+struct CaseResult {
+  std::string suite;
+  std::string name;
+  std::string summary;
+  bool applicable = true;
+  std::string not_applicable_because;
+  std::map<std::string, RuleOutcome, std::less<>> outcomes;
+  TimeNs target_ns = 0;  // the case's length on the target's clock
+  double wall_s = 0;
+  std::vector<std::string> log;
+  // The case's traffic as it crossed the link (for the HTML report's
+  // transcripts and plots); at most kMaxTrafficChunks chunks are kept.
+  static constexpr size_t kMaxTrafficChunks = 20000;
+  std::vector<Chunk> traffic;
+  bool MustFailed() const;
+  // Keeps the first kMaxTrafficChunks chunks of a case's traffic.
+  void KeepTraffic(const std::vector<Chunk>& all);
+};
+
+struct RuleSummary {
+  Status status = Status::kNotExercised;
+  uint32_t cases_failed = 0;
+  uint32_t cases_passed = 0;
+};
+
+struct RunReport {
+  std::string target;
+  std::string protocol = "dmc";  // ProtocolName()
+  RunOptions options;
+  // How the device introduced itself: one line for the console ("" when it
+  // did not answer) and the same as fields for the JSON report.
+  std::string device;
+  nlohmann::json device_info;
+  std::vector<CaseResult> cases;
+  std::map<std::string, RuleSummary, std::less<>> rules;  // every rule within the filter
+  double wall_s = 0;
+  // Set by the caller when the link to the device was lost for good (what
+  // happened); the outcomes then prove nothing about the device.
+  std::string target_error;
+  // The signal (SIGINT, SIGTERM, SIGHUP) that stopped the run before every
+  // case ran; 0 when it ran to the end.
+  int interrupted_by = 0;
+
+  bool MustFailed() const;
+  // Counts of rules by status.
+  std::map<Status, size_t> RuleCounts() const;
+};
+
+// Fills report.rules for every rule of `rules` within options.rules: not
+// applicable when `applies` says so, else failed / noted / passed / not
+// exercised from the case outcomes.
+void SummarizeRules(RunReport& report, const std::vector<Rule>& rules,
+                    const std::function<bool(const Rule&)>& applies);
+
+// 2 when the run has no verdict (a target error, or it was interrupted),
+// else 0 when every MUST rule passed, 1 when one failed (docs/exit-codes.md).
+int ExitCode(const RunReport& report);
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_CORE_RUN_REPORT_H_

@@ -1,0 +1,75 @@
+// The protocols the project speaks, in one table: what a protocol is called,
+// how its bytes are cut into messages and repaired, how a host greets a device,
+// and its line settings. Every program and library asks this table (and the
+// codecs it names) instead of switching on the protocol itself; a new protocol
+// is one row here plus its codec (docs/architecture.md "Adding a protocol").
+#ifndef MOCO_WIRE_PROTOCOL_H_
+#define MOCO_WIRE_PROTOCOL_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "wire/bytes.h"
+
+namespace moco::wire {
+
+enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
+
+enum class Side { kHost, kDevice };
+
+// A serial line's settings (8 data bits, no parity, 1 stop bit, no flow control).
+struct LineSettings {
+  uint32_t baud = 115200;
+};
+
+struct MessageCut {
+  size_t skip = 0;
+  size_t length = 0;
+};
+
+struct ProtocolInfo {
+  Protocol id = Protocol::kDmc;
+  std::string_view name;         // "dmc": sessions, --protocol, reports
+  std::string_view title;        // "DMC v2": prose
+  std::string_view rule_prefix;  // "DMC-": the conformance rules' ids ("" when none)
+  std::string_view alias;        // another name accepted on command lines ("dmc2"), or ""
+  LineSettings line;             // the line a real device of this protocol uses by default
+  // Where the first whole message from `side` in `bytes` is: `skip` bytes of
+  // noise, then `length` bytes of message (framing plausible, every byte
+  // present); {bytes.size(), 0} when no whole message is there.
+  MessageCut (*next_message)(Side side, ByteView bytes) = nullptr;
+  // Makes a host message frame correctly again (length and checksum set from
+  // its data, or its line end appended). Bytes that cannot start a message are
+  // left as they are.
+  void (*repair)(Bytes& message) = nullptr;
+  // The message a host sends first to learn what is there (HI, `hi`, PING).
+  Bytes (*greeting)() = nullptr;
+};
+
+// Every protocol, in the enum's order.
+std::span<const ProtocolInfo> Protocols();
+const ProtocolInfo& Info(Protocol p);
+
+// "dmc", "dfmoco", "stackshot", "stackshot-dfmoco".
+std::string_view ProtocolName(Protocol p);
+// Exactly one of the names above; nullopt otherwise (session files).
+std::optional<Protocol> ParseProtocol(std::string_view name);
+// A name or an alias ("dmc2", "stackshot3x"), for command lines.
+std::optional<Protocol> ParseProtocolOrAlias(std::string_view text);
+// "dmc, dfmoco or stackshot": the names of `protocols`, for messages.
+std::string NameList(std::span<const Protocol> protocols);
+
+// Cuts a byte stream from `side` into whole messages; the bytes between them
+// (noise, a message cut short) are kept as messages of their own, so joining
+// the result gives the stream back.
+std::vector<Bytes> SplitMessages(Protocol p, Side side, ByteView stream);
+Bytes JoinMessages(const std::vector<Bytes>& messages);
+
+}  // namespace moco::wire
+
+#endif  // MOCO_WIRE_PROTOCOL_H_
