@@ -8,7 +8,7 @@
 #include <string>
 
 #include "conformance/fuzz/campaign.h"
-#include "conformance/runner/runner.h"
+#include "conformance/protocols/registry.h"
 
 namespace moco::conformance {
 namespace {

@@ -11,7 +11,8 @@ sim=$3
 work=$4/$test_name
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
 # shellcheck source=../tools/cli_test_lib.sh
-. "$5/tools/cli_test_lib.sh"
+src=$5
+. "$src/tools/cli_test_lib.sh"
 
 # Starts `mocosim dmc16 --tcp 127.0.0.1:0` logging to sim.log; sets sim_pid, port.
 start_device() {
@@ -190,6 +191,120 @@ mococheck_cli_serial_target_is_labelled_serial)
   expect_rc 0 "$m" run --target "serial:$work/dev" --cases 'connect/*' --json r.json
   grep -q "^mococheck: serial:$work/dev" out.txt || fail "console label"
   grep -q "\"target\": \"serial:$work/dev" r.json || fail "JSON label"
+  ;;
+
+# In-process runs write their reports, atomically (no partial file left).
+mococheck_cli_in_process)
+  expect_rc 0 "$m" run --target in-process:dmc16 -q --junit mococheck.xml --json mococheck.json
+  test -s mococheck.xml && test -s mococheck.json || fail "reports missing"
+  test ! -e mococheck.xml.partial || fail "a partial report was left"
+  ;;
+mococheck_cli_stackshot_in_process)
+  expect_rc 0 "$m" run --target in-process:stackshot3x -q --junit ss.xml --json ss.json
+  test -s ss.xml || fail "no JUnit report"
+  grep -q '"protocol": "stackshot"' ss.json || fail "the JSON report names no stackshot protocol"
+  ;;
+mococheck_cli_dfmoco_in_process)
+  expect_rc 0 "$m" run --target in-process:dfmoco -q --junit dfm.xml --json dfm.json
+  test -s dfm.xml && test -s dfm.json || fail "reports missing"
+  ;;
+mococheck_cli_dfmoco_mega)
+  expect_rc 0 "$m" run --target in-process:dfmoco -q \
+    --profile "$src/fixtures/profiles/dfmoco-mega.json"
+  ;;
+
+# Usage errors exit 2: an unknown target kind, a protocol the model does not
+# speak, no target, a shard out of range.
+mococheck_cli_usage_errors)
+  expect_rc 2 "$m" run --target ftp:x
+  expect_rc 2 "$m" run --target in-process:dmc16 --protocol dfmoco
+  grep -q 'does not match in-process:dmc16' err.txt || fail "the mismatch is not named"
+  expect_rc 2 "$m" run
+  expect_rc 2 "$m" run --target in-process:dmc16 --shard 0/2
+  ;;
+
+# The DMC-16 driving the Bullet boom rig passes every rule, the virtual-axis
+# family included (a move, a stop and a jog run through the physical rig).
+mococheck_cli_dmc16_boom_rig)
+  expect_rc 0 "$m" run --target in-process:dmc16 -q --json boom.json \
+    --profile "$src/fixtures/profiles/dmc16-boom.json"
+  for r in 001 002 003 007 008; do
+    grep -A2 "\"id\": \"DMC-VIRT-$r\"" boom.json | grep -q '"status": "pass"' ||
+      fail "DMC-VIRT-$r did not pass"
+  done
+  ;;
+
+# Reports into a FIFO (as into /dev/null) are written in place: the FIFO
+# stays a FIFO and its reader gets the report (docs/files.md).
+mococheck_cli_junit_into_a_fifo_keeps_the_fifo)
+  mkfifo junit || fail "mkfifo"
+  cat junit >got &
+  pids="$pids $!"
+  expect_rc 0 "$m" run --target in-process:dmc16 -q --junit junit
+  wait_for grep -q '</testsuites>' got || fail "the FIFO's reader got no whole report"
+  test -p junit || fail "the FIFO was replaced"
+  grep -q '<testsuites' got || fail "no JUnit report through the FIFO"
+  ;;
+
+# Outputs that cannot be written, or would overwrite an input or each other,
+# are refused before the run (exit 2, naming the path); /dev/zero as a
+# profile is refused instead of read without end.
+mococheck_cli_bad_outputs_and_inputs_refused_before_the_run)
+  mkdir outdir && echo '{}' >p.json
+  expect_rc 2 "$m" run --target in-process:dmc16 -q --junit outdir
+  grep -q 'is a directory' err.txt || fail "a directory as --junit is not named"
+  expect_rc 2 "$m" run --target in-process:dmc16 -q --profile p.json --json p.json
+  grep -q 'is the --profile' err.txt || fail "--json over the profile is not named"
+  expect_rc 2 "$m" run --target in-process:dmc16 -q --junit r --json r
+  grep -q 'is also --junit' err.txt || fail "two reports to one file is not named"
+  expect_rc 2 "$m" run --target in-process:dmc16 -q --profile /dev/zero
+  grep -q 'character device' err.txt || fail "/dev/zero as a profile is not named"
+  test "$(cat p.json)" = '{}' || fail "the profile was written"
+  test ! -e r || fail "a report was written although the run was refused"
+  ;;
+
+# `mococheck cases` lists each protocol's cases.
+mococheck_cli_cases)
+  expect_rc 0 "$m" cases
+  grep -q '^rt/live-run ' out.txt || fail "no rt/live-run in the DMC cases"
+  ;;
+mococheck_cli_stackshot_cases)
+  expect_rc 0 "$m" cases --protocol stackshot
+  grep -q '^curve/play ' out.txt || fail "no curve/play in the StackShot cases"
+  ;;
+mococheck_cli_dfmoco_cases)
+  expect_rc 0 "$m" cases --protocol dfmoco
+  grep -q '^random/sequence ' out.txt || fail "no random/sequence in the DFMoco cases"
+  ;;
+
+# The golden sessions replay against fresh devices, and a short fuzz run per
+# protocol breaks no invariant.
+mococheck_replay_golden_sessions)
+  for s in dmc16-workflow dfmoco-uno-workflow stackshot3x-workflow; do
+    expect_rc 0 "$m" replay "$src/fixtures/sessions/$s.jsonl"
+    grep -q '^result: MATCH' out.txt || fail "$s does not replay byte for byte"
+  done
+  ;;
+mococheck_fuzz_every_protocol)
+  for s in dmc16-workflow dfmoco-uno-workflow stackshot3x-workflow; do
+    expect_rc 0 "$m" fuzz "$src/fixtures/sessions/$s.jsonl" --runs 2000 --crashes fuzz-crashes
+  done
+  ;;
+# Fuzz and replay usage errors exit 2: a real device to fuzz, sessions of two
+# protocols, a missing session, a model that speaks another protocol.
+mococheck_fuzz_replay_usage_errors)
+  f=$src/fixtures/sessions
+  expect_rc 2 "$m" fuzz "$f/dmc16-workflow.jsonl" --target tcp:127.0.0.1:1
+  expect_rc 2 "$m" fuzz "$f/dmc16-workflow.jsonl" "$f/dfmoco-uno-workflow.jsonl"
+  expect_rc 2 "$m" replay /nonexistent.jsonl
+  expect_rc 2 "$m" replay "$f/dmc16-workflow.jsonl" --target in-process:dfmoco
+  grep -q "does not speak the session's protocol dmc" err.txt || fail "the mismatch is not named"
+  ;;
+
+# docs/rules.md is what `mococheck rules --markdown` prints.
+mococheck_rules_markdown_matches_docs)
+  "$m" rules --markdown >rules.md || fail "mococheck rules failed"
+  cmp rules.md "$src/docs/rules.md" || fail "docs/rules.md is stale: mococheck rules --markdown > docs/rules.md"
   ;;
 
 *)

@@ -10,6 +10,8 @@
 //     using Host;    // constructed as Host(target, verdicts, host_options)
 //     using Device;  // what the device says of itself
 //     using Case;    // CaseOf<CaseContextOf<Host, Device>>
+//     // How a case that needs more reads: "the device does not advertise ".
+//     static constexpr std::string_view kLacking;
 //     static const std::vector<Case>& Cases();
 //     static const std::vector<Rule>& Rules();
 //     // Asks the device what it is; nullopt when it did not answer.
@@ -21,6 +23,8 @@
 //     // Greets the device at the start of a case; what it answered, or
 //     // nullopt (the host has judged the silence).
 //     static std::optional<Device> Greet(Host& host, Target& target, const Device& discovered);
+//     // The motor positions the device reported in `traffic`, for plots.
+//     static PositionSeries Positions(const std::vector<Chunk>& traffic);
 //   };
 //
 // A device that did not introduce itself is treated the same for every
@@ -33,6 +37,7 @@
 #include <chrono>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "conformance/core/cases.h"
@@ -45,11 +50,12 @@ namespace moco::conformance {
 
 // Why a case or rule with `needs` cannot run on `device` ("" when it can).
 template <typename Traits>
-std::string NotApplicableBecause(Needs needs, const std::optional<typename Traits::Device>& device) {
+std::string NotApplicableBecause(Needs needs,
+                                 const std::optional<typename Traits::Device>& device) {
   if (needs == Needs::kNothing) return "";
   if (!device) return "the device did not introduce itself";
   if (Traits::Applies(needs, *device)) return "";
-  return "the device does not advertise " + std::string(NeedsText(needs));
+  return std::string(Traits::kLacking) + std::string(NeedsText(needs));
 }
 
 template <typename Traits>
@@ -100,8 +106,8 @@ RunReport Run(Target& target, const RunOptions& options) {
     const TimeNs t0 = host.Now();
     const std::optional<Device> seen = Traits::Greet(host, target, device.value_or(Device{}));
     if (seen && !host.link_lost()) {
-      typename Case::Context ctx{host, verdicts, *seen, target, options.host, options.random,
-                                 result.log};
+      typename Case::Context ctx{host,         verdicts,       *seen,     target,
+                                 options.host, options.random, result.log};
       k.run(ctx);
     }
     host.Close();
@@ -114,6 +120,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
     result.outcomes = verdicts.outcomes();
     result.KeepTraffic(host.traffic());
+    result.positions = Traits::Positions(result.traffic);
     report.cases.push_back(std::move(result));
     // A case cut short by a stop request is not a verdict on the device.
     if (const int sig = StopRequested(); sig != 0) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -34,6 +35,9 @@ struct RunOptions {
   std::function<void(const RunReport& report)> on_progress;
 };
 
+// Position reports per motor (1-based): (time, position) samples.
+using PositionSeries = std::map<int, std::vector<std::pair<TimeNs, int64_t>>>;
+
 struct CaseResult {
   std::string suite;
   std::string name;
@@ -48,6 +52,8 @@ struct CaseResult {
   // transcripts and plots); at most kMaxTrafficChunks chunks are kept.
   static constexpr size_t kMaxTrafficChunks = 20000;
   std::vector<Chunk> traffic;
+  // The positions the device reported in that traffic (the HTML report's plots).
+  PositionSeries positions;
   bool MustFailed() const;
   // Keeps the first kMaxTrafficChunks chunks of a case's traffic.
   void KeepTraffic(const std::vector<Chunk>& all);

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <set>
 
-#include "conformance/suites/sequence.h"
+#include "conformance/core/sequence.h"
 #include "control/session.h"
 
 namespace moco::conformance {

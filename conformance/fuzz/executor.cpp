@@ -5,7 +5,7 @@
 
 #include <string_view>
 
-#include "conformance/runner/host.h"
+#include "conformance/protocols/dmc/dmc_host.h"
 #include "wire/dfmoco.h"
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"

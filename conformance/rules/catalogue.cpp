@@ -559,9 +559,12 @@ const std::vector<Rule>& RulesFor(Protocol p) {
     case Protocol::kStackshot:
       return StackshotRules();
     case Protocol::kDmc:
+      return DmcRules();
+    case Protocol::kStackshotDfmoco:
       break;
   }
-  return DmcRules();
+  static const std::vector<Rule> kNone;  // a protocol without rules of its own
+  return kNone;
 }
 
 size_t RuleCount() {
@@ -582,46 +585,6 @@ const Rule* FindRule(std::string_view id) {
   }();
   const auto it = index.find(id);
   return it == index.end() ? nullptr : it->second;
-}
-
-bool Applies(const Rule& rule, const dmc::HiResponse& hi) {
-  constexpr uint32_t kVirtualCaps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
-                                    dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
-  switch (rule.needs) {
-    case Needs::kNothing:
-      return true;
-    case Needs::kMotors:
-      return hi.motor_count >= 1;
-    case Needs::kTwoMotors:
-      return hi.motor_count >= 2;
-    case Needs::kDmx:
-      return hi.dmx_count >= 1;
-    case Needs::kGioOut:
-      return hi.gio_out_count >= 1;
-    case Needs::kGioIn:
-      return hi.gio_in_count >= 1;
-    case Needs::kRealTime:
-      return (hi.capabilities & dmc::kCapRealTime) != 0 && hi.motor_count >= 1;
-    case Needs::kGoMotion:
-      return (hi.capabilities & dmc::kCapGoMotion) != 0 && hi.motor_count >= 1;
-    case Needs::kGoMotion2:
-      return (hi.capabilities & dmc::kCapGoMotion2) != 0 && hi.motor_count >= 1;
-    case Needs::kLooping:
-      return (hi.capabilities & dmc::kCapRtLooping) != 0;
-    case Needs::kVirtual:
-      return (hi.capabilities & kVirtualCaps) != 0;
-    case Needs::kNoVirtual:
-      return (hi.capabilities & kVirtualCaps) == 0;
-    case Needs::kVirtualBoomRig:
-      return (hi.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && hi.motor_count >= 6;
-    case Needs::kAimPoint:
-      return (hi.capabilities & dmc::kCapAimPoint) != 0;
-    case Needs::kSsThreeAxes:
-      return false;  // a StackShot need: no DMC v2 device has it
-    default:         // another protocol's needs
-      return false;
-  }
-  return false;
 }
 
 namespace {

@@ -77,9 +77,6 @@ size_t RuleCount();
 // Searches every protocol's rules; nullptr for an unknown id.
 const Rule* FindRule(std::string_view id);
 
-// Whether DMC `rule` applies to a device that answered HI with `hi`.
-bool Applies(const Rule& rule, const dmc::HiResponse& hi);
-
 // Shell-style match: '*' any run, '?' one character; a comma separates
 // alternatives ("DMC-HI-*,DMC-ACK-00?").
 bool GlobMatch(std::string_view patterns, std::string_view text);

@@ -2,6 +2,8 @@
 // docs/rules.md equal to the generated text.
 #include "conformance/rules/catalogue.h"
 
+#include "conformance/protocols/dmc/dmc_protocol.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>

@@ -3,7 +3,7 @@
 // and reply grammar, `mp` while moving and the dialect differences. Clauses
 // are quoted from the protocol text; where it is silent the FACTS or ERRATA
 // reading is quoted instead and the source says so.
-#include "conformance/rules/dfmoco_rules.h"
+#include "conformance/rules/catalogue.h"
 
 #include <charconv>
 
@@ -281,47 +281,5 @@ const std::vector<Rule> kRules = {
 }  // namespace
 
 const std::vector<Rule>& DfmocoRules() { return kRules; }
-
-std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text) {
-  std::array<int, 3> v{0, 0, 0};
-  size_t at = 0;
-  for (size_t part = 0; part < v.size(); ++part) {
-    const char* begin = text.data() + at;
-    const char* end = text.data() + text.size();
-    const auto [ptr, ec] = std::from_chars(begin, end, v[part]);
-    if (ec != std::errc()) {
-      if (part == 0) return std::nullopt;
-      break;
-    }
-    at = static_cast<size_t>(ptr - text.data());
-    if (at >= text.size() || text[at] != '.') break;
-    ++at;
-  }
-  return v;
-}
-
-bool DfmocoApplies(Needs needs, const dfmoco::HelloReply& hello) {
-  const auto version = ParseDfmocoVersion(hello.version);
-  switch (needs) {
-    case Needs::kNothing:
-      return true;
-    case Needs::kDfmMotors:
-      return hello.motor_count >= 1;
-    case Needs::kDfmTwoMotors:
-      return hello.motor_count >= 2;
-    case Needs::kDfmJogVelocity:
-      return hello.motor_count >= 1 && hello.protocol_major >= 2;
-    case Needs::kDfmGoMotion:
-      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 2, 7};
-    case Needs::kDfmBlurRefusal:
-      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 3, 1};
-    default:  // another protocol's needs
-      return false;
-  }
-}
-
-bool DfmocoApplies(const Rule& rule, const dfmoco::HelloReply& hello) {
-  return DfmocoApplies(rule.needs, hello);
-}
 
 }  // namespace moco::conformance

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <thread>
 
-#include "conformance/runner/report.h"
-#include "conformance/runner/runner.h"
+#include "conformance/core/report.h"
+#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "conformance/targets/target.h"
 #include "transport/serve.h"
 

@@ -14,8 +14,8 @@
 #include <memory>
 #include <thread>
 
-#include "conformance/runner/report.h"
-#include "conformance/runner/runner.h"
+#include "conformance/core/report.h"
+#include "conformance/protocols/dmc/dmc_protocol.h"
 #include "conformance/targets/target.h"
 #include "transport/serve.h"
 

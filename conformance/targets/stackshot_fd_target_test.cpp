@@ -8,8 +8,8 @@
 #include <fstream>
 #include <thread>
 
-#include "conformance/runner/report.h"
-#include "conformance/runner/runner.h"
+#include "conformance/core/report.h"
+#include "conformance/protocols/stackshot/stackshot_protocol.h"
 #include "conformance/targets/target.h"
 #include "transport/serve.h"
 

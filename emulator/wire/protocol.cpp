@@ -11,6 +11,7 @@
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"
 #include "wire/stackshot_constants.h"
+#include "wire/transcript_sides.h"
 
 namespace moco::wire {
 namespace {
@@ -43,8 +44,8 @@ void DmcRepair(Bytes& m) {
   if (!h) return;
   // The data runs to the declared Length, or to what is there before the check bytes.
   const size_t have = m.size() - dmc::kHeaderSize;
-  const size_t n = std::min<size_t>({h->length, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0,
-                                     dmc::kMaxDataLength});
+  const size_t n = std::min<size_t>(
+      {h->length, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0, dmc::kMaxDataLength});
   const Bytes data(m.begin() + dmc::kHeaderSize,
                    m.begin() + static_cast<ptrdiff_t>(dmc::kHeaderSize + n));
   m.clear();
@@ -86,15 +87,47 @@ Bytes StackshotGreeting() {
 
 // One row per protocol, in the enum's order.
 const std::array<ProtocolInfo, 4> kProtocols = {{
-    {Protocol::kDmc, "dmc", "DMC v2", "DMC-", "dmc2", {115200}, &DmcNext, &DmcRepair,
-     &DmcGreeting},
-    {Protocol::kDfmoco, "dfmoco", "DFMoco", "DFM-", "", {57600}, &LineNext, &LineRepair,
-     &LineGreeting},
-    {Protocol::kStackshot, "stackshot", "StackShot 3X", "SS-", "stackshot3x", {38400},
-     &StackshotNext, &StackshotRepair, &StackshotGreeting},
+    {Protocol::kDmc,
+     "dmc",
+     "DMC v2",
+     "DMC-",
+     "dmc2",
+     {115200},
+     &DmcNext,
+     &DmcRepair,
+     &DmcGreeting,
+     &MakeDmcTranscript},
+    {Protocol::kDfmoco,
+     "dfmoco",
+     "DFMoco",
+     "DFM-",
+     "",
+     {57600},
+     &LineNext,
+     &LineRepair,
+     &LineGreeting,
+     &MakeDfmocoTranscript},
+    {Protocol::kStackshot,
+     "stackshot",
+     "StackShot 3X",
+     "SS-",
+     "stackshot3x",
+     {38400},
+     &StackshotNext,
+     &StackshotRepair,
+     &StackshotGreeting,
+     &MakeStackshotTranscript},
     // A StackShot switched to Dragonframe's DfMoco mode speaks DFMoco lines at 57600.
-    {Protocol::kStackshotDfmoco, "stackshot-dfmoco", "StackShot 3X (DfMoco mode)", "", "",
-     {57600}, &LineNext, &LineRepair, &LineGreeting},
+    {Protocol::kStackshotDfmoco,
+     "stackshot-dfmoco",
+     "StackShot 3X (DfMoco mode)",
+     "",
+     "",
+     {57600},
+     &LineNext,
+     &LineRepair,
+     &LineGreeting,
+     &MakeStackshotDfmocoTranscript},
 }};
 
 }  // namespace
@@ -134,8 +167,9 @@ std::vector<Bytes> SplitMessages(Protocol p, Side side, ByteView stream) {
   size_t i = 0;
   while (i < stream.size()) {
     const MessageCut c = next(side, stream.subspan(i));
-    if (c.skip > 0) out.emplace_back(stream.begin() + static_cast<ptrdiff_t>(i),
-                                     stream.begin() + static_cast<ptrdiff_t>(i + c.skip));
+    if (c.skip > 0)
+      out.emplace_back(stream.begin() + static_cast<ptrdiff_t>(i),
+                       stream.begin() + static_cast<ptrdiff_t>(i + c.skip));
     i += c.skip;
     if (c.length == 0) break;
     out.emplace_back(stream.begin() + static_cast<ptrdiff_t>(i),

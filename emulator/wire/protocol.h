@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -21,6 +22,8 @@ namespace moco::wire {
 enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
 
 enum class Side { kHost, kDevice };
+
+class TranscriptSides;  // wire/transcript_sides.h
 
 // A serial line's settings (8 data bits, no parity, 1 stop bit, no flow control).
 struct LineSettings {
@@ -49,6 +52,8 @@ struct ProtocolInfo {
   void (*repair)(Bytes& message) = nullptr;
   // The message a host sends first to learn what is there (HI, `hi`, PING).
   Bytes (*greeting)() = nullptr;
+  // Decoders of both directions for transcripts (wire/transcript.h).
+  std::unique_ptr<TranscriptSides> (*transcript)() = nullptr;
 };
 
 // Every protocol, in the enum's order.

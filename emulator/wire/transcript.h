@@ -22,6 +22,9 @@ struct TranscriptLine {
   std::string text;
 };
 
+// A protocol's decoders for both directions (wire/transcript_sides.h).
+class TranscriptSides;
+
 // Keeps one streaming decoder per direction. Not thread-safe.
 class TranscriptDecoder {
  public:
@@ -36,8 +39,7 @@ class TranscriptDecoder {
   std::vector<TranscriptLine> Finish();
 
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<TranscriptSides> sides_;
 };
 
 }  // namespace moco::wire

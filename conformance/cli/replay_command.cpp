@@ -1,0 +1,88 @@
+// `mococheck replay`: a recorded session's host side resent to a device, the
+// device side compared (docs/sessions.md).
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "cli_numbers.h"
+#include "conformance/cli/commands.h"
+#include "conformance/fuzz/replay.h"
+#include "control/session.h"
+
+namespace moco::conformance::cli {
+namespace {
+
+struct ReplayArgs {
+  std::string session, target, profile;
+  int64_t steps = -1, ms = -1;
+  uint32_t baud = 0;
+};
+
+int Replay(const ReplayArgs& a) {
+  auto loaded = control::LoadSession(a.session);
+  if (const auto* err = std::get_if<control::SessionError>(&loaded)) {
+    return Fail(a.session + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
+                err->message);
+  }
+  const control::Session& session = std::get<control::Session>(loaded);
+  if (const std::string w = control::SessionWarning(session); !w.empty()) {
+    std::fprintf(stderr, "mococheck: %s: %s\n", a.session.c_str(), w.c_str());
+  }
+  const Protocol proto = session.header.protocol;
+  if (std::ranges::find(kAllProtocols, proto) == std::end(kAllProtocols)) {
+    return Fail(a.session + ": protocol " + std::string(ProtocolName(proto)) +
+                " cannot be replayed; sessions in " + wire::NameList(kAllProtocols) + " can");
+  }
+  TargetRequest request;
+  request.text = a.target;
+  request.session_device = session.header.device;
+  request.profile = a.profile;
+  request.baud = a.baud;
+  request.protocol = proto;
+  request.no_device_message = a.session + ": the session names no emulated device (\"" +
+                              session.header.device + "\"); give --target";
+  auto resolved = ResolveTarget(request);
+  if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
+  std::unique_ptr<Target> target = std::move(std::get<ResolvedTarget>(resolved).target);
+  if (auto err = target->Open()) return Fail(*err);
+  ReplayOptions options;
+  if (a.steps >= 0) options.position_steps = a.steps;
+  if (a.ms >= 0) options.time_ms = a.ms;
+  const ReplayResult r = conformance::Replay(session, proto, *target, options);
+  std::cout << "mococheck replay: " << a.session << " -> " << target->Name() << "\n"
+            << ReplayText(r) << std::flush;
+  if (const auto lost = target->LinkLost()) {
+    return Fail("target error: " + target->Name() + ": " + *lost +
+                "; the comparison proves nothing about the device");
+  }
+  return r.ok() ? 0 : 1;
+}
+
+}  // namespace
+
+Runner AddReplayCommand(CLI::App& app, CLI::App*& sub) {
+  using moco::cli::AddNumber;
+  auto a = std::make_shared<ReplayArgs>();
+  CLI::App* replay = app.add_subcommand(
+      "replay",
+      "Resend a recorded session's host side and compare the device side (docs/sessions.md)");
+  sub = replay;
+  replay->add_option("session", a->session, "Session file (JSON Lines)")->required();
+  replay->add_option("--target", a->target,
+                     "in-process:MODEL (default: the session's device), pty:PATH, serial:PATH or "
+                     "tcp:HOST:PORT");
+  replay->add_option("--profile", a->profile, "Device profile for an in-process target")
+      ->check(CLI::ExistingFile);
+  AddNumber(replay, "--baud", a->baud, uint32_t{0}, uint32_t{4000000},
+            "Baud rate of a pty:/serial: target (default 0: the protocol's)");
+  AddNumber(replay, "--position-tolerance", a->steps, int64_t{0}, int64_t{1} << 31,
+            "Steps a reported position may differ (default: the session's, else 0)")
+      ->default_str("the session's");
+  AddNumber(replay, "--time-tolerance-ms", a->ms, int64_t{0}, int64_t{3600000},
+            "How far a device message may arrive from its recorded time (default: the "
+            "session's, else 0 in-process and 50 on a real link)")
+      ->default_str("the session's");
+  return [a] { return Replay(*a); };
+}
+
+}  // namespace moco::conformance::cli

@@ -1,0 +1,258 @@
+// `mococheck run`: the conformance suites against a device, the console
+// streamed as cases end, and the JUnit, JSON and HTML reports (docs/files.md,
+// docs/exit-codes.md).
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "base/file_io.h"
+#include "cli_numbers.h"
+#include "conformance/cli/commands.h"
+#include "conformance/core/report.h"
+#include "conformance/protocols/registry.h"
+
+namespace moco::conformance::cli {
+namespace {
+
+// "i/n" with 1 <= i <= n <= 1000, both whole decimal numbers.
+bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos) return false;
+  const auto i = moco::cli::ParseNumber<uint32_t>(std::string_view(text).substr(0, slash));
+  const auto n = moco::cli::ParseNumber<uint32_t>(std::string_view(text).substr(slash + 1));
+  if (!i || !n || *n == 0 || *i == 0 || *i > *n || *n > 1000) return false;
+  index = *i - 1;
+  count = *n;
+  return true;
+}
+
+// SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops after the
+// current case and the reports of what ran are written; a second signal ends
+// the program at once.
+extern "C" void OnStopSignal(int sig) {
+  if (StopRequested() != 0) {
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+    return;
+  }
+  RequestStop(sig);
+}
+
+void InstallStopHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: a waiting poll() returns EINTR and sees the request
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
+
+struct RunArgs {
+  std::string target_text, protocol, profile, rules_glob, cases_glob, junit, json_path, html_path,
+      shard = "1/1", session_path;
+  uint64_t seed = 1;
+  int steps = 40;
+  uint32_t baud = 0;
+  int64_t deadline_ms = 250, answer_timeout_ms = 2000, position_gap_ms = 200;
+  std::vector<std::string> deadlines;
+  bool verbose = false, quiet = false;
+};
+
+int Run(const RunArgs& a) {
+  TargetRequest request;
+  request.text = a.target_text;
+  request.profile = a.profile;
+  request.baud = a.baud;
+  request.protocol_option = a.protocol;
+  auto resolved = ResolveTarget(request);
+  if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
+  ResolvedTarget& rt = std::get<ResolvedTarget>(resolved);
+  const Protocol proto = rt.protocol;
+  const std::string title(wire::Info(proto).title);
+  const ProtocolRunner* runner = FindRunner(proto);
+  if (runner == nullptr) {
+    return Fail(title + " has no conformance suites in this build; use a DMC v2 target");
+  }
+  RunOptions options;
+  if (!ParseShard(a.shard, options.shard_index, options.shard_count)) {
+    return Fail("--shard " + a.shard + ": give i/n with 1 <= i <= n, e.g. --shard 1/4");
+  }
+  if (!a.rules_glob.empty()) {
+    bool any = false;
+    for (const Rule& r : runner->rules()) any = any || GlobMatch(a.rules_glob, r.id);
+    if (!any) {
+      return Fail("--rules " + a.rules_glob + " matches no " + title +
+                  " rule; see 'mococheck rules'");
+    }
+  }
+  if (!a.cases_glob.empty()) {
+    bool any = false;
+    for (const CaseInfo& k : runner->cases())
+      any = any || GlobMatch(a.cases_glob, k.suite + "/" + k.name);
+    if (!any) {
+      return Fail("--cases " + a.cases_glob + " selects no " + title +
+                  " case; see the case names with 'mococheck cases --protocol " +
+                  std::string(ProtocolName(proto)) + "'");
+    }
+  }
+  options.rules = a.rules_glob;
+  options.cases = a.cases_glob;
+  options.host.deadline_ns = a.deadline_ms * sim::kNsPerMs;
+  for (const std::string& d : a.deadlines) {
+    const size_t eq = d.find('=');
+    const std::string kind = d.substr(0, eq);
+    bool known = false;
+    for (const char* k : kDeadlineKinds) known = known || kind == k;
+    int64_t ms = 0;
+    const std::string problem = eq == std::string::npos
+                                    ? "no '='"
+                                    : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1),
+                                                             int64_t{1}, int64_t{600000}, ms);
+    if (!known || !problem.empty()) {
+      return Fail("--deadline " + d +
+                  ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS a whole "
+                  "number in 1..600000, e.g. --deadline rt=500");
+    }
+    options.host.deadline_by_kind_ns[kind] = ms * sim::kNsPerMs;
+  }
+  options.host.answer_timeout_ns = a.answer_timeout_ms * sim::kNsPerMs;
+  options.host.position_gap_ns = a.position_gap_ms * sim::kNsPerMs;
+  options.random.seed = a.seed;
+  options.random.steps = a.steps;
+  options.random.session_path = a.session_path;
+
+  // Every output is checked before the run, not after it (docs/files.md).
+  {
+    const std::vector<std::pair<std::string, std::string>> outputs = {
+        {"--junit", a.junit},
+        {"--html", a.html_path},
+        {"--json", a.json_path},
+        {"--save-session", a.session_path}};
+    for (size_t i = 0; i < outputs.size(); ++i) {
+      const auto& [option, path] = outputs[i];
+      if (path.empty()) continue;
+      if (auto err = base::CheckOutputPath(path, option)) return Fail(*err);
+      if (!a.profile.empty() && base::SameFile(path, a.profile)) {
+        return Fail(option + " " + path + " is the --profile; writing it would destroy the " +
+                    "profile: choose another path for " + option);
+      }
+      for (size_t j = 0; j < i; ++j) {
+        if (!outputs[j].second.empty() && base::SameFile(path, outputs[j].second)) {
+          return Fail(option + " " + path + " is also " + outputs[j].first +
+                      "; one report would overwrite the other: give each its own file");
+        }
+      }
+    }
+  }
+  // From here a signal stops the run and the reports of what ran are written.
+  InstallStopHandlers();
+  std::unique_ptr<Target> target = std::move(rt.target);
+  if (auto err = target->Open()) return Fail(*err);
+
+  // The console streams: the title now, the device once it answered, each
+  // case's verdict as it ends (flushed, whatever stdout is), the summary last.
+  if (!a.quiet) {
+    std::cout << ConsoleTitle(target->Name(), std::string(ProtocolName(proto))) << std::flush;
+  }
+  bool device_printed = false;
+  size_t printed = 0;
+  auto print_device = [&](const RunReport& so_far) {
+    if (device_printed) return;
+    device_printed = true;
+    if (so_far.device.empty() && !target->VirtualClock()) {
+      std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a " << title
+                << " device there, at this baud rate?" << std::endl;
+    }
+    if (!a.quiet) std::cout << ConsoleDevice(so_far) << std::flush;
+  };
+  options.on_progress = [&](const RunReport& so_far) {
+    print_device(so_far);
+    for (; printed < so_far.cases.size(); ++printed) {
+      if (!a.quiet) std::cout << ConsoleCase(so_far.cases[printed], a.verbose) << std::flush;
+    }
+  };
+  RunReport report = runner->run(*target, options);
+  options.on_progress(report);  // whatever the runner did not announce
+  if (const auto lost = target->LinkLost()) report.target_error = *lost;
+  if (!report.target_error.empty()) {
+    std::cerr << "mococheck: target error: " << target->Name() << ": " << report.target_error
+              << "; the outcomes prove nothing about the device" << std::endl;
+  }
+  if (a.quiet) {
+    const std::string text = ConsoleSummary(report, false);
+    std::cout << text.substr(text.rfind("result:")) << std::flush;
+  } else {
+    std::cout << ConsoleSummary(report, a.verbose) << std::flush;
+  }
+  if (!a.junit.empty()) {
+    if (auto err = WriteAtomically(a.junit, JunitReport(report)); !err.empty()) return Fail(err);
+  }
+  if (!a.html_path.empty()) {
+    if (auto err = WriteAtomically(a.html_path, HtmlReport(report)); !err.empty()) {
+      return Fail(err);
+    }
+  }
+  if (!a.json_path.empty()) {
+    if (auto err = WriteAtomically(a.json_path, JsonReport(report).dump(2) + "\n"); !err.empty()) {
+      return Fail(err);
+    }
+  }
+  return ExitCode(report);
+}
+
+}  // namespace
+
+Runner AddRunCommand(CLI::App& app, CLI::App*& sub) {
+  using moco::cli::AddNumber;
+  auto a = std::make_shared<RunArgs>();
+  CLI::App* run = app.add_subcommand("run", "Run the conformance suites against a device");
+  sub = run;
+  run->add_option("--target", a->target_text,
+                  "in-process:MODEL (e.g. in-process:dmc16, virtual time), pty:PATH or serial:PATH "
+                  "(raw 8N1 at --baud), tcp:HOST:PORT, or simavr:PATH.elf[@MCU[:HZ]] (AVR "
+                  "firmware under simavr on its own clock; default @atmega328p:16000000)")
+      ->required();
+  run->add_option("--protocol", a->protocol,
+                  "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "
+                  "in-process model's protocol, else dmc");
+  run->add_option("--profile", a->profile, "Device profile (JSON) for an in-process target")
+      ->check(CLI::ExistingFile);
+  run->add_option("--rules", a->rules_glob,
+                  "Only check rules whose id matches: globs separated by commas, e.g. 'DMC-HI-*'");
+  run->add_option("--cases", a->cases_glob,
+                  "Only run cases matching suite/name globs, e.g. 'motor/*,rt/*'");
+  AddNumber(run, "--seed", a->seed, uint64_t{0}, UINT64_MAX, "Seed of the random sequence suite");
+  AddNumber(run, "--steps", a->steps, 1, 100000, "Requests in the random sequence");
+  run->add_option("--junit", a->junit,
+                  "Write a JUnit XML report here (one testcase per rule and case)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--json", a->json_path, "Write a JSON report here")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--html", a->html_path,
+                  "Write a self-contained HTML report here (evidence, transcripts, position plots)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--shard", a->shard, "Run only shard i of n (1-based), e.g. 2/4")
+      ->capture_default_str();
+  AddNumber(run, "--baud", a->baud, uint32_t{0}, uint32_t{4000000},
+            "Baud rate of a pty:/serial: target (default 0: the protocol's: DMC v2 115200, "
+            "DFMoco 57600, StackShot 38400)");
+  AddNumber(run, "--deadline-ms", a->deadline_ms, int64_t{1}, int64_t{600000},
+            "DMC-DL-* answer deadline");
+  run->add_option("--deadline", a->deadlines,
+                  "Per-kind deadline KIND=MS (kinds: hi, query, command, upload, rt); repeatable, "
+                  "overrides --deadline-ms for that kind");
+  AddNumber(run, "--answer-timeout-ms", a->answer_timeout_ms, int64_t{1}, int64_t{600000},
+            "DMC-ACK-001: a request unanswered after this has no answer");
+  AddNumber(run, "--position-gap-ms", a->position_gap_ms, int64_t{1}, int64_t{600000},
+            "DMC-POS-002: the largest gap between position updates while moving");
+  run->add_option("--save-session", a->session_path,
+                  "Save a failing random sequence here (JSON Lines, docs/sessions.md)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_flag("-v,--verbose", a->verbose, "List passing rules and every case's log");
+  run->add_flag("-q,--quiet", a->quiet, "Print only the summary line");
+  return [a] { return Run(*a); };
+}
+
+}  // namespace moco::conformance::cli

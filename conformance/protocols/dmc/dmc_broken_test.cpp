@@ -1,0 +1,314 @@
+// Deliberately broken DMC-16s (the real device behind a filter on its output)
+// are caught by the rule that names the fault; the random suite shrinks a
+// failing sequence and saves it as a session file.
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "conformance/core/report.h"
+#include "conformance/protocols/dmc/dmc_protocol.h"
+#include "control/session.h"
+#include "devices/registry.h"
+
+namespace moco::conformance {
+namespace {
+
+using dmc::MsgType;
+using dmc::ToWire;
+
+// Decides what becomes of one frame the device wrote: `out` is the real link.
+using Breakage = std::function<void(const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
+                                    devices::ByteSink& out)>;
+
+// Frames the device's output and hands each frame to the breakage.
+class FilterSink final : public devices::ByteSink {
+ public:
+  FilterSink(sim::Scheduler& s, devices::ByteSink& out, Breakage b)
+      : scheduler_(s), out_(out), breakage_(std::move(b)) {}
+  void Write(wire::ByteView bytes) override {
+    decoder_.Feed(bytes, [&](const dmc::FrameEvent& e) {
+      if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
+        breakage_(*f, wire::Bytes(f->raw.begin(), f->raw.end()), scheduler_, out_);
+      }
+    });
+  }
+
+ private:
+  sim::Scheduler& scheduler_;
+  devices::ByteSink& out_;
+  Breakage breakage_;
+  dmc::FrameDecoder decoder_;
+};
+
+// The real DMC-16 with a broken output stage.
+class BrokenDmc16 final : public devices::Device {
+ public:
+  BrokenDmc16(sim::Scheduler& s, devices::ByteSink& out, Breakage b, const std::string& profile)
+      : sink_(s, out, std::move(b)), inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
+  std::string_view Model() const override { return "dmc16-broken"; }
+  devices::LineSettings Line() const override { return inner_->Line(); }
+  void PowerOn() override { inner_->PowerOn(); }
+  void PowerOff() override { inner_->PowerOff(); }
+  bool Powered() const override { return inner_->Powered(); }
+  void OnHostBytes(wire::ByteView bytes) override { inner_->OnHostBytes(bytes); }
+  void OnHostLink(bool open) override { inner_->OnHostLink(open); }
+
+ private:
+  FilterSink sink_;
+  std::unique_ptr<devices::Device> inner_;
+};
+
+RunReport RunBroken(Breakage b, RunOptions options = {}, const std::string& profile = "") {
+  InProcessTarget target("dmc16-broken", [b, profile](sim::Scheduler& s, devices::ByteSink& out) {
+    return std::make_unique<BrokenDmc16>(s, out, b, profile);
+  });
+  EXPECT_FALSE(target.Open().has_value());
+  return RunDmc(target, options);
+}
+
+// Re-encodes `f` with a new ID or data.
+wire::Bytes Reencode(const dmc::FrameRef& f, uint32_t id, wire::ByteView data) {
+  wire::Bytes out;
+  dmc::EncodeFrame(id, f.type, data, out);
+  return out;
+}
+
+void ExpectCaught(const RunReport& r, const std::string& rule, Status want = Status::kFail) {
+  // MOCOCHECK_PRINT=1 shows what a user of mococheck would see.
+  if (std::getenv("MOCOCHECK_PRINT") != nullptr)
+    std::printf("%s\n", ConsoleReport(r, false).c_str());
+  ASSERT_TRUE(r.rules.count(rule)) << rule;
+  EXPECT_EQ(r.rules.at(rule).status, want) << rule << "\n" << ConsoleReport(r, false);
+  // The failing case explains itself: expected, observed, the time.
+  bool explained = false;
+  for (const CaseResult& c : r.cases) {
+    auto it = c.outcomes.find(rule);
+    if (it == c.outcomes.end() || it->second.evidence.empty()) continue;
+    const Evidence& e = it->second.evidence.front();
+    explained = !e.expected.empty() && !e.observed.empty();
+  }
+  EXPECT_TRUE(explained) << rule;
+}
+
+void PassThrough(const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+  out.Write(raw);
+}
+
+TEST(BrokenDevice, UnbrokenWrapperPassesEverything) {
+  const RunReport r = RunBroken(PassThrough);
+  EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
+}
+
+// How the device's bytes are cut into writes never changes a verdict.
+RC_GTEST_PROP(BrokenDevice, AnyChunkingOfTheOutputKeepsEveryVerdict, ()) {
+  const auto cuts = *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 40));
+  RunOptions o;
+  o.cases = "connect/*,errors/*,motor/reset-position";
+  auto index = std::make_shared<size_t>(0);
+  const RunReport whole = RunBroken(PassThrough, o);
+  const RunReport cut = RunBroken(
+      [cuts, index](const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&,
+                    devices::ByteSink& out) {
+        size_t at = 0;
+        while (at < raw.size()) {
+          const size_t n = cuts.empty() ? 1 : cuts[(*index)++ % cuts.size()];
+          const size_t len = std::min(n, raw.size() - at);
+          out.Write(wire::ByteView(raw.data() + at, len));
+          at += len;
+        }
+      },
+      o);
+  RC_ASSERT(ExitCode(cut) == 0);
+  RC_ASSERT(whole.rules.size() == cut.rules.size());
+  for (const auto& [id, s] : whole.rules) RC_ASSERT(cut.rules.at(id).status == s.status);
+}
+
+TEST(BrokenDevice, CorruptedChecksumIsCaughtByCsum001) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorStatus))
+          raw.back() = static_cast<uint8_t>(raw.back() + 1);
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-CSUM-001");
+  EXPECT_EQ(ExitCode(r), 1);
+  // The evidence quotes the bad frame's bytes.
+  for (const CaseResult& c : r.cases) {
+    auto it = c.outcomes.find("DMC-CSUM-001");
+    if (it != c.outcomes.end() && !it->second.evidence.empty()) {
+      EXPECT_EQ(it->second.evidence[0].hex.rfind("4446", 0), 0u);
+      EXPECT_EQ(it->second.evidence[0].hex.size(), 2u * (dmc::kHeaderSize + 5 + dmc::kCheckSize));
+    }
+  }
+}
+
+TEST(BrokenDevice, DroppedAckIsCaughtByAck001) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (ToWire(MsgType::kMotorStop) | dmc::kFlagAck)) return;
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-001");
+  EXPECT_EQ(ExitCode(r), 1);
+}
+
+TEST(BrokenDevice, WrongIdIsCaughtByAck003) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (ToWire(MsgType::kMotorResetPosition) | dmc::kFlagAck)) {
+          raw = Reencode(f, f.id + 0x100, f.data);
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-003");
+  EXPECT_EQ(ExitCode(r), 1);
+}
+
+TEST(BrokenDevice, DuplicateAnswerIsCaughtByAck002) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        out.Write(raw);
+        if (f.type == ToWire(MsgType::kMotorMove)) out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-002");
+}
+
+TEST(BrokenDevice, DelayedPositionReportIsCaughtByPos002) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorGetPosition) && f.id < DmcHost::kFirstHostId) {
+          s.After(350 * sim::kNsPerMs, [&out, raw] { out.Write(raw); });
+          return;
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-POS-002");
+  // POS-002 is a SHOULD: the run still passes on its MUST rules unless others broke.
+  EXPECT_EQ(FindRule("DMC-POS-002")->level, Level::kShould);
+}
+
+TEST(BrokenDevice, SlowQueryAnswersMissTheirKindsDeadline) {
+  const Breakage slow_status = [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
+                                  devices::ByteSink& out) {
+    if (f.type == ToWire(MsgType::kMotorStatus)) {
+      s.After(100 * sim::kNsPerMs, [&out, raw] { out.Write(raw); });
+      return;
+    }
+    out.Write(raw);
+  };
+  RunOptions o;
+  o.cases = "connect/*";
+  const RunReport lenient = RunBroken(slow_status, o);
+  EXPECT_EQ(lenient.rules.at("DMC-DL-002").status, Status::kPass);  // 100 ms < 250 ms
+  o.host.deadline_by_kind_ns["query"] = 50 * sim::kNsPerMs;
+  const RunReport strict = RunBroken(slow_status, o);
+  ExpectCaught(strict, "DMC-DL-002");
+  EXPECT_EQ(strict.rules.at("DMC-DL-001").status, Status::kPass);  // HI keeps 250 ms
+  EXPECT_EQ(ExitCode(strict), 0) << "deadlines are SHOULD rules";
+}
+
+TEST(BrokenDevice, SwallowedRtEndIsCaughtByRt005) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kRtEnd)) return;
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-RT-005");
+  ExpectCaught(r, "DMC-GM-001");
+  EXPECT_EQ(ExitCode(r), 1);
+}
+
+TEST(BrokenDevice, StatusBitsBeyondTheMotorsAreCaughtByStat002) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorStatus) && f.data.size() == 5) {
+          wire::Bytes data(f.data.begin(), f.data.end());
+          data[3] |= 0x80;  // motor 32 of a 16-motor device
+          raw = Reencode(f, f.id, data);
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-STAT-002");
+}
+
+TEST(BrokenDevice, StrayBytesAreCaughtByFrame001) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        out.Write(raw);
+        if (f.type == ToWire(MsgType::kHi)) out.Write(wire::Bytes{0x00, 0x0d, 0x0a});
+      });
+  ExpectCaught(r, "DMC-FRAME-001");
+}
+
+TEST(BrokenDevice, LegacyHiIsANoteNotAFailure) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kHi) && f.data.size() == dmc::kHiResponseSize) {
+          raw = Reencode(f, f.id, f.data.first(dmc::kHiResponseLegacySize));
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-HI-003", Status::kNoted);
+  EXPECT_EQ(r.rules.at("DMC-HI-002").status, Status::kPass);
+  EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
+}
+
+TEST(BrokenDevice, ThirtyTwoBitAckCodesAreANote) {
+  // The profile's ack_width_bits (FACTS: one dmc-lite firmware writes 32-bit codes).
+  const std::filesystem::path p = std::filesystem::temp_directory_path() /
+                                  ("mococheck_ack32_" + std::to_string(getpid()) + ".json");
+  {
+    std::ofstream out(p);
+    out << R"({"model": "dmc16", "ack_width_bits": 32})";
+  }
+  const RunReport r = RunBroken(PassThrough, {}, p.string());
+  std::filesystem::remove(p);
+  ExpectCaught(r, "DMC-ACK-006", Status::kNoted);
+  EXPECT_EQ(r.rules.at("DMC-ACK-005").status, Status::kPass);
+  EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
+}
+
+TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
+  const std::filesystem::path session = std::filesystem::temp_directory_path() /
+                                        ("mococheck_shrunk_" + std::to_string(getpid()) + ".jsonl");
+  RunOptions o;
+  o.cases = "random/*";
+  o.random.seed = 7;
+  o.random.steps = 40;
+  o.random.session_path = session.string();
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (ToWire(MsgType::kMotorStopAll) | dmc::kFlagAck))
+          return;  // STOP_ALL unanswered
+        out.Write(raw);
+      },
+      o);
+  ASSERT_EQ(r.cases.size(), 1u);
+  EXPECT_TRUE(r.cases[0].MustFailed());
+  const auto& log = r.cases[0].log;
+  const auto has = [&](const std::string& s) {
+    return std::find(log.begin(), log.end(), s) != log.end();
+  };
+  EXPECT_TRUE(has("shrunk to 1 step(s):")) << ConsoleReport(r, true);
+  EXPECT_TRUE(has("  MOTOR_STOP_ALL")) << ConsoleReport(r, true);
+  auto loaded = control::LoadSession(session);
+  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
+  const auto& s = std::get<control::Session>(loaded);
+  EXPECT_EQ(s.header.protocol, wire::Protocol::kDmc);
+  EXPECT_EQ(s.header.clock, "virtual");
+  bool stop_all_sent = false;
+  for (const auto& e : s.entries) {
+    if (e.from != control::Origin::kHost) continue;
+    auto f = dmc::DecodeFrame(e.bytes);
+    stop_all_sent = stop_all_sent || (f.ok() && f->type == ToWire(MsgType::kMotorStopAll));
+  }
+  EXPECT_TRUE(stop_all_sent);
+  std::filesystem::remove(session);
+}
+
+}  // namespace
+}  // namespace moco::conformance

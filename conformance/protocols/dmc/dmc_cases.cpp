@@ -1,0 +1,628 @@
+// DMC v2 scenario suites (dmc-v2-protocol.txt "Capabilities", "MSG_HI",
+// "MSG_MOTOR_*", "MSG_RT_*", "Computing and Validating the Checksum"; ERRATA
+// 1.2-1.11): each case drives Dragonframe-style traffic and judges what the
+// device did against the named rules. Cases work relative to the positions
+// they find, so they also run against a device that is not fresh.
+#include "conformance/protocols/dmc/dmc_suites.h"
+
+#include "conformance/protocols/dmc/dmc_cases_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace moco::conformance {
+namespace dmc_cases {
+
+using dmc::AckCode;
+using dmc::MsgType;
+using dmc::ToWire;
+
+Evidence EvOf(const DmcHost& h, const DeviceRecord* r, std::string expected, std::string observed) {
+  return Evidence{std::move(expected), std::move(observed), r != nullptr ? wire::ToHex(r->raw) : "",
+                  r != nullptr ? r->t_ns : h.Now()};
+}
+
+std::string CodeText(const DeviceRecord* r) {
+  if (auto code = AckCodeOf(r)) return "ACK " + dmc::AckCodeName(*code);
+  return Show(r);
+}
+
+// `rule` passes when `r` is an ACK with `want`.
+bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r, AckCode want) {
+  const std::optional<uint32_t> code = AckCodeOf(r);
+  return c.v.Check(rule, code && *code == ToWire(want), [&] {
+    return EvOf(c.host, r, "ACK " + dmc::AckCodeName(ToWire(want)), CodeText(r));
+  });
+}
+
+// `rule` and DMC-ACK-011 pass when `r` is ACK OK.
+bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r) {
+  ExpectCode(c, "DMC-ACK-011", r, AckCode::kOk);
+  return ExpectCode(c, rule, r, AckCode::kOk);
+}
+
+// `rule` passes when `r` is an ACK other than OK.
+bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r) {
+  const std::optional<uint32_t> code = AckCodeOf(r);
+  return c.v.Check(rule, code && *code != ToWire(AckCode::kOk),
+                   [&] { return EvOf(c.host, r, "an ACK with an error code", CodeText(r)); });
+}
+
+bool Expect(DmcCaseContext& c, std::string_view rule, bool ok, std::string expected,
+            std::string observed) {
+  return c.v.Check(rule, ok, [&] { return EvOf(c.host, nullptr, expected, observed); });
+}
+
+// Unsolicited MOTOR_GET_POSITION messages from record `from` on.
+std::vector<Update> UpdatesSince(const DmcHost& h, size_t from) {
+  std::vector<Update> out;
+  for (size_t i = from; i < h.records().size(); ++i) {
+    const DeviceRecord& r = h.records()[i];
+    if (r.request >= 0) continue;
+    if (const auto* p = As<dmc::MotorPositionReport>(&r)) {
+      out.push_back(Update{r.t_ns, p->move_time_x1000, p->positions_steps, &r});
+    }
+  }
+  return out;
+}
+
+int CountSince(const DmcHost& h, size_t from, MsgType type) {
+  int n = 0;
+  for (size_t i = from; i < h.records().size(); ++i) {
+    if (h.records()[i].request < 0 && h.records()[i].type == ToWire(type)) ++n;
+  }
+  return n;
+}
+
+bool IsUnsolicited(const DeviceRecord& r, MsgType type) {
+  return r.request < 0 && r.type == ToWire(type);
+}
+
+std::string Vec(const std::vector<int32_t>& v) {
+  std::string s = "[";
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  return s + "]";
+}
+
+int32_t At(const std::vector<int32_t>& v, size_t i) { return i < v.size() ? v[i] : 0; }
+
+void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to) {
+  c.host.Call(dmc::MotorMove{motor, to});
+  WaitRest(c.host, kRestTimeout);
+}
+
+}  // namespace dmc_cases
+
+namespace {
+
+using namespace dmc_cases;  // NOLINT: the shared checks of every DMC case
+
+// ---------------------------------------------------------------- connect
+
+void BootHi(DmcCaseContext& c) {
+  if (!c.target.CanRestart()) return;  // the start-up of an external device is not observed
+  bool seen = false;
+  for (const DeviceRecord& r : c.host.records()) {
+    seen = seen || (IsUnsolicited(r, MsgType::kHi) && r.t_ns <= 1000 * kMs);
+  }
+  if (!seen) {
+    c.host.WaitFor(0, 1000 * kMs,
+                   [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kHi); });
+    for (const DeviceRecord& r : c.host.records()) seen = seen || IsUnsolicited(r, MsgType::kHi);
+  }
+  Expect(c, "DMC-HI-011", seen, "an unsolicited HI within 1 s of power-on", "none");
+}
+
+void HiAgain(DmcCaseContext& c) {
+  const DeviceRecord* r = c.host.Call(dmc::HiRequest{});
+  Expect(c, "DMC-HI-001", As<dmc::HiResponse>(r) != nullptr, "HI response", Show(r));
+}
+
+void Bytewise(DmcCaseContext& c) {
+  const DeviceRecord* r = c.host.Await(c.host.SendBytewise(dmc::HiRequest{}));
+  Expect(c, "DMC-ERR-009", As<dmc::HiResponse>(r) != nullptr, "HI response to a byte-wise HI",
+         Show(r));
+  r = c.host.Await(c.host.SendBytewise(dmc::MotorStatusRequest{}));
+  Expect(c, "DMC-ERR-009", As<dmc::MotorStatusResponse>(r) != nullptr,
+         "MOTOR_STATUS response to a byte-wise MOTOR_STATUS", Show(r));
+}
+
+void Queries(DmcCaseContext& c) {
+  const DeviceRecord* r = c.host.Call(dmc::MotorStatusRequest{});
+  if (const auto* st = As<dmc::MotorStatusResponse>(r); st != nullptr && c.device.motor_count > 0) {
+    c.v.Check("DMC-STAT-004", st->moving_bits == 0,
+              [&] { return EvOf(c.host, r, "no motor moving at rest", Show(r)); });
+  }
+  r = c.host.Call(dmc::MotorGetPositionRequest{});
+  Expect(c, "DMC-POS-001", As<dmc::MotorPositionReport>(r) != nullptr,
+         "MOTOR_GET_POSITION response", Show(r));
+  c.host.Call(dmc::GioInRequest{});
+}
+
+// ---------------------------------------------------------------- motor
+
+void SetSpeed(DmcCaseContext& c, uint8_t motor, uint32_t v, uint32_t a) {
+  ExpectOk(c, "DMC-CFG-001", c.host.Call(dmc::MotorSetSpeed{motor, v, a}));
+}
+
+void Move(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  SetSpeed(c, 1, 2000, 4000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t start = At(*p0, 0), target = start + 2000;
+  const size_t mark = h.records().size();
+  const DeviceRecord* r = h.Call(dmc::MotorMove{1, target});
+  const TimeNs t0 = r != nullptr ? r->t_ns : h.Now();
+  const auto* mv = As<dmc::MotorMoveResponse>(r);
+  c.v.Check("DMC-MOVE-002", mv != nullptr && mv->moving == 1,
+            [&] { return EvOf(h, r, "MOTOR_MOVE moving=1", Show(r)); });
+  h.Idle(250 * kMs);
+  r = h.Call(dmc::MotorStatusRequest{});
+  const auto* st = As<dmc::MotorStatusResponse>(r);
+  c.v.Check("DMC-STAT-004", st != nullptr && (st->moving_bits & 1u) != 0,
+            [&] { return EvOf(h, r, "bit 0 set while motor 1 moves", Show(r)); });
+  const bool rested = WaitRest(h, kRestTimeout);
+  Expect(c, "DMC-STAT-004", rested, "status at rest after the move", "still moving");
+  h.Idle(300 * kMs);
+  const std::vector<Update> ups = UpdatesSince(h, mark);
+  // Updates while moving: from the move until the first one on the target.
+  TimeNs last = t0, worst = 0, sum = 0;
+  size_t n = 0;
+  bool reached = false;
+  for (const Update& u : ups) {
+    if (reached) break;
+    worst = std::max(worst, u.t_ns - last);
+    sum += u.t_ns - last;
+    ++n;
+    last = u.t_ns;
+    reached = At(u.positions, 0) == target;
+  }
+  c.v.Check("DMC-POS-002", n > 0 && worst <= c.host_options.position_gap_ns, [&] {
+    return EvOf(
+        h, nullptr,
+        "updates at most " + std::to_string(c.host_options.position_gap_ns / kMs) + " ms apart",
+        n == 0 ? "no update" : "a gap of " + std::to_string(worst / kMs) + " ms");
+  });
+  if (n > 1) {
+    const TimeNs mean = sum / static_cast<TimeNs>(n);
+    c.v.Check("DMC-POS-003", mean >= 75 * kMs, [&] {
+      return EvOf(h, nullptr, "about 100 ms between updates",
+                  std::to_string(mean / kMs) + " ms mean");
+    });
+  }
+  for (const Update& u : ups) {
+    const int32_t p = At(u.positions, 0);
+    if (!c.v.Check("DMC-POS-005", p >= start && p <= target, [&] {
+          return EvOf(
+              h, u.rec,
+              "motor 1 within [" + std::to_string(start) + ", " + std::to_string(target) + "]",
+              std::to_string(p));
+        }))
+      break;
+  }
+  Expect(c, "DMC-POS-004", !ups.empty() && At(ups.back().positions, 0) == target,
+         "a last update with motor 1 on " + std::to_string(target),
+         ups.empty() ? "no update" : "last update " + Vec(ups.back().positions));
+  const auto p1 = GetPositions(h);
+  if (!p1) return;
+  Expect(c, "DMC-MOVE-003", At(*p1, 0) == target, "motor 1 at " + std::to_string(target),
+         std::to_string(At(*p1, 0)));
+  Expect(c, "DMC-POS-006", At(*p1, 0) == target,
+         "MOTOR_GET_POSITION motor 1 = " + std::to_string(target), Vec(*p1));
+  bool others = p1->size() == p0->size();
+  for (size_t i = 1; others && i < p1->size(); ++i) others = (*p1)[i] == (*p0)[i];
+  Expect(c, "DMC-MOVE-004", others, "other motors as before " + Vec(*p0), Vec(*p1));
+  r = h.Call(dmc::MotorMove{1, target});
+  mv = As<dmc::MotorMoveResponse>(r);
+  c.v.Check("DMC-MOVE-002", mv != nullptr && mv->moving == 0,
+            [&] { return EvOf(h, r, "MOTOR_MOVE moving=0 for the current position", Show(r)); });
+  MoveAndRest(c, 1, start);
+}
+
+void Stop(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  SetSpeed(c, 1, 2000, 4000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t start = At(*p0, 0), far = start + 100000;
+  h.Call(dmc::MotorMove{1, far});
+  h.Idle(500 * kMs);
+  ExpectOk(c, "DMC-STOP-001", h.Call(dmc::MotorStop{1}));
+  const bool rested = WaitRest(h, 10'000 * kMs);
+  const auto p1 = GetPositions(h);
+  Expect(c, "DMC-STOP-001", rested && p1 && At(*p1, 0) > start && At(*p1, 0) < far,
+         "motor 1 at rest between " + std::to_string(start) + " and " + std::to_string(far),
+         p1 ? (rested ? "" : "still moving at ") + std::to_string(At(*p1, 0)) : "no position");
+  MoveAndRest(c, 1, start);
+}
+
+void StopAll(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const uint8_t motors = std::min<uint8_t>(c.device.motor_count, 2);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (uint8_t m = 1; m <= motors; ++m) {
+      SetSpeed(c, m, 2000, 4000);
+      h.Call(dmc::MotorMove{m, At(*p0, m - 1u) + 100000});
+    }
+    h.Idle(400 * kMs);
+    dmc::MotorStopAll stop;
+    if (pass == 0) stop.flags = dmc::kStopAllSilent;
+    const DeviceRecord* r = h.Call(stop);
+    ExpectOk(c, "DMC-STOP-002", r);
+    ExpectOk(c, "DMC-STOP-003", r);
+    Expect(c, "DMC-STOP-002", WaitRest(h, 10'000 * kMs), "every motor at rest after STOP_ALL",
+           "still moving");
+    h.Idle(1500 * kMs);  // past any "soon after" window
+  }
+  for (uint8_t m = 1; m <= motors; ++m) h.Call(dmc::MotorMove{m, At(*p0, m - 1u)});
+  WaitRest(h, kRestTimeout);
+}
+
+// Distance travelled by motor 1 after STOP_ALL (twice when `twice`).
+std::optional<int64_t> StopDistance(DmcCaseContext& c, bool twice) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return std::nullopt;
+  h.Call(dmc::MotorMove{1, At(*p0, 0) + 100000});
+  h.Idle(600 * kMs);
+  h.Call(dmc::MotorStopAll{});
+  if (twice) h.Call(dmc::MotorStopAll{});
+  WaitRest(h, 10'000 * kMs);
+  const auto p1 = GetPositions(h);
+  MoveAndRest(c, 1, At(*p0, 0));
+  h.Idle(1500 * kMs);
+  if (!p1) return std::nullopt;
+  return static_cast<int64_t>(At(*p1, 0)) - At(*p0, 0);
+}
+
+void HardStop(DmcCaseContext& c) {
+  SetSpeed(c, 1, 2000, 4000);
+  c.host.Idle(1500 * kMs);
+  const auto single = StopDistance(c, false);
+  const auto twice = StopDistance(c, true);
+  if (!single || !twice) return;
+  Expect(c, "DMC-STOP-004", *twice <= *single,
+         "no further than a single STOP_ALL (" + std::to_string(*single) + " steps)",
+         std::to_string(*twice) + " steps after two");
+}
+
+void Reset(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t value = At(*p0, 0) + 12345;
+  const size_t mark = h.records().size();
+  ExpectOk(c, "DMC-RST-001", h.Call(dmc::MotorResetPosition{1, value}));
+  const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+    return IsUnsolicited(r, MsgType::kMotorGetPosition);
+  });
+  const DeviceRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+  const auto* rep = As<dmc::MotorPositionReport>(u);
+  c.v.Check("DMC-RST-002", rep != nullptr && At(rep->positions_steps, 0) == value, [&] {
+    return EvOf(h, u,
+                "MOTOR_GET_POSITION with motor 1 = " + std::to_string(value) + " within 500 ms",
+                Show(u));
+  });
+  const auto p1 = GetPositions(h);
+  const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+  const auto* st = As<dmc::MotorStatusResponse>(r);
+  Expect(c, "DMC-RST-003",
+         p1 && At(*p1, 0) == value && st != nullptr && (st->moving_bits & 1u) == 0,
+         "motor 1 at rest reporting " + std::to_string(value),
+         (p1 ? Vec(*p1) : "no position") + ", " + Show(r));
+  h.Call(dmc::MotorResetPosition{1, At(*p0, 0)});
+}
+
+void Configure(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  ExpectOk(c, "DMC-CFG-002", h.Call(dmc::MotorConfigure{1, dmc::kMotorEnabled | 0x40}));
+  ExpectOk(c, "DMC-CFG-002", h.Call(dmc::MotorConfigure{1, dmc::kMotorEnabled}));
+  ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, 0, 0, 0, 0}));
+  SetSpeed(c, 1, 3000, 6000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t start = At(*p0, 0);
+  ExpectOk(c, "DMC-CFG-003", h.Call(dmc::MotorJog{1, dmc::kJogSpeedMax, start + 300}));
+  WaitRest(h, kRestTimeout);
+  const auto p1 = GetPositions(h);
+  Expect(c, "DMC-CFG-003", p1 && At(*p1, 0) > start && At(*p1, 0) <= start + 300,
+         "motor 1 moved towards " + std::to_string(start + 300), p1 ? Vec(*p1) : "no position");
+  ExpectCode(c, "DMC-CFG-004", h.Call(dmc::MotorJog{1, 0, start}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-CFG-004", h.Call(dmc::MotorJog{1, 10001, start}), AckCode::kErrRange);
+  MoveAndRest(c, 1, start);
+}
+
+void NoHostAck(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  h.set_ack_unsolicited(false);
+  SetSpeed(c, 1, 2000, 4000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  h.Call(dmc::MotorMove{1, At(*p0, 0) + 1500});
+  for (int i = 0; i < 4; ++i) {
+    h.Idle(150 * kMs);
+    const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+    Expect(c, "DMC-UNS-002", As<dmc::MotorStatusResponse>(r) != nullptr,
+           "MOTOR_STATUS answered while updates go un-ACKed", Show(r));
+  }
+  MoveAndRest(c, 1, At(*p0, 0));
+  h.set_ack_unsolicited(true);
+}
+
+void EStop(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  h.Call(dmc::MotorMove{1, At(*p0, 0) + 50000});
+  h.Idle(300 * kMs);
+  const size_t mark = h.records().size();
+  if (!c.target.SetEStop(true)) {
+    c.log.push_back("the target has no e-stop the runner can press: MOTOR_HARD_STOP not exercised");
+    h.Call(dmc::MotorStopAll{});
+    WaitRest(h, kRestTimeout);
+    MoveAndRest(c, 1, At(*p0, 0));
+    return;
+  }
+  const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+    return IsUnsolicited(r, MsgType::kMotorHardStop);
+  });
+  const DeviceRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+  const auto* m = As<dmc::MotorHardStop>(hs);
+  Expect(c, "DMC-UNS-003", m != nullptr && m->reason == 0 && !m->motor,
+         "MOTOR_HARD_STOP reason=0 (E-Stop) without MOTOR within 500 ms", Show(hs));
+  c.target.SetEStop(false);
+  WaitRest(h, kRestTimeout);
+  MoveAndRest(c, 1, At(*p0, 0));
+}
+
+// ---------------------------------------------------------------- errors
+
+void BadMotor(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const uint8_t bad[2] = {0, static_cast<uint8_t>(c.device.motor_count + 1)};
+  for (uint8_t m : bad) {
+    const std::string_view rule = m == 0 ? "DMC-ERR-001" : "DMC-ERR-002";
+    const std::vector<dmc::HostMessage> msgs = {
+        dmc::MotorMove{m, 100},
+        dmc::MotorStop{m},
+        dmc::MotorResetPosition{m, 5},
+        dmc::MotorJog{m, 100, 100},
+        dmc::MotorConfigure{m, 1},
+        dmc::MotorSetSpeed{m, 1000, 1000},
+        dmc::MotorSetLimits{m, 0, 0, 0, 0, 0},
+    };
+    for (const auto& msg : msgs) ExpectCode(c, rule, h.Call(msg), AckCode::kErrRange);
+  }
+}
+
+void Checksum(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const uint32_t id = h.SendFrame(ToWire(MsgType::kHi), {}, true);
+  const DeviceRecord* r = h.Await(id);
+  ExpectCode(c, "DMC-CSUM-002", r, AckCode::kErrChecksum);
+  c.v.Check("DMC-CSUM-003",
+            r != nullptr && r->id == id && r->type == (ToWire(MsgType::kHi) | dmc::kFlagAck),
+            [&] { return EvOf(h, r, "ACK HI with id=" + std::to_string(id), Show(r)); });
+  r = h.Call(dmc::MotorStatusRequest{});
+  Expect(c, "DMC-CSUM-005", As<dmc::MotorStatusResponse>(r) != nullptr,
+         "MOTOR_STATUS answered after a corrupted frame", Show(r));
+  if (c.device.motor_count == 0) return;
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  wire::Bytes data;
+  dmc::EncodeData(dmc::HostMessage{dmc::MotorMove{1, At(*p0, 0) + 1000}}, data);
+  r = h.Await(h.SendFrame(ToWire(MsgType::kMotorMove), data, true));
+  ExpectCode(c, "DMC-CSUM-002", r, AckCode::kErrChecksum);
+  h.Idle(200 * kMs);
+  const auto p1 = GetPositions(h);
+  Expect(c, "DMC-CSUM-005", p1 && *p1 == *p0, "a corrupted MOTOR_MOVE does not move: " + Vec(*p0),
+         p1 ? Vec(*p1) : "no position");
+}
+
+void UnknownType(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  ExpectCode(c, "DMC-ERR-003", h.Await(h.SendFrame(0x0077, {})), AckCode::kErrUnsupported);
+  const uint8_t some[3] = {1, 2, 3};
+  ExpectCode(c, "DMC-ERR-003", h.Await(h.SendFrame(0x0301, some)), AckCode::kErrUnsupported);
+  ExpectCode(c, "DMC-ERR-004", h.Await(h.SendFrame(dmc::kLegacyVirtJogOnLineType, some)),
+             AckCode::kErrUnsupported);
+}
+
+void BadLength(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const uint8_t junk[8] = {1, 0, 0, 0, 0, 0, 0, 0};
+  struct Bad {
+    MsgType type;
+    size_t len;
+  };
+  std::vector<Bad> bad = {{MsgType::kMotorStatus, 1}, {MsgType::kHi, 2}};
+  if (c.device.motor_count > 0) {
+    bad.insert(bad.end(), {{MsgType::kMotorMove, 3},
+                           {MsgType::kMotorSetSpeed, 5},
+                           {MsgType::kMotorResetPosition, 6},
+                           {MsgType::kMotorStop, 0}});
+  }
+  for (const Bad& b : bad) {
+    const DeviceRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
+    ExpectRefused(c, "DMC-ERR-005", r);
+    const std::optional<uint32_t> code = AckCodeOf(r);
+    if (code && *code != ToWire(AckCode::kOk)) {
+      c.v.Check("DMC-ERR-006", *code == ToWire(AckCode::kErrGeneral),
+                [&] { return EvOf(h, r, "ERR_GENERAL", CodeText(r)); });
+    }
+  }
+}
+
+void Noise(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const uint8_t noise[] = {'x', 'y', 0x00, 0xff, 'D', 0x01, 'F', 'D'};
+  h.SendNoise(noise);
+  const DeviceRecord* r = h.Call(dmc::HiRequest{});
+  Expect(c, "DMC-ERR-007", As<dmc::HiResponse>(r) != nullptr, "HI answered after noise", Show(r));
+  // A header declaring Length 2000 and nothing after it.
+  wire::Bytes over = {'D', 'F', 0x99, 0x99, 0, 0, 0x30, 0, 0xd0, 0x07};
+  h.SendNoise(over);
+  r = h.Call(dmc::MotorStatusRequest{});
+  Expect(c, "DMC-ERR-008", As<dmc::MotorStatusResponse>(r) != nullptr,
+         "MOTOR_STATUS answered after an oversize header", Show(r));
+}
+
+void MaxFrame(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const wire::Bytes data(dmc::kMaxDataLength, 0x11);
+  const DeviceRecord* r = h.Await(h.SendFrame(0x0077, data));
+  Expect(c, "DMC-ERR-012", AckCodeOf(r).has_value(), "an ACK to a 1048-byte frame", Show(r));
+}
+
+void Unadvertised(DmcCaseContext& c) {
+  ExpectCode(c, "DMC-ERR-010", c.host.Call(dmc::VirtGetPositionRequest{}),
+             AckCode::kErrUnsupported);
+  ExpectCode(c, "DMC-ERR-010", c.host.Call(dmc::VirtStop{1}), AckCode::kErrUnsupported);
+}
+
+void Io(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  h.Call(dmc::GioInRequest{});
+  if (c.device.gio_out_count > 0) ExpectOk(c, "DMC-GIO-003", h.Call(dmc::GioOut{1}));
+  if (c.device.gio_out_count > 0) ExpectOk(c, "DMC-GIO-003", h.Call(dmc::GioOut{0}));
+  ExpectOk(c, "DMC-GIO-004", h.Call(dmc::GioCam{dmc::kGioCamShutter}));
+  ExpectOk(c, "DMC-GIO-004", h.Call(dmc::GioCam{0}));
+}
+
+void Dmx(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, {10, 20, 30}}));
+  ExpectCode(c, "DMC-ERR-011", h.Call(dmc::Dmx{0, 0, {10}}), AckCode::kErrRange);
+  ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, {0, 0, 0}}));
+}
+
+// ---------------------------------------------------------------- limits
+
+void SoftLimits(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  SetSpeed(c, 1, 3000, 6000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t s = At(*p0, 0);
+  ExpectOk(c, "DMC-CFG-005",
+           h.Call(dmc::MotorSetLimits{1, dmc::kLimitEnabled, s - 1000, dmc::kLimitEnabled, s + 1000,
+                                      0}));
+  ExpectCode(c, "DMC-LIM-001", h.Call(dmc::MotorMove{1, s + 2000}), AckCode::kErrSoftUp);
+  ExpectCode(c, "DMC-LIM-002", h.Call(dmc::MotorMove{1, s - 2000}), AckCode::kErrSoftLow);
+  h.Idle(200 * kMs);
+  auto p = GetPositions(h);
+  Expect(c, "DMC-LIM-003", p && At(*p, 0) == s, "motor 1 still at " + std::to_string(s),
+         p ? Vec(*p) : "no position");
+  const DeviceRecord* r = h.Call(dmc::MotorMove{1, s + 500});
+  Expect(c, "DMC-LIM-004", As<dmc::MotorMoveResponse>(r) != nullptr, "MOTOR_MOVE response",
+         Show(r));
+  WaitRest(h, kRestTimeout);
+  p = GetPositions(h);
+  Expect(c, "DMC-LIM-004", p && At(*p, 0) == s + 500, "motor 1 at " + std::to_string(s + 500),
+         p ? Vec(*p) : "no position");
+  const size_t mark = h.records().size();
+  h.Call(dmc::MotorJog{1, dmc::kJogSpeedMax, s + 5000});
+  WaitRest(h, kRestTimeout);
+  p = GetPositions(h);
+  int32_t highest = p ? At(*p, 0) : 0;
+  for (const Update& u : UpdatesSince(h, mark)) highest = std::max(highest, At(u.positions, 0));
+  Expect(c, "DMC-LIM-006", highest <= s + 1000, "never above " + std::to_string(s + 1000),
+         "reached " + std::to_string(highest));
+  ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, s - 1000, 0, s + 1000, 0}));
+  r = h.Call(dmc::MotorMove{1, s + 2000});
+  Expect(c, "DMC-LIM-005", As<dmc::MotorMoveResponse>(r) != nullptr,
+         "MOTOR_MOVE beyond a disabled limit accepted", Show(r));
+  WaitRest(h, kRestTimeout);
+  p = GetPositions(h);
+  Expect(c, "DMC-LIM-005", p && At(*p, 0) == s + 2000, "motor 1 at " + std::to_string(s + 2000),
+         p ? Vec(*p) : "no position");
+  MoveAndRest(c, 1, s);
+}
+
+std::vector<DmcCase> MakeCases() {
+  using N = Needs;
+  return {
+      {"connect", "boot-hi", N::kNothing, "unsolicited HI at power-on", BootHi},
+      {"connect", "hi", N::kNothing, "HI twice: layout, ranges, stable answer", HiAgain},
+      {"connect", "bytewise", N::kNothing, "requests delivered one byte at a time", Bytewise},
+      {"connect", "queries", N::kNothing, "MOTOR_STATUS, MOTOR_GET_POSITION, GIO_IN at rest",
+       Queries},
+      {"motor", "move", N::kMotors, "move with position updates, status and final position", Move},
+      {"motor", "stop", N::kMotors, "MOTOR_STOP during a long move", Stop},
+      {"motor", "stop-all", N::kMotors, "STOP_ALL with and without FLAGS", StopAll},
+      {"motor", "hard-stop", N::kMotors, "a second STOP_ALL stops no later than one", HardStop},
+      {"motor", "reset-position", N::kMotors, "RESET_POSITION and its position update", Reset},
+      {"motor", "configure-jog", N::kMotors, "CONFIGURE, SET_LIMITS, SET_SPEED, JOG", Configure},
+      {"motor", "no-host-ack", N::kMotors, "updates left un-ACKed do not stall the device",
+       NoHostAck},
+      {"motor", "estop", N::kMotors, "the e-stop button (in-process): MOTOR_HARD_STOP", EStop},
+      {"errors", "bad-motor", N::kMotors, "motor 0 and MOTOR COUNT + 1 for every motor command",
+       BadMotor},
+      {"errors", "checksum", N::kNothing, "corrupted check bytes, then a valid request", Checksum},
+      {"errors", "unknown-type", N::kNothing, "unknown and retired types", UnknownType},
+      {"errors", "bad-length", N::kNothing, "known types with a wrong data length", BadLength},
+      {"errors", "noise", N::kNothing, "noise and an oversize header between frames", Noise},
+      {"errors", "max-frame", N::kNothing, "a frame filling the 1048-byte buffer", MaxFrame},
+      {"errors", "unadvertised", N::kNoVirtual, "virtual messages to a device without virtuals",
+       Unadvertised},
+      {"io", "gio", N::kNothing, "GIO_IN, GIO_OUT, GIO_CAM", Io},
+      {"io", "dmx", N::kDmx, "DMX set and channel 0", Dmx},
+      {"limits", "soft", N::kMotors, "moves and a jog against enabled and disabled soft limits",
+       SoftLimits},
+      {"rt", "upload-position", N::kRealTime, "upload, POSITION_FRAME, last-set repeat, range",
+       UploadPosition},
+      {"rt", "live-run", N::kRealTime, "RUN_MOVE (short form), GO, frame reports, RT_END", LiveRun},
+      {"rt", "stop-run", N::kRealTime, "STOP_ALL during a live run", StopRun},
+      {"rt", "go-unarmed", N::kRealTime, "GO with nothing armed", GoUnarmed},
+      {"rt", "jog-all", N::kRealTime, "JOG_ALL from a frame position and off it", JogAll},
+      {"rt", "stop-loop", N::kLooping, "STOP_LOOP", StopLoop},
+      {"gomotion", "shoot", N::kGoMotion, "SHOOT_FRAME, GO, RT_END",
+       [](DmcCaseContext& c) { Shoot(c, false); }},
+      {"gomotion", "shoot2", N::kGoMotion2, "SHOOT_FRAME2, GO, RT_END",
+       [](DmcCaseContext& c) { Shoot(c, true); }},
+      {"virtual", "get-position", N::kVirtual, "VIRT_GET_POSITION layout", VirtPosition},
+      {"virtual", "config", N::kVirtual,
+       "VIRT_CONFIG forms, the capability bits together, the TYPE 8 reading", VirtConfigForms},
+      {"virtual", "move", N::kVirtualBoomRig,
+       "VIRT_MOVE reached and read back, unreachable, virtual motor 0 and 7", VirtMoveReadBack},
+      {"virtual", "stop", N::kVirtualBoomRig, "VIRT_STOP during a long virtual move",
+       VirtStopShort},
+      {"virtual", "jog", N::kVirtualBoomRig, "VIRT_JOG, VIRT_JOG_ON_LINE and their stops",
+       VirtJogs},
+      {"virtual", "aim-point", N::kAimPoint, "VIRT_AIM_POINT echo and the position's aim fields",
+       VirtAim},
+      {"random", "sequence", N::kMotors, "a seeded sequence of valid motor requests (--seed)",
+       RandomSequence},
+  };
+}
+
+}  // namespace
+
+const std::vector<DmcCase>& DmcCases() {
+  static const std::vector<DmcCase> cases = MakeCases();
+  return cases;
+}
+
+std::optional<std::vector<int32_t>> GetPositions(DmcHost& host) {
+  const auto* p = As<dmc::MotorPositionReport>(host.Call(dmc::MotorGetPositionRequest{}));
+  if (p == nullptr) return std::nullopt;
+  return p->positions_steps;
+}
+
+bool WaitRest(DmcHost& host, TimeNs timeout_ns) {
+  const TimeNs until = host.Now() + timeout_ns;
+  for (;;) {
+    const auto* st = As<dmc::MotorStatusResponse>(host.Call(dmc::MotorStatusRequest{}));
+    if (st == nullptr) return false;
+    if (st->moving_bits == 0) return true;
+    if (host.Now() >= until || host.link_lost()) return false;
+    host.Idle(50 * kMs);
+  }
+}
+
+}  // namespace moco::conformance

@@ -1,0 +1,68 @@
+// What the DMC v2 case files share (dmc_cases.cpp, dmc_cases_rt.cpp): the
+// checks every case makes and the cases of dmc_cases_rt.cpp that the case
+// table lists. Internal to the DMC v2 suites.
+#ifndef MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
+#define MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "conformance/protocols/dmc/dmc_suites.h"
+
+namespace moco::conformance::dmc_cases {
+
+// Evidence at record `r` (or at the host's time when there is none).
+Evidence EvOf(const DmcHost& h, const DeviceRecord* r, std::string expected, std::string observed);
+// "ACK ERR_RANGE", or what the record is.
+std::string CodeText(const DeviceRecord* r);
+// `rule` passes when `r` is an ACK with `want`.
+bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r, dmc::AckCode want);
+// `rule` and DMC-ACK-011 pass when `r` is ACK OK.
+bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r);
+// `rule` passes when `r` is an ACK other than OK.
+bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r);
+bool Expect(DmcCaseContext& c, std::string_view rule, bool ok, std::string expected,
+            std::string observed);
+
+struct Update {
+  TimeNs t_ns;
+  uint32_t move_time;
+  std::vector<int32_t> positions;
+  const DeviceRecord* rec;
+};
+// Unsolicited MOTOR_GET_POSITION messages from record `from` on.
+std::vector<Update> UpdatesSince(const DmcHost& h, size_t from);
+// Unsolicited messages of `type` from record `from` on.
+int CountSince(const DmcHost& h, size_t from, dmc::MsgType type);
+bool IsUnsolicited(const DeviceRecord& r, dmc::MsgType type);
+// "[1, 2, 3]".
+std::string Vec(const std::vector<int32_t>& v);
+// v[i], or 0 past its end.
+int32_t At(const std::vector<int32_t>& v, size_t i);
+
+inline constexpr TimeNs kMs = sim::kNsPerMs;
+inline constexpr TimeNs kRestTimeout = 60'000 * kMs;
+
+// Moves `motor` to `to` and waits until nothing moves.
+void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to);
+
+// --- the real-time, go-motion, looping and virtual-axis cases (dmc_cases_rt.cpp)
+void UploadPosition(DmcCaseContext& c);
+void LiveRun(DmcCaseContext& c);
+void StopRun(DmcCaseContext& c);
+void GoUnarmed(DmcCaseContext& c);
+void JogAll(DmcCaseContext& c);
+void Shoot(DmcCaseContext& c, bool second);
+void StopLoop(DmcCaseContext& c);
+void VirtPosition(DmcCaseContext& c);
+void VirtConfigForms(DmcCaseContext& c);
+void VirtMoveReadBack(DmcCaseContext& c);
+void VirtStopShort(DmcCaseContext& c);
+void VirtJogs(DmcCaseContext& c);
+void VirtAim(DmcCaseContext& c);
+
+}  // namespace moco::conformance::dmc_cases
+
+#endif  // MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_

@@ -1,0 +1,399 @@
+// DMC v2 real-time, go-motion, looping and virtual-axis cases
+// (dmc-v2-protocol.txt "MSG_RT_*", "MSG_VIRT_*", "Capabilities"; ERRATA
+// 1.5-1.11): uploads, live runs, jogs to a frame, shooting and the virtual
+// rig, judged against the named rules. Listed by the table in dmc_cases.cpp.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "conformance/protocols/dmc/dmc_cases_internal.h"
+
+namespace moco::conformance::dmc_cases {
+
+using dmc::AckCode;
+using dmc::MsgType;
+using dmc::ToWire;
+
+// ---------------------------------------------------------------- real-time
+
+struct Uploaded {
+  std::vector<std::vector<int32_t>> path;  // [motor-1][frame]: positions at frames 0..end
+  uint32_t end = 0;
+};
+
+// Uploads frames 0..20: motor 1 climbs 40 steps a frame and motor 2 falls 25
+// a frame over frames 0..10 (last set), then both hold.
+std::optional<Uploaded> Upload(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return std::nullopt;
+  Uploaded u;
+  u.end = 20;
+  const uint8_t motors = std::min<uint8_t>(c.device.motor_count, 2);
+  ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveBegin{0, u.end}));
+  for (uint8_t m = 1; m <= motors; ++m) {
+    const int32_t step = m == 1 ? 40 : -25;
+    std::vector<int32_t> section;
+    for (int k = 0; k <= 10; ++k) section.push_back(At(*p0, m - 1u) + step * k);
+    ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveAxis{m, 0, true, section}));
+    std::vector<int32_t> path = section;
+    while (path.size() <= u.end) path.push_back(section.back());
+    u.path.push_back(path);
+  }
+  ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveEnd{}));
+  return u;
+}
+
+bool AtFrame(DmcCaseContext& c, const Uploaded& u, uint32_t frame, std::string_view rule) {
+  ExpectOk(c, rule, c.host.Call(dmc::RtPositionFrame{frame}));
+  WaitRest(c.host, kRestTimeout);
+  const auto p = GetPositions(c.host);
+  std::vector<int32_t> want;
+  for (const auto& path : u.path) want.push_back(path[frame]);
+  bool ok = p.has_value();
+  for (size_t i = 0; ok && i < want.size(); ++i) ok = (*p)[i] == want[i];
+  return Expect(c, rule, ok, "frame " + std::to_string(frame) + " positions " + Vec(want),
+                p ? Vec(*p) : "no position");
+}
+
+void UploadPosition(DmcCaseContext& c) {
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 5, "DMC-RT-002");
+  AtFrame(c, *u, 15, "DMC-RT-003");
+  ExpectRefused(c, "DMC-RT-010", c.host.Call(dmc::RtPositionFrame{u->end + 1}));
+  AtFrame(c, *u, 0, "DMC-RT-002");
+}
+
+dmc::RtRunMove ShortRun(uint32_t end) {
+  dmc::RtRunMove run;
+  run.fps_x1000 = 24000;
+  run.start_frame = 0;
+  run.end_frame = end;
+  run.preroll_ms = 500;
+  run.postroll_ms = 500;
+  return run;  // FLAGS and the camera angles left out: 29 data bytes
+}
+
+void LiveRun(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 0, "DMC-RT-002");
+  const uint32_t end = 10;
+  ExpectOk(c, "DMC-RT-009", h.Call(ShortRun(end)));
+  WaitRest(h, kRestTimeout);
+  const size_t mark = h.records().size();
+  ExpectOk(c, "DMC-RT-009", h.Call(dmc::RtGo{}));
+  const int e = h.WaitFor(mark, 20'000 * kMs,
+                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+  Expect(c, "DMC-RT-005", e >= 0, "RT_END after the run", "none within 20 s");
+  h.Idle(500 * kMs);
+  const int ends = CountSince(h, mark, MsgType::kRtEnd);
+  Expect(c, "DMC-RT-006", ends <= 1, "one RT_END", std::to_string(ends) + " RT_END messages");
+  const std::vector<Update> ups = UpdatesSince(h, mark);
+  const double interval_ns = 1e9 / 24.0;
+  const TimeNs slack = c.target.VirtualClock() ? 0 : 30 * kMs;
+  TimeNs prev_t = -1;  // none yet
+  for (uint32_t k = 0; k <= end; ++k) {
+    const Update* first = nullptr;
+    for (const Update& up : ups) {
+      if (up.move_time / 1000 == k) {
+        first = &up;
+        break;
+      }
+    }
+    if (!Expect(c, "DMC-RT-004", first != nullptr,
+                "a report with MOVE TIME " + std::to_string(k * 1000),
+                "none for frame " + std::to_string(k))) {
+      prev_t = -1;
+      continue;
+    }
+    if (prev_t >= 0) {
+      const TimeNs dt = first->t_ns - prev_t;
+      c.v.Check("DMC-RT-007",
+                dt >= static_cast<TimeNs>(interval_ns * 0.5) - slack &&
+                    dt <= static_cast<TimeNs>(interval_ns * 1.5) + slack,
+                [&] {
+                  return EvOf(h, first->rec, "about 41.7 ms after the previous frame's report",
+                              std::to_string(dt / kMs) + " ms");
+                });
+    }
+    prev_t = first->t_ns;
+    for (size_t m = 0; m < u->path.size(); ++m) {
+      const int32_t a = u->path[m][k], b = u->path[m][std::min(k + 1, u->end)];
+      const int32_t p = At(first->positions, m);
+      c.v.Check("DMC-RT-008", p >= std::min(a, b) && p <= std::max(a, b), [&] {
+        return EvOf(h, first->rec,
+                    "motor " + std::to_string(m + 1) + " within [" +
+                        std::to_string(std::min(a, b)) + ", " + std::to_string(std::max(a, b)) +
+                        "] at frame " + std::to_string(k),
+                    std::to_string(p));
+      });
+    }
+  }
+  WaitRest(h, kRestTimeout);
+}
+
+void StopRun(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 0, "DMC-RT-002");
+  h.Call(ShortRun(10));
+  WaitRest(h, kRestTimeout);
+  const size_t mark = h.records().size();
+  h.Call(dmc::RtGo{});
+  h.WaitFor(mark, 10'000 * kMs, [](const DeviceRecord& r) {
+    const auto* p = As<dmc::MotorPositionReport>(&r);
+    return r.request < 0 && p != nullptr && p->move_time_x1000 >= 3000;
+  });
+  const size_t stop_mark = h.records().size();
+  ExpectOk(c, "DMC-STOP-002", h.Call(dmc::MotorStopAll{}));
+  const int e = h.WaitFor(stop_mark, 5000 * kMs,
+                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+  Expect(c, "DMC-RT-012", e >= 0, "RT_END after STOP_ALL ends the run", "none within 5 s");
+  WaitRest(h, kRestTimeout);
+}
+
+void GoUnarmed(DmcCaseContext& c) { ExpectRefused(c, "DMC-RT-011", c.host.Call(dmc::RtGo{})); }
+
+void JogAll(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 0, "DMC-RT-002");
+  const size_t mark = h.records().size();
+  ExpectOk(c, "DMC-RT-013", h.Call(dmc::RtJogAll{24000, 5}));
+  WaitRest(h, kRestTimeout);
+  h.Idle(200 * kMs);
+  const std::vector<Update> ups = UpdatesSince(h, mark);
+  for (uint32_t k = 1; k <= 5; ++k) {
+    bool seen = false;
+    for (const Update& up : ups) seen = seen || up.move_time / 1000 == k;
+    Expect(c, "DMC-RT-013", seen, "a report with MOVE TIME " + std::to_string(k * 1000),
+           "none for frame " + std::to_string(k));
+  }
+  const auto p = GetPositions(h);
+  if (!p) return;
+  MoveAndRest(c, 1, At(*p, 0) + 37);
+  ExpectCode(c, "DMC-RT-014", h.Call(dmc::RtJogAll{24000, 0}), AckCode::kErrNotInPosition);
+  MoveAndRest(c, 1, u->path[0][0]);
+}
+
+void Shoot(DmcCaseContext& c, bool second) {
+  DmcHost& h = c.host;
+  const std::string_view rule = second ? "DMC-GM-002" : "DMC-GM-001";
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 3, "DMC-RT-002");
+  const int32_t at = u->path[0][3];
+  const std::vector<dmc::BlurMotor> blur = {{1, at - 20, at + 20}};
+  if (second) {
+    ExpectOk(c, rule, h.Call(dmc::RtShootFrame2{3, 200, 90, 270, blur}));
+  } else {
+    ExpectOk(c, rule, h.Call(dmc::RtShootFrame{3, dmc::kDirectionForward, 200, 500, blur}));
+  }
+  WaitRest(h, kRestTimeout);
+  const size_t mark = h.records().size();
+  ExpectOk(c, rule, h.Call(dmc::RtGo{}));
+  const int e = h.WaitFor(mark, 10'000 * kMs,
+                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+  Expect(c, rule, e >= 0, "RT_END after the exposure", "none within 10 s");
+  WaitRest(h, kRestTimeout);
+}
+
+void StopLoop(DmcCaseContext& c) { ExpectOk(c, "DMC-LOOP-001", c.host.Call(dmc::RtStopLoop{})); }
+
+void VirtPosition(DmcCaseContext& c) {
+  const DeviceRecord* r = c.host.Call(dmc::VirtGetPositionRequest{});
+  Expect(c, "DMC-VIRT-001", As<dmc::VirtPositionReport>(r) != nullptr, "VIRT_GET_POSITION response",
+         Show(r));
+}
+
+// A boom-swing-track rig on motors 1..6 (boom 2.0 + level extension 0.5,
+// angles 1000 steps per degree, track 10000 steps per unit), every POSITION 0.
+constexpr int32_t kVirtAngleSpu = 1000;
+constexpr int32_t kVirtTrackSpu = 10000;
+constexpr int32_t kVirtTolerance = 200;  // 0.002 units or degrees, x100000
+
+dmc::VirtRigBoomSwingTrack TestBoomRig() {
+  dmc::VirtRigBoomSwingTrack b;
+  b.boom = {1, kVirtAngleSpu, 0};
+  b.swing = {2, kVirtAngleSpu, 0};
+  b.track = {3, kVirtTrackSpu, 0};
+  b.pan = {4, kVirtAngleSpu, 0};
+  b.tilt = {5, kVirtAngleSpu, 0};
+  b.roll = {6, kVirtAngleSpu, 0};
+  b.boom_length_x1000 = 2000;
+  b.boom_ext_x1000 = 500;
+  return b;
+}
+
+bool ConfigureBoomRig(DmcCaseContext& c) {
+  return ExpectOk(c, "DMC-VIRT-002", c.host.Call(dmc::VirtConfig{TestBoomRig()}));
+}
+
+void Unconfigure(DmcCaseContext& c) { c.host.Call(dmc::VirtConfig{dmc::VirtRigNone{}}); }
+
+std::optional<dmc::VirtPositionReport> VirtPositions(DmcHost& h) {
+  const auto* p = As<dmc::VirtPositionReport>(h.Call(dmc::VirtGetPositionRequest{}));
+  if (p == nullptr) return std::nullopt;
+  return *p;
+}
+
+void ExpectVirtAt(DmcCaseContext& c, std::string_view rule, const char* axis, int32_t got,
+                  int32_t want) {
+  c.v.Check(rule, std::abs(int64_t{got} - want) <= kVirtTolerance, [&] {
+    return EvOf(c.host, nullptr, std::string(axis) + " " + std::to_string(want) + " (x100000)",
+                std::to_string(got));
+  });
+}
+
+void VirtConfigForms(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  constexpr uint32_t kModes = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                              dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
+  char caps[16];
+  std::snprintf(caps, sizeof caps, "0x%04x", c.device.capabilities);
+  Expect(c, "DMC-VIRT-011", (c.device.capabilities & kModes) == kModes,
+         "capabilities with 0x003c all set", caps);
+  if ((c.device.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && c.device.motor_count >= 6) {
+    // ERRATA 1.7: the table and SAFE DISTANCE are each optional.
+    dmc::VirtRigBoomSwingTrack b = TestBoomRig();
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 93 bytes
+    b.safe_distance_x1000 = 500;
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 97
+    // A table in which the boom's present position is geometric 0 degrees,
+    // one degree of axis per degree of angle.
+    const auto p = GetPositions(h);
+    const double boom_deg =
+        static_cast<double>(At(p.value_or(std::vector<int32_t>{}), 0)) / kVirtAngleSpu;
+    b.compensation.emplace();
+    for (size_t i = 0; i < b.compensation->size(); ++i) {
+      (*b.compensation)[i] = static_cast<int32_t>(
+          std::lround((boom_deg + static_cast<double>(i) - 60.0) * dmc::kVirtPositionScale));
+    }
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 581
+    b.safe_distance_x1000.reset();
+    ExpectOk(c, "DMC-VIRT-002", h.Call(dmc::VirtConfig{b}));  // 577
+  }
+  if ((c.device.capabilities & dmc::kCapVirtXyz) != 0 && c.device.motor_count >= 6) {
+    // TYPE 8 with TYPE 1's layout: x-y-z in the bit-flag numbering.
+    wire::Bytes data;
+    dmc::EncodeData(dmc::HostMessage{dmc::VirtConfig{TestBoomRig()}}, data);
+    dmc::VirtRigRaw raw;
+    raw.type = static_cast<uint8_t>(dmc::RigType::kXyzFlag);
+    raw.data.assign(data.begin() + 1, data.end());
+    const DeviceRecord* r = h.Call(dmc::VirtConfig{raw});
+    const std::optional<uint32_t> code = AckCodeOf(r);
+    c.v.Check("DMC-VIRT-012", code && *code != ToWire(AckCode::kOk), [&] {
+      return EvOf(h, r, "TYPE 8 refused (the spec numbers the rigs 0..4)",
+                  CodeText(r) + ": TYPE 8 taken as x-y-z (bit-flag numbering)");
+    });
+  }
+  Unconfigure(c);
+}
+
+void VirtMoveReadBack(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  // 0.1 units along the track, then 0.1 units up.
+  ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{1, p0->track_x100000 + 10000}));
+  WaitRest(h, kRestTimeout);
+  const auto p1 = VirtPositions(h);
+  if (!p1) return;
+  ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p1->track_x100000, p0->track_x100000 + 10000);
+  ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{3, p1->ns_x100000 + 10000}));
+  WaitRest(h, kRestTimeout);
+  const auto p2 = VirtPositions(h);
+  if (!p2) return;
+  ExpectVirtAt(c, "DMC-VIRT-003", "vNS", p2->ns_x100000, p1->ns_x100000 + 10000);
+  ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p2->track_x100000, p1->track_x100000);
+  // 6 units above a boom of 2: out of reach.
+  const auto steps = GetPositions(h);
+  const DeviceRecord* r = h.Call(dmc::VirtMove{3, p2->ns_x100000 + 600000});
+  ExpectRefused(c, "DMC-VIRT-004", r);
+  ExpectCode(c, "DMC-VIRT-005", r, AckCode::kErrRange);
+  h.Idle(100 * kMs);
+  const auto after = GetPositions(h);
+  Expect(c, "DMC-VIRT-004", steps && after && *steps == *after,
+         "motor positions unchanged: " + (steps ? Vec(*steps) : std::string("?")),
+         after ? Vec(*after) : std::string("no MOTOR_GET_POSITION answer"));
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtMove{0, 0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtMove{7, 0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtStop{0}), AckCode::kErrRange);
+  ExpectCode(c, "DMC-VIRT-006", h.Call(dmc::VirtStop{7}), AckCode::kErrRange);
+  Unconfigure(c);
+}
+
+void VirtStopShort(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  const int32_t far = p0->track_x100000 + 2'000'000;  // 20 units: far enough to stop short of
+  ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtMove{1, far}));
+  h.Idle(200 * kMs);
+  ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtStop{1}));
+  Expect(c, "DMC-VIRT-007", WaitRest(h, 10'000 * kMs), "the rig at rest within 10 s of VIRT_STOP",
+         "still moving");
+  const auto p1 = VirtPositions(h);
+  if (!p1) return;
+  Expect(c, "DMC-VIRT-007", p1->track_x100000 < far - kVirtTolerance,
+         "vTrack short of " + std::to_string(far), std::to_string(p1->track_x100000));
+  h.Call(dmc::VirtMove{1, p0->track_x100000});
+  WaitRest(h, kRestTimeout);
+  Unconfigure(c);
+}
+
+void VirtJogs(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  if (!ConfigureBoomRig(c)) return;
+  const auto p0 = VirtPositions(h);
+  if (!p0) return;
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJog{1, dmc::kJogSpeedMax, p0->track_x100000 + 5000}));
+  WaitRest(h, kRestTimeout);
+  if (const auto p1 = VirtPositions(h)) {
+    ExpectVirtAt(c, "DMC-VIRT-008", "vTrack", p1->track_x100000, p0->track_x100000 + 5000);
+  }
+  // Along the camera line, then speed 0; the pan, then VIRT_STOP.
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 5000}));
+  h.Idle(300 * kMs);
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 0}));
+  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of speed 0",
+         "still moving");
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{3, -3000}));
+  h.Idle(300 * kMs);
+  ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtStop{4}));
+  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of VIRT_STOP",
+         "still moving");
+  Unconfigure(c);
+}
+
+void VirtAim(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  for (const dmc::VirtAimPoint& a :
+       {dmc::VirtAimPoint{1, 1500, -250, 9000}, dmc::VirtAimPoint{0, 1500, -250, 9000}}) {
+    const DeviceRecord* r = h.Call(a);
+    const auto* echo = As<dmc::VirtAimPoint>(r);
+    c.v.Check("DMC-VIRT-009", echo != nullptr && *echo == a, [&] {
+      return EvOf(h, r, "VIRT_AIM_POINT enable=" + std::to_string(a.enable) + " 1500,-250,9000",
+                  Show(r));
+    });
+    const auto p = VirtPositions(h);
+    const bool same = p && p->aim && p->aim->enabled == a.enable && p->aim->x_x1000 == a.x_x1000 &&
+                      p->aim->y_x1000 == a.y_x1000 && p->aim->z_x1000 == a.z_x1000;
+    Expect(c, "DMC-VIRT-010", same,
+           "aim fields enabled=" + std::to_string(a.enable) + " 1500,-250,9000",
+           p && p->aim ? "enabled=" + std::to_string(p->aim->enabled) + " " +
+                             std::to_string(p->aim->x_x1000) + "," +
+                             std::to_string(p->aim->y_x1000) + "," + std::to_string(p->aim->z_x1000)
+                       : std::string("no aim fields"));
+  }
+}
+
+}  // namespace moco::conformance::dmc_cases

@@ -1,0 +1,238 @@
+// mococheck against the in-process DMC-16 (virtual time): every MUST rule
+// passes, the run is deterministic, sharding partitions the cases, the random
+// suite holds for many seeds, and the reports carry the outcomes.
+#include "conformance/protocols/dmc/dmc_protocol.h"
+
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "conformance/core/report.h"
+
+namespace moco::conformance {
+namespace {
+
+RunReport RunInProcess(RunOptions options = {}) {
+  auto target = InProcessTarget::ForModel("dmc16", "");
+  EXPECT_FALSE(target->Open().has_value());
+  return RunDmc(*target, options);
+}
+
+TEST(Runner, EveryRuleHoldsForTheEmulatedDmc16) {
+  const RunReport report = RunInProcess();
+  ASSERT_TRUE(report.device_info.contains("name"));
+  EXPECT_EQ(report.device_info["name"], "DMC-16");
+  EXPECT_FALSE(report.MustFailed()) << ConsoleReport(report, false);
+  EXPECT_EQ(ExitCode(report), 0);
+  for (const auto& [id, s] : report.rules) {
+    EXPECT_NE(s.status, Status::kFail) << id << "\n" << ConsoleReport(report, false);
+    EXPECT_NE(s.status, Status::kNoted) << id;
+  }
+  // The DMC-16 profile advertises no virtuals; the in-process e-stop makes
+  // the device send MOTOR_HARD_STOP.
+  EXPECT_EQ(report.rules.at("DMC-VIRT-001").status, Status::kNotApplicable);
+  EXPECT_EQ(report.rules.at("DMC-UNS-003").status, Status::kPass);
+  for (const auto& [id, s] : report.rules) {
+    EXPECT_TRUE(s.status == Status::kPass || s.status == Status::kNotApplicable) << id;
+  }
+  size_t passed = 0;
+  for (const auto& [id, s] : report.rules) passed += s.status == Status::kPass;
+  EXPECT_GE(passed, 100u);
+  for (const CaseResult& c : report.cases) {
+    if (c.suite == "virtual") {
+      EXPECT_FALSE(c.applicable);
+    } else {
+      EXPECT_TRUE(c.applicable) << c.suite << "/" << c.name;
+      EXPECT_FALSE(c.outcomes.empty()) << c.suite << "/" << c.name;
+    }
+  }
+}
+
+TEST(Runner, RunsAreDeterministicInVirtualTime) {
+  const RunReport a = RunInProcess();
+  const RunReport b = RunInProcess();
+  ASSERT_EQ(a.cases.size(), b.cases.size());
+  for (size_t i = 0; i < a.cases.size(); ++i) {
+    EXPECT_EQ(a.cases[i].target_ns, b.cases[i].target_ns) << a.cases[i].name;
+    ASSERT_EQ(a.cases[i].outcomes.size(), b.cases[i].outcomes.size());
+    for (const auto& [id, o] : a.cases[i].outcomes) {
+      EXPECT_EQ(o.checks, b.cases[i].outcomes.at(id).checks) << a.cases[i].name << " " << id;
+    }
+  }
+}
+
+TEST(Runner, ShardsPartitionTheCases) {
+  std::multiset<std::string> all, sharded;
+  for (const CaseResult& c : RunInProcess().cases) all.insert(c.suite + "/" + c.name);
+  for (uint32_t i = 0; i < 3; ++i) {
+    RunOptions o;
+    o.shard_index = i;
+    o.shard_count = 3;
+    for (const CaseResult& c : RunInProcess(o).cases) sharded.insert(c.suite + "/" + c.name);
+  }
+  EXPECT_EQ(all, sharded);
+}
+
+TEST(Runner, RuleAndCaseFiltersNarrowTheRun) {
+  RunOptions o;
+  o.rules = "DMC-CSUM-*";
+  o.cases = "errors/*";
+  const RunReport r = RunInProcess(o);
+  for (const CaseResult& c : r.cases) {
+    EXPECT_EQ(c.suite, "errors");
+    for (const auto& [id, out] : c.outcomes) EXPECT_EQ(id.rfind("DMC-CSUM-", 0), 0u) << id;
+  }
+  for (const auto& [id, s] : r.rules) EXPECT_EQ(id.rfind("DMC-CSUM-", 0), 0u);
+  EXPECT_EQ(r.rules.at("DMC-CSUM-002").status, Status::kPass);
+}
+
+TEST(Runner, RandomSequencesHoldForManySeeds) {
+  for (uint64_t seed = 1; seed <= 25; ++seed) {
+    RunOptions o;
+    o.cases = "random/*";
+    o.random.seed = seed;
+    o.random.steps = 60;
+    const RunReport r = RunInProcess(o);
+    ASSERT_EQ(r.cases.size(), 1u);
+    EXPECT_FALSE(r.cases[0].MustFailed()) << "seed " << seed << "\n" << ConsoleReport(r, true);
+    EXPECT_GT(r.cases[0].outcomes.at("DMC-ACK-011").checks, 0u);
+  }
+}
+
+// The random suite's law: any seed and length of valid requests leaves the
+// DMC-16 answering OK and resting where the model says.
+RC_GTEST_PROP(RandomSuite, AnySeedAndLengthHoldsForTheDmc16, ()) {
+  RunOptions o;
+  o.cases = "random/*";
+  o.random.seed = *rc::gen::arbitrary<uint64_t>();
+  o.random.steps = *rc::gen::inRange(1, 80);
+  const RunReport r = RunInProcess(o);
+  RC_ASSERT(r.cases.size() == 1u);
+  RC_ASSERT(!r.cases[0].MustFailed());
+}
+
+TEST(Runner, InProcessCasesRunFast) {
+  const auto t0 = std::chrono::steady_clock::now();
+  size_t cases = 0;
+  for (int i = 0; i < 5; ++i) cases += RunInProcess().cases.size();
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("in-process: %zu cases in %.3f s (%.0f cases/s)\n", cases, s,
+              static_cast<double>(cases) / s);
+  EXPECT_LT(s, 60.0);
+}
+
+TEST(Reports, TheStreamedPiecesAddUpToTheConsoleReport) {
+  RunOptions options;
+  options.cases = "connect/*,motor/*";
+  std::string streamed;
+  size_t calls = 0;
+  options.on_progress = [&](const RunReport& so_far) {
+    if (calls++ == 0) {
+      EXPECT_TRUE(so_far.cases.empty()) << "the first call comes before any case";
+      streamed += ConsoleDevice(so_far);
+      return;
+    }
+    ASSERT_FALSE(so_far.cases.empty());
+    streamed += ConsoleCase(so_far.cases.back(), false);
+  };
+  const RunReport r = RunInProcess(options);
+  ASSERT_GT(r.cases.size(), 1u);
+  EXPECT_EQ(calls, r.cases.size() + 1) << "once after the introduction, once per case";
+  EXPECT_EQ(ConsoleTitle(r.target, r.protocol) + streamed + ConsoleSummary(r, false),
+            ConsoleReport(r, false));
+}
+
+TEST(Reports, ARunWithoutAVerdictSaysSoInEveryReport) {
+  RunReport lost = RunInProcess();
+  lost.target_error = "the device closed the connection";
+  EXPECT_EQ(ExitCode(lost), 2);
+  EXPECT_NE(ConsoleReport(lost, false).find("result: TARGET ERROR"), std::string::npos);
+  EXPECT_EQ(JsonReport(lost)["exit_code"], 2);
+  EXPECT_EQ(JsonReport(lost)["target_error"], "the device closed the connection");
+  EXPECT_NE(JunitReport(lost).find("<error message=\"target error: the device closed"),
+            std::string::npos);
+  EXPECT_NE(HtmlReport(lost).find("TARGET ERROR"), std::string::npos);
+  RunReport stopped = RunInProcess();
+  stopped.interrupted_by = 1;
+  EXPECT_EQ(ExitCode(stopped), 2);
+  EXPECT_NE(ConsoleReport(stopped, false).find("result: INTERRUPTED"), std::string::npos);
+  EXPECT_EQ(JsonReport(stopped)["interrupted_by_signal"], 1);
+  EXPECT_NE(JunitReport(stopped).find("errors=\"1\""), std::string::npos);
+}
+
+TEST(Reports, JsonAndJunitCarryEveryCaseAndRule) {
+  const RunReport r = RunInProcess();
+  const nlohmann::json j = JsonReport(r);
+  EXPECT_EQ(j["target"], "in-process:dmc16");
+  EXPECT_EQ(j["exit_code"], 0);
+  EXPECT_EQ(j["device"]["motor_count"], 16);
+  EXPECT_EQ(j["cases"].size(), r.cases.size());
+  EXPECT_EQ(j["rules"].size(), DmcRules().size());
+  const std::string x = JunitReport(r);
+  EXPECT_EQ(x.rfind("<?xml", 0), 0u);
+  EXPECT_NE(x.find("name=\"DMC-CSUM-001\""), std::string::npos);
+  EXPECT_NE(x.find("classname=\"mococheck.dmc.motor.move\""), std::string::npos);
+  EXPECT_NE(x.find("<skipped message=\"not applicable"), std::string::npos);
+  EXPECT_NE(x.find("failures=\"0\""), std::string::npos);
+  size_t testcases = 0;
+  for (size_t p = 0; (p = x.find("<testcase ", p)) != std::string::npos; ++p) ++testcases;
+  size_t expected = 0;
+  for (const CaseResult& c : r.cases) expected += c.applicable ? c.outcomes.size() : 1;
+  EXPECT_EQ(testcases, expected);
+}
+
+TEST(Reports, WrittenAtomically) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("mococheck_report_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "r.json").string();
+  EXPECT_EQ(WriteAtomically(path, "{}\n"), "");
+  EXPECT_TRUE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".partial"));
+  EXPECT_NE(WriteAtomically((dir / "missing" / "r.json").string(), "x"), "");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Targets, ParseTargetSpecNamesTheProblem) {
+  auto ok = ParseTargetSpec("tcp:127.0.0.1:5000");
+  ASSERT_TRUE(std::holds_alternative<TargetSpec>(ok));
+  EXPECT_EQ(std::get<TargetSpec>(ok).kind, TargetSpec::Kind::kTcp);
+  EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("pty:/tmp/x")).address, "/tmp/x");
+  // The scheme is kept as written, so a serial: target is not labelled pty:.
+  EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")).scheme, "serial");
+  auto serial = MakeTarget(std::get<TargetSpec>(ParseTargetSpec("serial:/dev/ttyUSB0")), "", 9600);
+  ASSERT_TRUE(std::holds_alternative<std::unique_ptr<Target>>(serial));
+  EXPECT_EQ(std::get<std::unique_ptr<Target>>(serial)->Name(), "serial:/dev/ttyUSB0 @9600");
+  EXPECT_EQ(std::get<TargetSpec>(ParseTargetSpec("in-process:dmc16")).kind,
+            TargetSpec::Kind::kInProcess);
+  for (const char* bad : {"tcp:5000", "tcp:host:port", "ftp:x", "pty:", "dmc16"}) {
+    auto r = ParseTargetSpec(bad);
+    ASSERT_TRUE(std::holds_alternative<std::string>(r)) << bad;
+    EXPECT_NE(std::get<std::string>(r).find("in-process:MODEL"), std::string::npos) << bad;
+  }
+  auto unknown =
+      MakeTarget(TargetSpec{TargetSpec::Kind::kInProcess, "toaster", "in-process"}, "", 115200);
+  ASSERT_TRUE(std::holds_alternative<std::string>(unknown));
+  EXPECT_NE(std::get<std::string>(unknown).find("dmc16"), std::string::npos);
+}
+
+TEST(Targets, InProcessWaitingCostsNoWallTime) {
+  auto t = InProcessTarget::ForModel("dmc16", "");
+  ASSERT_FALSE(t->Open().has_value());
+  wire::Bytes got;
+  const auto w0 = std::chrono::steady_clock::now();
+  t->Receive(600 * sim::kNsPerSecond, got);  // the boot HI arrives at once
+  EXPECT_FALSE(got.empty());
+  got.clear();
+  t->Receive(600 * sim::kNsPerSecond, got);  // nothing more: ten minutes pass
+  EXPECT_TRUE(got.empty());
+  EXPECT_EQ(t->Now(), 600 * sim::kNsPerSecond);
+  EXPECT_LT(std::chrono::steady_clock::now() - w0, std::chrono::seconds(5));
+}
+
+}  // namespace
+}  // namespace moco::conformance

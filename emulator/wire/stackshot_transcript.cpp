@@ -1,0 +1,74 @@
+// StackShot 3X transcripts (see transcript_sides.h).
+#include <map>
+#include <string>
+
+#include "wire/stackshot.h"
+#include "wire/transcript_sides.h"
+
+namespace moco::wire {
+namespace {
+
+// StackShot binary: packets per direction; a reply is read in the light of the
+// action of the last host packet for the same command.
+class StackshotSides final : public TranscriptSides {
+ public:
+  StackshotSides() : host_(false), device_(true) {}
+
+  void Feed(Side side, ByteView bytes, std::vector<TranscriptLine>& out) override {
+    std::vector<stackshot::DecodedPacket> packets;
+    (side == Side::kHost ? host_ : device_).Feed(bytes, packets);
+    for (const auto& d : packets) {
+      if (d.skipped_before > 0) {
+        out.push_back(
+            {side, true,
+             "skipped " + std::to_string(d.skipped_before) + " byte(s) before a sync byte"});
+      }
+      std::string note;
+      if (!d.checksum_ok) note = " [checksum byte differs from the default algorithm]";
+      if (side == Side::kHost) {
+        last_action_[d.packet.command] = static_cast<stackshot::Action>(d.packet.action);
+        auto c = stackshot::DecodeHostPacket(d.packet);
+        if (!c.ok()) {
+          out.push_back(
+              {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(c.error())});
+          continue;
+        }
+        out.push_back({side, false, stackshot::Describe(*c) + note});
+      } else {
+        stackshot::ReplyContext ctx;
+        if (auto it = last_action_.find(d.packet.command); it != last_action_.end()) {
+          ctx.request_action = it->second;
+        }
+        auto r = stackshot::DecodeDevicePacket(d.packet, ctx);
+        if (!r.ok()) {
+          out.push_back(
+              {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(r.error())});
+          continue;
+        }
+        out.push_back({side, false, stackshot::Describe(*r) + note});
+      }
+    }
+  }
+
+  void Finish(std::vector<TranscriptLine>& out) override {
+    if (size_t n = host_.Flush()) {
+      out.push_back({Side::kHost, true, std::to_string(n) + " byte(s) of an incomplete packet"});
+    }
+    if (size_t n = device_.Flush()) {
+      out.push_back({Side::kDevice, true, std::to_string(n) + " byte(s) of an incomplete packet"});
+    }
+  }
+
+ private:
+  stackshot::PacketDecoder host_;
+  stackshot::PacketDecoder device_;
+  std::map<uint16_t, stackshot::Action> last_action_;
+};
+
+}  // namespace
+
+std::unique_ptr<TranscriptSides> MakeStackshotTranscript() {
+  return std::make_unique<StackshotSides>();
+}
+
+}  // namespace moco::wire
