@@ -28,7 +28,7 @@
 #include "conformance/runner/runner.h"
 #include "conformance/suites/suites.h"
 #include "conformance/targets/target.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/registry.h"
 
 namespace {

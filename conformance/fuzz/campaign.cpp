@@ -6,7 +6,7 @@
 #include <set>
 
 #include "conformance/suites/sequence.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

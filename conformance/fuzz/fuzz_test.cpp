@@ -12,7 +12,7 @@
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/registry.h"
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"

@@ -12,7 +12,7 @@
 
 #include "conformance/fuzz/mutator.h"
 #include "conformance/targets/target.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 

@@ -11,7 +11,7 @@
 
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/registry.h"
 
 namespace moco::conformance {

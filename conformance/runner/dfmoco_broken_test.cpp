@@ -16,7 +16,7 @@
 #include "conformance/rules/dfmoco_rules.h"
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 
 namespace moco::conformance {

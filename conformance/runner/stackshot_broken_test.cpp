@@ -10,7 +10,7 @@
 
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/stackshot3x/stackshot3x.h"
 
 namespace moco::conformance {

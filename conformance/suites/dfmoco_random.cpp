@@ -8,7 +8,7 @@
 
 #include "conformance/suites/dfmoco_suites.h"
 #include "conformance/suites/sequence.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

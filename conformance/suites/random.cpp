@@ -7,7 +7,7 @@
 
 #include "conformance/suites/sequence.h"
 #include "conformance/suites/suites.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

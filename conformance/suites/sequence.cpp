@@ -3,7 +3,7 @@
 
 #include <exception>
 
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 

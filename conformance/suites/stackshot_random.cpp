@@ -8,7 +8,7 @@
 
 #include "conformance/suites/sequence.h"
 #include "conformance/suites/stackshot_suites.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

@@ -9,7 +9,7 @@
 #include "conformance/runner/report.h"
 #include "conformance/runner/runner.h"
 #include "conformance/targets/target.h"
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 namespace moco::conformance {
 namespace {

@@ -1,8 +1,9 @@
 // Session files: timestamped host/device traffic in JSON Lines (docs/sessions.md).
 // Read by `mocosim decode`, `mococheck replay` and `mococheck fuzz`; written by
-// `mocosim --record`.
-#ifndef MOCO_CONTROL_SESSION_H_
-#define MOCO_CONTROL_SESSION_H_
+// `mocosim --record`. The recording format is its own layer (docs/architecture.md):
+// below devices, transport, control and conformance, it uses only base and wire.
+#ifndef MOCO_SESSION_SESSION_H_
+#define MOCO_SESSION_SESSION_H_
 
 #include <cstdint>
 #include <filesystem>
@@ -16,7 +17,7 @@
 #include "wire/bytes.h"
 #include "wire/transcript.h"
 
-namespace moco::control {
+namespace moco::session {
 
 inline constexpr int kSessionFormatVersion = 1;
 
@@ -117,6 +118,27 @@ class SessionWriter {
   bool finished_ = false;
 };
 
+}  // namespace moco::session
+
+// The format's former home was moco::control; conformance still names it so
+// until its restructuring moves to moco::session. New code names session::.
+namespace moco::control {
+using session::EntryToJson;
+using session::HeaderToJson;
+using session::kMaxSessionLineBytes;
+using session::kSessionFormatVersion;
+using session::LoadSession;
+using session::Origin;
+using session::ParseSession;
+using session::Session;
+using session::SessionEntry;
+using session::SessionError;
+using session::SessionHeader;
+using session::SessionWarning;
+using session::SessionWriter;
+using wire::ParseProtocol;
+using wire::Protocol;
+using wire::ProtocolName;
 }  // namespace moco::control
 
-#endif  // MOCO_CONTROL_SESSION_H_
+#endif  // MOCO_SESSION_SESSION_H_
