@@ -18,22 +18,22 @@
 #include "cli_numbers.h"
 #include "control/control_channel.h"
 #include "control/scenario.h"
-#include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
 #include "physics/bullet/rig_path_svg.h"
 #include "plot/rig_plot.h"
+#include "serve/serve.h"
+#include "session/session.h"
 #include "transport/control_socket.h"
-#include "transport/serve.h"
 #include "wire/transcript.h"
 
 namespace {
 
-using moco::control::LoadSession;
-using moco::control::Origin;
-using moco::control::Session;
-using moco::control::SessionError;
-using moco::control::SessionWarning;
+using moco::session::LoadSession;
+using moco::session::Origin;
+using moco::session::Session;
+using moco::session::SessionError;
+using moco::session::SessionWarning;
 using moco::wire::Side;
 using moco::wire::TranscriptDecoder;
 using moco::wire::TranscriptLine;
@@ -213,13 +213,13 @@ int Plot(const PlotArgs& a) {
 // when asked for. Exit 0 on a clean stop, 1 when a recording could not be
 // completed, 2 when the devices cannot be set up (the message names the
 // device, the field and the fix).
-int Serve(moco::transport::EmulatorConfig config) {
+int Serve(moco::serve::EmulatorConfig config) {
   using moco::control::ControlChannel;
   try {
-    moco::transport::Emulator emulator(std::move(config));
+    moco::serve::Emulator emulator(std::move(config));
     ControlChannel channel(emulator.scheduler());
     for (size_t i = 0; i < emulator.size(); ++i) {
-      channel.AddDevice(emulator.name(i), emulator.device(i), &emulator.server(i));
+      channel.AddDevice(emulator.name(i), emulator.device(i), &emulator.link_control(i));
     }
     emulator.AttachControl(channel);
     const auto& cfg = emulator.config();
@@ -228,21 +228,21 @@ int Serve(moco::transport::EmulatorConfig config) {
       const auto scenario = moco::control::Scenario::Load(cfg.scenario_path);
       // Times are from power-on (scheduler time 0, when the clock starts).
       scenario_run = scenario.Schedule(channel, emulator.scheduler(), emulator.scheduler().Now());
-      emulator.Log(moco::transport::LogLevel::kInfo, "scenario " + cfg.scenario_path + ": " +
-                                                         std::to_string(scenario_run->remaining()) +
-                                                         " event(s)");
+      emulator.Log(moco::serve::LogLevel::kInfo, "scenario " + cfg.scenario_path + ": " +
+                                                     std::to_string(scenario_run->remaining()) +
+                                                     " event(s)");
     }
     std::unique_ptr<moco::transport::ControlSocket> socket;
     if (!cfg.control_path.empty()) {
       moco::transport::ControlSocketOptions opts;
       opts.log = [&emulator](std::string_view l) {
-        emulator.Log(moco::transport::LogLevel::kWarn, "control socket: " + std::string(l));
+        emulator.Log(moco::serve::LogLevel::kWarn, "control socket: " + std::string(l));
       };
       socket = std::make_unique<moco::transport::ControlSocket>(
           emulator.driver(), cfg.control_path,
           [&channel](std::string_view line) { return channel.Handle(line); }, opts);
     }
-    moco::transport::EmulatorHooks hooks;
+    moco::serve::EmulatorHooks hooks;
     hooks.on_stopping = [&] {
       if (scenario_run) scenario_run->Cancel();
       if (socket) socket->Stop();
@@ -250,10 +250,10 @@ int Serve(moco::transport::EmulatorConfig config) {
     emulator.SetHooks(hooks);
     emulator.Start();
     if (socket) {
-      emulator.Log(moco::transport::LogLevel::kError,
+      emulator.Log(moco::serve::LogLevel::kError,
                    "control socket " + socket->path() + " (JSON lines; send {\"cmd\":\"help\"})");
     }
-    emulator.Log(moco::transport::LogLevel::kWarn,
+    emulator.Log(moco::serve::LogLevel::kWarn,
                  "serving " + std::to_string(emulator.size()) + " device(s); Ctrl-C stops");
     return emulator.Run();
   } catch (const std::exception& e) {
@@ -331,7 +331,7 @@ int main(int argc, char** argv) {
   struct OneDevice {
     CLI::App* cmd = nullptr;
     CLI::Option* wifi_opt = nullptr;  // models that have a Wi-Fi link
-    moco::transport::DeviceConfig config;
+    moco::serve::DeviceConfig config;
     std::string pty_path, tcp_spec, wifi_spec, log_level = "info", control_path, scenario_path;
   };
   std::vector<std::unique_ptr<OneDevice>> one_device;
@@ -439,16 +439,16 @@ int main(int argc, char** argv) {
     o->config.endpoint = wifi                  ? "wifi:" + o->wifi_spec
                          : o->pty_path.empty() ? "tcp:" + o->tcp_spec
                                                : "pty:" + o->pty_path;
-    moco::transport::EmulatorConfig config;
+    moco::serve::EmulatorConfig config;
     config.devices.push_back(o->config);
     config.control_path = o->control_path;
     config.scenario_path = o->scenario_path;
-    config.log_level = moco::transport::ParseLogLevel(o->log_level);
+    config.log_level = moco::serve::ParseLogLevel(o->log_level);
     return Serve(std::move(config));
   }
   if (run->parsed()) {
     try {
-      return Serve(moco::transport::LoadRunConfig(run_path));
+      return Serve(moco::serve::LoadRunConfig(run_path));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "mocosim run: %s\n", e.what());
       return 2;

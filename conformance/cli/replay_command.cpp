@@ -7,7 +7,7 @@
 #include "cli_numbers.h"
 #include "conformance/cli/commands.h"
 #include "conformance/fuzz/replay.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance::cli {
 namespace {
@@ -19,13 +19,13 @@ struct ReplayArgs {
 };
 
 int Replay(const ReplayArgs& a) {
-  auto loaded = control::LoadSession(a.session);
-  if (const auto* err = std::get_if<control::SessionError>(&loaded)) {
+  auto loaded = session::LoadSession(a.session);
+  if (const auto* err = std::get_if<session::SessionError>(&loaded)) {
     return Fail(a.session + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
                 err->message);
   }
-  const control::Session& session = std::get<control::Session>(loaded);
-  if (const std::string w = control::SessionWarning(session); !w.empty()) {
+  const session::Session& session = std::get<session::Session>(loaded);
+  if (const std::string w = session::SessionWarning(session); !w.empty()) {
     std::fprintf(stderr, "mococheck: %s: %s\n", a.session.c_str(), w.c_str());
   }
   const Protocol proto = session.header.protocol;

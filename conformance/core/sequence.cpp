@@ -3,24 +3,24 @@
 
 #include <exception>
 
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 
 void SaveFailingSession(const std::string& path, wire::Protocol protocol, const Target& target,
                         const std::string& note, const std::vector<Chunk>& traffic,
                         std::vector<std::string>& log) {
-  control::SessionHeader header;
+  session::SessionHeader header;
   header.protocol = protocol;
   header.device = target.Name();
   header.clock = target.VirtualClock() ? "virtual" : "real";
   header.note = note;
   try {
-    control::SessionWriter w(path, header);
+    session::SessionWriter w(path, header);
     for (const Chunk& ch : traffic) {
-      control::SessionEntry e;
+      session::SessionEntry e;
       e.t_ns = ch.t_ns;
-      e.from = ch.from_host ? control::Origin::kHost : control::Origin::kDevice;
+      e.from = ch.from_host ? session::Origin::kHost : session::Origin::kDevice;
       e.bytes = ch.bytes;
       w.Append(e);
     }

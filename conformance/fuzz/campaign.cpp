@@ -7,7 +7,7 @@
 #include <set>
 
 #include "conformance/core/sequence.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {
@@ -26,20 +26,20 @@ Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violatio
 }  // namespace
 
 std::variant<Seed, std::string> LoadSeed(const std::string& path) {
-  auto loaded = control::LoadSession(path);
-  if (const auto* err = std::get_if<control::SessionError>(&loaded)) {
+  auto loaded = session::LoadSession(path);
+  if (const auto* err = std::get_if<session::SessionError>(&loaded)) {
     return path + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
            err->message;
   }
-  const control::Session& s = std::get<control::Session>(loaded);
+  const session::Session& s = std::get<session::Session>(loaded);
   const std::optional<Protocol> protocol = s.header.protocol;
   if (std::ranges::find(kAllProtocols, *protocol) == std::end(kAllProtocols)) {
-    return path + ": protocol " + std::string(control::ProtocolName(s.header.protocol)) +
+    return path + ": protocol " + std::string(wire::ProtocolName(s.header.protocol)) +
            " is not fuzzed; record the session in the device's packet protocol";
   }
   wire::Bytes host;
-  for (const control::SessionEntry& e : s.entries) {
-    if (!e.is_event && e.from == control::Origin::kHost) {
+  for (const session::SessionEntry& e : s.entries) {
+    if (!e.is_event && e.from == session::Origin::kHost) {
       host.insert(host.end(), e.bytes.begin(), e.bytes.end());
     }
   }
@@ -48,7 +48,7 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
   seed.protocol = *protocol;
   seed.device = s.header.device;
   seed.messages = wire::SplitMessages(*protocol, wire::Side::kHost, host);
-  seed.warning = control::SessionWarning(s);
+  seed.warning = session::SessionWarning(s);
   if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
   return seed;
 }
@@ -56,17 +56,17 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
 std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
                          const std::string& note, const Messages& messages, TimeNs gap_ns) {
   try {
-    control::SessionHeader h;
+    session::SessionHeader h;
     h.protocol = protocol;
     h.device = device;
     h.clock = "virtual";
     h.note = note;
-    control::SessionWriter w(path, h);
+    session::SessionWriter w(path, h);
     TimeNs t = 0;
     for (const wire::Bytes& m : messages) {
-      control::SessionEntry e;
+      session::SessionEntry e;
       e.t_ns = t;
-      e.from = control::Origin::kHost;
+      e.from = session::Origin::kHost;
       e.bytes = m;
       w.Append(e);
       t += gap_ns;

@@ -22,7 +22,7 @@ struct Seed {
   Protocol protocol = Protocol::kDmc;
   std::string device;  // the header's device model, may be empty
   Messages messages;
-  std::string warning;  // control::SessionWarning of the file (a cut last line), or empty
+  std::string warning;  // session::SessionWarning of the file (a cut last line), or empty
 };
 
 // Reads a session file and cuts its host traffic into messages. On failure

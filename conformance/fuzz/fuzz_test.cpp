@@ -12,7 +12,7 @@
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/registry.h"
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"
@@ -32,10 +32,10 @@ Seed LoadOrDie(const std::string& name) {
   return std::get<Seed>(s);
 }
 
-control::Session SessionOrDie(const std::string& name) {
-  auto s = control::LoadSession(Fixture(name));
-  if (const auto* e = std::get_if<control::SessionError>(&s)) ADD_FAILURE() << e->message;
-  return std::get<control::Session>(s);
+session::Session SessionOrDie(const std::string& name) {
+  auto s = session::LoadSession(Fixture(name));
+  if (const auto* e = std::get_if<session::SessionError>(&s)) ADD_FAILURE() << e->message;
+  return std::get<session::Session>(s);
 }
 
 // --- splitting and repair -------------------------------------------------------------
@@ -273,11 +273,11 @@ TEST(Replay, GoldenDeviceSessionsMatchTheirDevicesExactly) {
 
 // The workflow session with one recorded position report moved by `delta`
 // steps on motor 1 (re-sealed), or with every device time after 1 s shifted.
-control::Session Perturbed(int32_t delta, TimeNs shift_ns) {
-  control::Session s = SessionOrDie("dmc16-workflow.jsonl");
+session::Session Perturbed(int32_t delta, TimeNs shift_ns) {
+  session::Session s = SessionOrDie("dmc16-workflow.jsonl");
   bool done = delta == 0;
-  for (control::SessionEntry& e : s.entries) {
-    if (e.is_event || e.from != control::Origin::kDevice) continue;
+  for (session::SessionEntry& e : s.entries) {
+    if (e.is_event || e.from != session::Origin::kDevice) continue;
     if (e.t_ns > 1'000'000'000) e.t_ns += shift_ns;
     if (done) continue;
     auto f = dmc::DecodeFrame(e.bytes);
@@ -297,7 +297,7 @@ control::Session Perturbed(int32_t delta, TimeNs shift_ns) {
 TEST(Replay, APositionOffByMoreThanTheToleranceIsADifference) {
   auto target = InProcessTarget::ForModel("dmc16", "");
   ASSERT_FALSE(target->Open().has_value());
-  const control::Session s = Perturbed(3, 0);
+  const session::Session s = Perturbed(3, 0);
   const ReplayResult strict = Replay(s, Protocol::kDmc, *target, {});
   ASSERT_EQ(strict.differences.size(), 1u) << ReplayText(strict);
   EXPECT_NE(strict.differences[0].why.find("3 steps off"), std::string::npos)
@@ -310,7 +310,7 @@ TEST(Replay, APositionOffByMoreThanTheToleranceIsADifference) {
 TEST(Replay, ALateMessageIsADifferenceUnlessWithinTheTimeTolerance) {
   auto target = InProcessTarget::ForModel("dmc16", "");
   ASSERT_FALSE(target->Open().has_value());
-  const control::Session s = Perturbed(0, 4 * sim::kNsPerMs);
+  const session::Session s = Perturbed(0, 4 * sim::kNsPerMs);
   const ReplayResult strict = Replay(s, Protocol::kDmc, *target, {});
   ASSERT_FALSE(strict.ok());
   EXPECT_NE(strict.differences[0].why.find("from the recorded time"), std::string::npos);
@@ -321,11 +321,11 @@ TEST(Replay, ALateMessageIsADifferenceUnlessWithinTheTimeTolerance) {
 }
 
 TEST(Replay, AnUnrecordedDeviceMessageIsADifferenceWhereItArrives) {
-  control::Session s = SessionOrDie("dmc16-workflow.jsonl");
+  session::Session s = SessionOrDie("dmc16-workflow.jsonl");
   // Drop the third recorded device chunk (one frame): the device will send it anyway.
   size_t seen = 0;
   for (auto it = s.entries.begin(); it != s.entries.end(); ++it) {
-    if (!it->is_event && it->from == control::Origin::kDevice && ++seen == 3) {
+    if (!it->is_event && it->from == session::Origin::kDevice && ++seen == 3) {
       ASSERT_EQ(SplitDeviceChunks(Protocol::kDmc, {{it->t_ns, it->bytes}}).size(), 1u);
       s.entries.erase(it);
       break;

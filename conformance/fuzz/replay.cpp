@@ -135,7 +135,7 @@ std::vector<TimedMessage> SplitDeviceChunks(Protocol protocol,
   return out;
 }
 
-ReplayResult Replay(const control::Session& session, Protocol protocol, Target& target,
+ReplayResult Replay(const session::Session& session, Protocol protocol, Target& target,
                     const ReplayOptions& options) {
   ReplayResult result;
   result.from_power_on = target.CanRestart();
@@ -148,11 +148,11 @@ ReplayResult Replay(const control::Session& session, Protocol protocol, Target& 
   std::vector<TimedMessage> expected_chunks;
   TimeNs first_host = -1;
   TimeNs last_t = 0;
-  for (const control::SessionEntry& e : session.entries) {
+  for (const session::SessionEntry& e : session.entries) {
     if (e.is_event) continue;
     last_t = std::max(last_t, e.t_ns);
-    if (e.from == control::Origin::kHost && first_host < 0) first_host = e.t_ns;
-    if (e.from == control::Origin::kDevice) expected_chunks.push_back({e.t_ns, e.bytes});
+    if (e.from == session::Origin::kHost && first_host < 0) first_host = e.t_ns;
+    if (e.from == session::Origin::kDevice) expected_chunks.push_back({e.t_ns, e.bytes});
   }
   if (first_host < 0) first_host = 0;
   // Recorded times map to target times: from power-on as they are; on a
@@ -177,8 +177,8 @@ ReplayResult Replay(const control::Session& session, Protocol protocol, Target& 
       if (target.Now() >= t_target) return true;
     }
   };
-  for (const control::SessionEntry& e : session.entries) {
-    if (e.is_event || e.from != control::Origin::kHost) continue;
+  for (const session::SessionEntry& e : session.entries) {
+    if (e.is_event || e.from != session::Origin::kHost) continue;
     if (!pump_until(origin + (e.t_ns - base))) break;
     if (protocol == Protocol::kDmc) {
       for (const wire::Bytes& m : wire::SplitMessages(protocol, wire::Side::kHost, e.bytes)) {

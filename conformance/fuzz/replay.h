@@ -12,7 +12,7 @@
 
 #include "conformance/fuzz/mutator.h"
 #include "conformance/targets/target.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 
@@ -62,7 +62,7 @@ struct ReplayResult {
 // the device starts from power-on as recorded; otherwise recorded device
 // messages before the first host message are not expected).
 // REQUIRES: the session's protocol is `protocol`.
-ReplayResult Replay(const control::Session& session, Protocol protocol, Target& target,
+ReplayResult Replay(const session::Session& session, Protocol protocol, Target& target,
                     const ReplayOptions& options);
 
 // Human-readable summary and the differences.

@@ -1,5 +1,5 @@
 // mococheck's DFMoco suites over a real PTY (dfmoco-protocol.txt "Protocol":
-// 57600 8N1) against the DFMoco Arduino served by transport::Emulator, on the
+// 57600 8N1) against the DFMoco Arduino served by serve::Emulator, on the
 // steady clock: every MUST rule of the cases run passes.
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include "conformance/core/report.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "conformance/targets/target.h"
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 namespace moco::conformance {
 namespace {
@@ -21,14 +21,14 @@ TEST(DfmocoFdTarget, HandshakeMotorAndErrorSuitesPassOverARealPty) {
       fs::temp_directory_path() / ("mococheck_dfm_pty_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  transport::EmulatorConfig config;
-  config.log_level = transport::LogLevel::kError;
-  transport::DeviceConfig d;
+  serve::EmulatorConfig config;
+  config.log_level = serve::LogLevel::kError;
+  serve::DeviceConfig d;
   d.model = "dfmoco";
   d.endpoint = "pty:" + (dir / "dfmoco").string();
   d.no_pacing = true;
   config.devices = {d};
-  transport::Emulator e(config, [](std::string_view) {});
+  serve::Emulator e(config, [](std::string_view) {});
   e.Start();
   std::thread io([&] { e.Run(); });
 

@@ -1,4 +1,4 @@
-// The real-clock targets against a DMC-16 served by transport::Emulator over a
+// The real-clock targets against a DMC-16 served by serve::Emulator over a
 // real PTY and a real TCP socket (no pacing): the handshake, error and motor
 // suites pass on the steady clock; unusable addresses are clear errors.
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
 #include "conformance/targets/target.h"
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 namespace moco::conformance {
 namespace {
@@ -35,14 +35,14 @@ fs::path TempDir() {
 
 // Serves one DMC-16 at `endpoint` while `body` runs.
 void WithServedDmc16(const std::string& endpoint,
-                     const std::function<void(transport::Emulator&)>& body) {
-  transport::EmulatorConfig config;
-  config.log_level = transport::LogLevel::kError;
-  transport::DeviceConfig d;
+                     const std::function<void(serve::Emulator&)>& body) {
+  serve::EmulatorConfig config;
+  config.log_level = serve::LogLevel::kError;
+  serve::DeviceConfig d;
   d.endpoint = endpoint;
   d.no_pacing = true;
   config.devices = {d};
-  transport::Emulator e(config, [](std::string_view) {});
+  serve::Emulator e(config, [](std::string_view) {});
   e.Start();
   std::thread io([&] { e.Run(); });
   body(e);
@@ -59,7 +59,7 @@ void ExpectPassed(const RunReport& r, std::initializer_list<const char*> rules) 
 
 TEST(FdTarget, HandshakeErrorAndResetSuitesPassOverARealPty) {
   const fs::path dir = TempDir();
-  WithServedDmc16("pty:" + (dir / "dmc16").string(), [&](transport::Emulator& e) {
+  WithServedDmc16("pty:" + (dir / "dmc16").string(), [&](serve::Emulator& e) {
     FdTarget target(FdTarget::Kind::kSerial, e.server(0).pty_path(), 115200);
     ASSERT_FALSE(target.Open().has_value());
     EXPECT_FALSE(target.VirtualClock());
@@ -81,7 +81,7 @@ TEST(FdTarget, HandshakeErrorAndResetSuitesPassOverARealPty) {
 }
 
 TEST(FdTarget, HandshakeAndAMoveWithUpdatesPassOverTcp) {
-  WithServedDmc16("tcp:127.0.0.1:0", [&](transport::Emulator& e) {
+  WithServedDmc16("tcp:127.0.0.1:0", [&](serve::Emulator& e) {
     FdTarget target(FdTarget::Kind::kTcp, "127.0.0.1:" + std::to_string(e.server(0).tcp_port()));
     ASSERT_FALSE(target.Open().has_value());
     RunOptions o;

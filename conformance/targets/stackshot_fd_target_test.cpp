@@ -1,4 +1,4 @@
-// mococheck against a StackShot 3X served by transport::Emulator over a real
+// mococheck against a StackShot 3X served by serve::Emulator over a real
 // PTY (stackshot-protocol.txt section 2 at 38400 baud, no pacing) on the
 // steady clock: every MUST rule the suites reach from outside the process
 // passes, and what only an in-process target can do is left unexercised.
@@ -11,7 +11,7 @@
 #include "conformance/core/report.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
 #include "conformance/targets/target.h"
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 namespace moco::conformance {
 namespace {
@@ -30,17 +30,17 @@ fs::path TempDir() {
 // Serves one StackShot 3X at `endpoint` while `body` runs; its NVM lives in `dir`.
 void WithServedStackshot(const fs::path& dir, const std::string& endpoint,
                          const std::string& profile,
-                         const std::function<void(transport::Emulator&)>& body) {
-  transport::EmulatorConfig config;
-  config.log_level = transport::LogLevel::kError;
-  transport::DeviceConfig d;
+                         const std::function<void(serve::Emulator&)>& body) {
+  serve::EmulatorConfig config;
+  config.log_level = serve::LogLevel::kError;
+  serve::DeviceConfig d;
   d.model = "stackshot3x";
   d.endpoint = endpoint;
   d.profile_path = profile;
   d.state_path = (dir / "nvm.json").string();
   d.no_pacing = true;
   config.devices = {d};
-  transport::Emulator e(config, [](std::string_view) {});
+  serve::Emulator e(config, [](std::string_view) {});
   e.Start();
   std::thread io([&] { e.Run(); });
   body(e);
@@ -58,7 +58,7 @@ TEST(StackshotFdTarget, EveryMustRulePassesOverARealPty) {
     out << R"({"serial_number": 1234567})";
   }
   WithServedStackshot(
-      dir, "pty:" + (dir / "ss3x").string(), profile.string(), [&](transport::Emulator& e) {
+      dir, "pty:" + (dir / "ss3x").string(), profile.string(), [&](serve::Emulator& e) {
         FdTarget target(FdTarget::Kind::kSerial, e.server(0).pty_path(), 38400);
         ASSERT_FALSE(target.Open().has_value());
         RunOptions o;

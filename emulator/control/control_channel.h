@@ -1,7 +1,8 @@
-// The run-time control vocabulary of every emulated device (docs/control.md):
-// e-stop, limit switches, GIO inputs, power cycles, link cuts and faults, and
-// state queries, one JSON object per request, shared by the control socket
-// and scenario files.
+// The run-time control of every emulated device (docs/control.md): the
+// channel that executes the vocabulary's commands (command_codec.h) against
+// devices and their links: e-stop, limit switches, GIO inputs, power cycles,
+// link cuts and faults, and state queries, shared by the control socket and
+// scenario files.
 #ifndef MOCO_CONTROL_CONTROL_CHANNEL_H_
 #define MOCO_CONTROL_CONTROL_CHANNEL_H_
 
@@ -17,93 +18,16 @@
 
 #include <nlohmann/json.hpp>
 
-#include "control/session.h"
+#include "control/command_codec.h"
+#include "control/link_control.h"
 #include "devices/device.h"
+#include "session/session.h"
 #include "sim/limits.h"
+#include "sim/line_faults.h"
 #include "sim/scheduler.h"
 #include "sim/stepper_motor.h"
-#include "transport/link_faults.h"
-
-namespace moco::transport {
-class DeviceServer;
-}  // namespace moco::transport
 
 namespace moco::control {
-
-// ---- Commands ---------------------------------------------------------------
-
-// {"cmd":"estop","engaged":true}
-struct EStopCommand {
-  bool engaged = false;
-};
-// {"cmd":"limit","set":1,"input":"low","active":true} or
-// {"cmd":"limit","motor":3,"end":"upper","active":true}: exactly one of the
-// two forms (set + input, or motor + end).
-struct LimitCommand {
-  std::optional<int> set;
-  sim::SwitchInput input = sim::SwitchInput::kLow;
-  std::optional<int> motor;
-  sim::LimitEnd end = sim::LimitEnd::kLower;
-  bool active = false;
-};
-// {"cmd":"gio_in","bit":4,"level":true} or {"cmd":"gio_in","bits":"0x0000ff00"}:
-// raw input levels as wired (the device debounces them).
-struct GioInCommand {
-  std::optional<int> bit;  // 0..31; when absent, `bits` sets all 32 inputs
-  bool level = false;
-  uint32_t bits = 0;
-};
-// {"cmd":"power_cycle","off_ms":500}
-struct PowerCycleCommand {
-  int64_t off_ms = 0;
-};
-// {"cmd":"cut_link","ms":2000}
-struct CutLinkCommand {
-  int64_t ms = 0;
-};
-// {"cmd":"faults","config":"seed=42,dir=to-host,drop=0.01"} or {"config":"off"}
-struct FaultsCommand {
-  std::string spec;  // as given ("off" for none)
-  transport::FaultConfig config;
-};
-struct StateCommand {};
-// {"cmd":"events","after":12}: the device's own events (stalls, collisions)
-// with a sequence number above `after` (default 0: every one still kept).
-struct EventsCommand {
-  uint64_t after = 0;
-};
-struct DevicesCommand {};
-struct HelpCommand {};
-
-using CommandBody =
-    std::variant<EStopCommand, LimitCommand, GioInCommand, PowerCycleCommand, CutLinkCommand,
-                 FaultsCommand, StateCommand, EventsCommand, DevicesCommand, HelpCommand>;
-
-struct Command {
-  std::string device;  // empty: the only device served
-  CommandBody body;
-  nlohmann::json id;  // echoed in the reply when not null
-};
-
-// The command's name ("estop", "limit", ...).
-std::string_view CommandName(const CommandBody& body);
-// Whether the command changes the device or its link (queries do not).
-bool IsAction(const CommandBody& body);
-// The canonical JSON form of a command: "cmd", its fields, and "device" when
-// given. ParseCommand(ToJson(c)) yields c again.
-nlohmann::json ToJson(const Command& command);
-
-// Parses JSON text like nlohmann::json::parse (throws its exceptions) and
-// reports in `duplicate` the first key given twice in one object ("" when
-// none): the control vocabulary refuses {"engaged":true,"engaged":false}
-// rather than letting the last one win.
-nlohmann::json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate);
-
-// Parses one request object. Fields `extra_fields` are allowed besides the
-// command's own (a scenario's "at_ms") and ignored. Never throws. On failure
-// returns a message naming the field, what was found and what to write.
-std::variant<Command, std::string> ParseCommand(const nlohmann::json& request,
-                                                const std::vector<std::string>& extra_fields = {});
 
 // ---- Events -----------------------------------------------------------------
 
@@ -119,7 +43,7 @@ struct ControlEvent {
   // {"t_ns":..., "event":"<cmd>", <command fields>, "source":..., ["index":...,]
   //  "ok":true|false, ["error":...]}
   nlohmann::json SessionLine() const;
-  SessionEntry ToSessionEntry() const;
+  session::SessionEntry ToSessionEntry() const;
 };
 
 // Something a device did by itself (devices::DeviceEventListener), stamped
@@ -133,25 +57,25 @@ struct DeviceEvent {
   // The session-file event line (docs/sessions.md):
   // {"t_ns":..., "event":"stall", <the device's fields>, "source":"device", "seq":...}
   nlohmann::json SessionLine() const;
-  SessionEntry ToSessionEntry() const;
+  session::SessionEntry ToSessionEntry() const;
 };
 
 // ---- The channel ------------------------------------------------------------
 
 // Executes commands against named devices. Each device is a devices::Device
 // (its rig(), gio(), State(), PowerOff/PowerOn) and, when it is served on an
-// endpoint, its transport::DeviceServer (link cuts, faults, link stats, power
+// endpoint, the LinkControl of its link (link cuts, faults, link stats, power
 // cycles through the link).
 //
 // Typical use:
 //   ControlChannel channel(scheduler);
-//   channel.AddDevice("dmc16", device, &server);
+//   channel.AddDevice("dmc16", device, &link);  // link: a LinkControl, or none
 //   std::string reply = channel.Handle(line);
 //
 // Every call comes from the thread that owns the scheduler. Called from
 // outside a scheduler callback in real time, the caller syncs the clock first
 // and re-arms it after (ControlSocket does both). The scheduler, the devices
-// and the servers must outlive the channel.
+// and the links must outlive the channel.
 class ControlChannel {
  public:
   // Called after each executed action (not after queries), whatever its source.
@@ -169,12 +93,11 @@ class ControlChannel {
 
   // Adds a device under `name` (letters, digits, '-', '_', '.'; 1..64 bytes)
   // and becomes the listener of its events (Device::SetEventListener).
-  // `server` (may be null: the device runs in-process) must serve `device`.
-  // `device` (and `server`) must outlive the channel: its destructor detaches
-  // from the device's events.
+  // `link` (may be null: the device runs in-process) must be the link that
+  // serves `device`. `device` (and `link`) must outlive the channel: its
+  // destructor detaches from the device's events.
   // Throws std::invalid_argument for a bad or duplicate name (a start-up error).
-  void AddDevice(std::string name, devices::Device& device,
-                 transport::DeviceServer* server = nullptr);
+  void AddDevice(std::string name, devices::Device& device, LinkControl* link = nullptr);
   std::vector<std::string> DeviceNames() const;
 
   void SetActionListener(ActionListener listener) { listener_ = std::move(listener); }
@@ -203,7 +126,7 @@ class ControlChannel {
   struct Target {
     std::string name;
     devices::Device* device = nullptr;
-    transport::DeviceServer* server = nullptr;
+    LinkControl* link = nullptr;
     sim::Scheduler::TimerId power_on_timer = sim::Scheduler::kNoTimer;
     std::deque<DeviceEvent> events;  // the last kEventsKept
     uint64_t events_seen = 0;
@@ -223,10 +146,6 @@ class ControlChannel {
   ActionListener listener_;
   DeviceEventListener device_event_listener_;
 };
-
-// The vocabulary as data: one entry per command with its fields and an
-// example, for "help" and docs/control.md.
-nlohmann::json Vocabulary();
 
 }  // namespace moco::control
 

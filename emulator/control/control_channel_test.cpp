@@ -1,7 +1,8 @@
-// Tests for the control vocabulary (control_channel.h, docs/control.md) in
+// Tests for the control channel (control_channel.h, docs/control.md) in
 // virtual time: each command's effect on the rig, GIO, power and link, the
 // limit binding with the 0x80 swap (dmc-v2-protocol.txt MSG_MOTOR_SET_LIMITS),
 // error replies, and the laws "one reply per line" and "no input crashes".
+// The codec alone: command_codec_test.cpp.
 #include "control/control_channel.h"
 
 #include <gtest/gtest.h>
@@ -11,8 +12,9 @@
 #include <memory>
 #include <string>
 
-#include "control/session.h"
 #include "control/test_support.h"
+#include "serve/link_control_adapter.h"
+#include "session/session.h"
 #include "transport/device_server.h"
 
 namespace moco::control {
@@ -259,18 +261,6 @@ TEST_F(ControlChannelTest, DevicesAndHelpNeedNoDevice) {
   EXPECT_EQ(names.back(), "help");
 }
 
-TEST(VocabularyTest, EveryExampleInTheVocabularyParsesAsItsOwnCommand) {
-  const json vocab = Vocabulary();
-  ASSERT_FALSE(vocab.empty());
-  for (const json& entry : vocab) {
-    const json example = json::parse(entry["example"].get<std::string>());
-    auto parsed = ParseCommand(example);
-    ASSERT_TRUE(std::holds_alternative<Command>(parsed))
-        << entry["cmd"] << ": " << std::get<std::string>(parsed);
-    EXPECT_EQ(CommandName(std::get<Command>(parsed).body), entry["cmd"].get<std::string>());
-  }
-}
-
 // ---- several devices, device errors -------------------------------------------
 
 TEST_F(ControlChannelTest, WithSeveralDevicesTheDeviceFieldIsRequired) {
@@ -444,10 +434,11 @@ TEST_F(ControlChannelTest, ActionsReachTheListenerAsSessionEventsQueriesDoNot) {
 
   // The entry is a valid session event line (docs/sessions.md).
   const std::string text = "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n" +
-                           EntryToJson(events[0].ToSessionEntry()).dump() + "\n";
-  auto session = ParseSession(text);
-  ASSERT_TRUE(std::holds_alternative<Session>(session)) << std::get<SessionError>(session).message;
-  const Session& s = std::get<Session>(session);
+                           session::EntryToJson(events[0].ToSessionEntry()).dump() + "\n";
+  auto parsed = session::ParseSession(text);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(parsed))
+      << std::get<session::SessionError>(parsed).message;
+  const session::Session& s = std::get<session::Session>(parsed);
   ASSERT_EQ(s.entries.size(), 1u);
   EXPECT_TRUE(s.entries[0].is_event);
   EXPECT_EQ(s.entries[0].t_ns, 2 * sim::kNsPerSecond);
@@ -488,10 +479,11 @@ TEST_F(ControlChannelTest, DeviceEventsAreNumberedKeptForTheEventsQueryAndPassed
 
   // The session line is a valid event line that keeps the device's fields.
   const std::string text = "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n" +
-                           EntryToJson(passed[0].ToSessionEntry()).dump() + "\n";
-  auto session = ParseSession(text);
-  ASSERT_TRUE(std::holds_alternative<Session>(session)) << std::get<SessionError>(session).message;
-  const SessionEntry& e = std::get<Session>(session).entries.at(0);
+                           session::EntryToJson(passed[0].ToSessionEntry()).dump() + "\n";
+  auto parsed = session::ParseSession(text);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(parsed))
+      << std::get<session::SessionError>(parsed).message;
+  const session::SessionEntry& e = std::get<session::Session>(parsed).entries.at(0);
   EXPECT_TRUE(e.is_event);
   EXPECT_EQ(e.t_ns, 3 * sim::kNsPerSecond);
   EXPECT_EQ(e.event["event"], "stall");
@@ -526,8 +518,9 @@ TEST(ControlChannelDevicesTest, ADestroyedChannelNoLongerListensToItsDevices) {
 
 // ---- a device served on an endpoint -------------------------------------------
 
-// A real DeviceServer on an ephemeral TCP port; its driver is never started,
-// so the link keeps the scheduler's virtual time.
+// A real DeviceServer on an ephemeral TCP port, reached through the serving
+// layer's LinkControl; its driver is never started, so the link keeps the
+// scheduler's virtual time.
 class ServedDeviceTest : public ::testing::Test {
  protected:
   ServedDeviceTest() {
@@ -537,7 +530,8 @@ class ServedDeviceTest : public ::testing::Test {
     device_ = std::make_unique<FakeDevice>(scheduler_);
     server_->Serve(*device_);
     device_->PowerOn();
-    channel_.AddDevice("dmc16", *device_, server_.get());
+    link_ = std::make_unique<serve::DeviceServerLink>(*server_);
+    channel_.AddDevice("dmc16", *device_, link_.get());
   }
   ~ServedDeviceTest() override { server_->Stop(); }
 
@@ -545,6 +539,7 @@ class ServedDeviceTest : public ::testing::Test {
   sim::Scheduler scheduler_;
   transport::RealtimeDriver driver_{io_, scheduler_};
   std::unique_ptr<transport::DeviceServer> server_;
+  std::unique_ptr<serve::DeviceServerLink> link_;
   std::unique_ptr<FakeDevice> device_;
   ControlChannel channel_{scheduler_};
 };
@@ -663,58 +658,6 @@ RC_GTEST_PROP(ControlChannelLaw, NearlyValidRequestsGetExactlyOneReply, ()) {
     CheckOneReply(channel, request.dump(-1, ' ', false, json::error_handler_t::replace));
     scheduler.RunUntil(scheduler.Now() + *rc::gen::inRange<int64_t>(0, 500) * kNsPerMs);
   }
-}
-
-// ToJson and ParseCommand are inverse: the canonical form parses back to the
-// same command.
-rc::Gen<CommandBody> GenBody() {
-  return rc::gen::oneOf(
-      rc::gen::map(rc::gen::arbitrary<bool>(), [](bool b) { return CommandBody(EStopCommand{b}); }),
-      rc::gen::map(rc::gen::tuple(rc::gen::inRange(1, 128), rc::gen::arbitrary<bool>(),
-                                  rc::gen::arbitrary<bool>(), rc::gen::arbitrary<bool>()),
-                   [](std::tuple<int, bool, bool, bool> t) {
-                     LimitCommand c;
-                     if (std::get<1>(t)) {
-                       c.set = std::get<0>(t);
-                       c.input = std::get<2>(t) ? sim::SwitchInput::kHigh : sim::SwitchInput::kLow;
-                     } else {
-                       c.motor = std::get<0>(t);
-                       c.end = std::get<2>(t) ? sim::LimitEnd::kUpper : sim::LimitEnd::kLower;
-                     }
-                     c.active = std::get<3>(t);
-                     return CommandBody(c);
-                   }),
-      rc::gen::map(rc::gen::tuple(rc::gen::inRange(-1, 32), rc::gen::arbitrary<bool>(),
-                                  rc::gen::arbitrary<uint32_t>()),
-                   [](std::tuple<int, bool, uint32_t> t) {
-                     GioInCommand c;
-                     if (std::get<0>(t) >= 0) {
-                       c.bit = std::get<0>(t);
-                       c.level = std::get<1>(t);
-                     } else {
-                       c.bits = std::get<2>(t);
-                     }
-                     return CommandBody(c);
-                   }),
-      rc::gen::map(rc::gen::inRange<int64_t>(0, 86400001),
-                   [](int64_t ms) { return CommandBody(PowerCycleCommand{ms}); }),
-      rc::gen::map(rc::gen::inRange<int64_t>(1, 86400001),
-                   [](int64_t ms) { return CommandBody(CutLinkCommand{ms}); }),
-      rc::gen::just(CommandBody(StateCommand{})), rc::gen::just(CommandBody(DevicesCommand{})),
-      rc::gen::just(CommandBody(HelpCommand{})));
-}
-
-RC_GTEST_PROP(ControlChannelLaw, CanonicalJsonParsesBackToTheSameCommand, ()) {
-  Command c;
-  c.body = *GenBody();
-  if (*rc::gen::arbitrary<bool>()) c.device = "dev-1";
-  const json j = ToJson(c);
-  auto parsed = ParseCommand(j);
-  RC_ASSERT(std::holds_alternative<Command>(parsed));
-  const Command& back = std::get<Command>(parsed);
-  RC_ASSERT(back.device == c.device);
-  RC_ASSERT(ToJson(back) == j);
-  RC_ASSERT(back.body.index() == c.body.index());
 }
 
 }  // namespace

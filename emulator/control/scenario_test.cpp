@@ -13,6 +13,7 @@
 #include <fstream>
 
 #include "control/test_support.h"
+#include "serve/link_control_adapter.h"
 #include "transport/device_server.h"
 
 namespace moco::control {
@@ -307,8 +308,9 @@ TEST(ScenarioDocsTest, TheDocumentedExampleRunsCleanly) {
   device.PowerOn();
   ASSERT_EQ(device.the_rig().BindLimits(1, sim::HardLimitBinding::FromWire(0x01)),
             sim::MoveStatus::kOk);
+  serve::DeviceServerLink link(server);
   ControlChannel channel(scheduler);
-  channel.AddDevice("dmc16", device, &server);
+  channel.AddDevice("dmc16", device, &link);
   std::vector<ControlEvent> log;
   auto run = s.Schedule(channel, scheduler, 0, [&](const ControlEvent& e) { log.push_back(e); });
   scheduler.RunUntilIdle();

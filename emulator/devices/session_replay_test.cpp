@@ -10,8 +10,8 @@
 #include <variant>
 #include <vector>
 
-#include "control/session.h"
 #include "devices/registry.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
 
 namespace moco::devices {
@@ -38,19 +38,19 @@ class Recorder final : public ByteSink {
 };
 
 void Replay(const std::string& file, const std::string& model) {
-  const auto loaded = control::LoadSession(SourceDir() / "fixtures/sessions" / file);
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded))
-      << std::get<control::SessionError>(loaded).message;
-  const control::Session& session = std::get<control::Session>(loaded);
+  const auto loaded = session::LoadSession(SourceDir() / "fixtures/sessions" / file);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded))
+      << std::get<session::SessionError>(loaded).message;
+  const session::Session& session = std::get<session::Session>(loaded);
   ASSERT_EQ(session.header.clock, "virtual");
   sim::Scheduler scheduler;
   Recorder out(scheduler);
   auto device = CreateDevice(model, "", scheduler, out);
   device->PowerOn();
   std::vector<Chunk> want;
-  for (const control::SessionEntry& e : session.entries) {
+  for (const session::SessionEntry& e : session.entries) {
     if (e.is_event) continue;
-    if (e.from == control::Origin::kDevice) {
+    if (e.from == session::Origin::kDevice) {
       want.push_back({e.t_ns, e.bytes});
       continue;
     }

@@ -121,9 +121,9 @@ std::optional<RigPlotError> CheckOptions(const RigPlotOptions& o) {
 
 }  // namespace
 
-RigPlotResult PlotSession(const control::Session& session, const std::string& profile_path,
+RigPlotResult PlotSession(const session::Session& session, const std::string& profile_path,
                           const RigPlotOptions& options) {
-  if (session.header.protocol != control::Protocol::kDmc) {
+  if (session.header.protocol != wire::Protocol::kDmc) {
     return RigPlotError{Kind::kNotDmc,
                         "the session is " + std::string(ProtocolName(session.header.protocol)) +
                             " traffic; a rig plot replays DMC v2 sessions (header \"protocol\": "
@@ -157,7 +157,7 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
   });
   device.PowerOn();
 
-  const std::vector<control::SessionEntry>& entries = session.entries;
+  const std::vector<session::SessionEntry>& entries = session.entries;
   const sim::TimeNs last_entry_ns = entries.empty() ? 0 : entries.back().t_ns;
   const sim::TimeNs tail_ns = static_cast<sim::TimeNs>(options.tail_s * kNsPerS);
   sim::TimeNs end_ns =
@@ -180,9 +180,9 @@ RigPlotResult PlotSession(const control::Session& session, const std::string& pr
   uint64_t collisions_at_start = 0;
   size_t next = 0;
 
-  auto apply = [&](const control::SessionEntry& e) {
+  auto apply = [&](const session::SessionEntry& e) {
     if (!e.is_event) {
-      if (e.from != control::Origin::kHost) return;
+      if (e.from != session::Origin::kHost) return;
       ++sum.host_chunks;
       device.OnHostBytes(e.bytes);
       return;

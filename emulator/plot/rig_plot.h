@@ -15,9 +15,9 @@
 #include <utility>
 #include <vector>
 
-#include "control/session.h"
 #include "physics/bullet/rig_dynamics.h"
 #include "physics/bullet/rig_path_svg.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
 
 namespace moco::plot {
@@ -109,7 +109,7 @@ class RigPlotResult {
 // e-stop stops the plotted rig too). Device lines are not compared, other
 // events (device, link) are skipped. Deterministic: the same inputs give
 // bit-identical samples. Never throws for bad input; errors are values.
-RigPlotResult PlotSession(const control::Session& session, const std::string& profile_path,
+RigPlotResult PlotSession(const session::Session& session, const std::string& profile_path,
                           const RigPlotOptions& options = {});
 
 }  // namespace moco::plot

@@ -35,13 +35,13 @@ std::string Source(const std::string& rel) {
 
 const std::string kBoomProfile = Source("fixtures/profiles/dmc16-boom.json");
 
-control::Session LoadFixture(const std::string& name) {
-  auto loaded = control::LoadSession(Source("fixtures/sessions/" + name));
-  if (const auto* e = std::get_if<control::SessionError>(&loaded)) {
+session::Session LoadFixture(const std::string& name) {
+  auto loaded = session::LoadSession(Source("fixtures/sessions/" + name));
+  if (const auto* e = std::get_if<session::SessionError>(&loaded)) {
     ADD_FAILURE() << name << ":" << e->line << ": " << e->message;
     return {};
   }
-  return std::get<control::Session>(loaded);
+  return std::get<session::Session>(loaded);
 }
 
 physics::RigProfile BoomJib() {
@@ -67,14 +67,14 @@ physics::JointVector FixtureTargets() {
           8889 / head_steps_per_deg * kDeg,  0};
 }
 
-RigPlot PlotOk(const control::Session& s, const RigPlotOptions& o = {}) {
+RigPlot PlotOk(const session::Session& s, const RigPlotOptions& o = {}) {
   const RigPlotResult r = PlotSession(s, kBoomProfile, o);
   EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().message);
   return r.ok() ? r.value() : RigPlot{};
 }
 
 TEST(RigPlot, SamplesComeAtTheAskedPeriodFromPowerOnUntilTheRigRests) {
-  const control::Session s = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session s = LoadFixture("dmc16-boom-move.jsonl");
   RigPlotOptions o;
   o.period_ns = 20 * sim::kNsPerMs;
   const RigPlot plot = PlotOk(s, o);
@@ -90,7 +90,7 @@ TEST(RigPlot, SamplesComeAtTheAskedPeriodFromPowerOnUntilTheRigRests) {
   EXPECT_LE(plot.summary.duration_s, last_entry_s + 2.0 + 1e-9);
   // Every host frame of the session was fed (one frame per chunk here).
   size_t host_chunks = 0;
-  for (const auto& e : s.entries) host_chunks += !e.is_event && e.from == control::Origin::kHost;
+  for (const auto& e : s.entries) host_chunks += !e.is_event && e.from == session::Origin::kHost;
   EXPECT_EQ(plot.summary.host_chunks, host_chunks);
   EXPECT_EQ(plot.summary.host_messages, host_chunks);
   EXPECT_GT(plot.summary.device_bytes, 0u);
@@ -152,15 +152,15 @@ TEST(RigPlot, ThePhysicalPathFollowsWithinTheBoomSag) {
 }
 
 // A DMC session of host requests, one every 10 ms from 0.1 s.
-control::Session HostSession(const std::vector<dmc::HostMessage>& requests) {
-  control::Session s;
-  s.header.protocol = control::Protocol::kDmc;
+session::Session HostSession(const std::vector<dmc::HostMessage>& requests) {
+  session::Session s;
+  s.header.protocol = wire::Protocol::kDmc;
   uint32_t id = 1;
   sim::TimeNs t_ns = 100 * sim::kNsPerMs;
   for (const dmc::HostMessage& m : requests) {
-    control::SessionEntry e;
+    session::SessionEntry e;
     e.t_ns = t_ns;
-    e.from = control::Origin::kHost;
+    e.from = session::Origin::kHost;
     e.bytes = dmc::Encode(id++, m);
     s.entries.push_back(std::move(e));
     t_ns += 10 * sim::kNsPerMs;
@@ -205,7 +205,7 @@ TEST(RigPlot, DrivingTheHeadIntoTheFloorCountsACollision) {
 }
 
 TEST(RigPlot, TheWindowRestrictsTheSampleTimes) {
-  const control::Session s = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session s = LoadFixture("dmc16-boom-move.jsonl");
   const RigPlot full = PlotOk(s);
   RigPlotOptions o;
   o.from_s = 1.0;
@@ -230,7 +230,7 @@ TEST(RigPlot, TheWindowRestrictsTheSampleTimes) {
 }
 
 TEST(RigPlot, AnEmptyWindowIsNamed) {
-  const control::Session s = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session s = LoadFixture("dmc16-boom-move.jsonl");
   RigPlotOptions o;
   o.from_s = 3.0;
   o.to_s = 2.0;
@@ -269,7 +269,7 @@ TEST(RigPlot, AProfileWithoutAPhysicalRigIsNamedWithTheFix) {
 }
 
 TEST(RigPlot, AnUnreadableOrForeignProfileIsABadProfile) {
-  const control::Session s = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session s = LoadFixture("dmc16-boom-move.jsonl");
   RigPlotResult r = PlotSession(s, "/nonexistent/profile.json");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().kind, RigPlotError::Kind::kBadProfile);
@@ -291,8 +291,8 @@ TEST(RigPlot, ANonDmcSessionIsNamed) {
 }
 
 // The fixture with one event line inserted at `t_s`, in time order.
-control::Session WithEvent(control::Session s, double t_s, nlohmann::json line) {
-  control::SessionEntry e;
+session::Session WithEvent(session::Session s, double t_s, nlohmann::json line) {
+  session::SessionEntry e;
   e.t_ns = static_cast<sim::TimeNs>(t_s * 1e9);
   e.is_event = true;
   line["t_ns"] = e.t_ns;
@@ -315,7 +315,7 @@ class DropSink final : public devices::ByteSink {
 
 TEST(RigPlot, AReplayReproducesTheRecordedStallsAndCollisions) {
   // The track driven beyond its pull-out torque, then the boom into the floor.
-  control::Session s =
+  session::Session s =
       HostSession({dmc::MotorSetSpeed{1, 100000, 2000000}, dmc::MotorMove{1, 80000},
                    dmc::MotorSetSpeed{3, 10000, 10000}, dmc::MotorMove{3, -52444}});
   // Record as mocosim does: the device events go into the session.
@@ -326,17 +326,17 @@ TEST(RigPlot, AReplayReproducesTheRecordedStallsAndCollisions) {
                           devices::LoadDmc16Profile(Source("fixtures/profiles/dmc16-boom.json")));
     control::ControlChannel channel(scheduler);
     channel.AddDevice("dmc16", device);
-    std::vector<control::SessionEntry> events;
+    std::vector<session::SessionEntry> events;
     channel.SetDeviceEventListener(
         [&](const control::DeviceEvent& e) { events.push_back(e.ToSessionEntry()); });
     device.PowerOn();
-    for (const control::SessionEntry& e : std::vector(s.entries)) {
+    for (const session::SessionEntry& e : std::vector(s.entries)) {
       scheduler.RunUntil(e.t_ns);
       device.OnHostBytes(e.bytes);
     }
     scheduler.RunUntil(12 * sim::kNsPerSecond);
     ASSERT_FALSE(events.empty());
-    for (control::SessionEntry& e : events) s.entries.push_back(std::move(e));
+    for (session::SessionEntry& e : events) s.entries.push_back(std::move(e));
     std::stable_sort(s.entries.begin(), s.entries.end(),
                      [](const auto& a, const auto& b) { return a.t_ns < b.t_ns; });
   }
@@ -355,7 +355,7 @@ TEST(RigPlot, AReplayReproducesTheRecordedStallsAndCollisions) {
 }
 
 TEST(RigPlot, ARecordedEStopStopsTheCommandedPath) {
-  const control::Session plain = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session plain = LoadFixture("dmc16-boom-move.jsonl");
   const RigPlot moving = PlotOk(plain);
   const RigPlot stopped = PlotOk(WithEvent(plain, 2.0, kEStop));
   EXPECT_EQ(stopped.summary.control_events_applied, 1u);
@@ -376,7 +376,7 @@ TEST(RigPlot, ARecordedEStopStopsTheCommandedPath) {
 }
 
 TEST(RigPlot, EventsOfOtherSourcesOrThatFailedAreNotReplayed) {
-  const control::Session plain = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session plain = LoadFixture("dmc16-boom-move.jsonl");
   const RigPlot reference = PlotOk(plain);
   nlohmann::json from_device = kEStop;
   from_device["source"] = "device";
@@ -400,7 +400,7 @@ TEST(RigPlot, EventsOfOtherSourcesOrThatFailedAreNotReplayed) {
 }
 
 TEST(RigPlot, TheSameInputGivesTheSameSvg) {
-  const control::Session s = LoadFixture("dmc16-boom-move.jsonl");
+  const session::Session s = LoadFixture("dmc16-boom-move.jsonl");
   const std::string a = physics::RigPathSvg(PlotOk(s).samples, "boom");
   const std::string b = physics::RigPathSvg(PlotOk(s).samples, "boom");
   EXPECT_EQ(a, b);

@@ -13,8 +13,8 @@
 
 #include <filesystem>
 
-#include "control/session.h"
-#include "transport/session_tap.h"
+#include "serve/session_tap.h"
+#include "session/session.h"
 #include "transport/test_support.h"
 
 namespace moco::transport {
@@ -140,12 +140,12 @@ TEST_F(DeviceServerTest, HostThatDoesNotReadIsHeldBackNotAnsweredIntoTheVoid) {
 TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
   const fs::path file =
       fs::temp_directory_path() / ("moco_tap_" + std::to_string(getpid()) + ".jsonl");
-  control::SessionHeader header;
-  header.protocol = control::Protocol::kDfmoco;
+  session::SessionHeader header;
+  header.protocol = wire::Protocol::kDfmoco;
   header.device = "echo";
   {
-    control::SessionWriter writer(file, header);
-    SessionTap tap(writer);
+    session::SessionWriter writer(file, header);
+    serve::SessionTap tap(writer);
     ServeOptions opts;
     opts.observer = &tap;
     opts.log = [](std::string_view) {};
@@ -179,10 +179,10 @@ TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
     server.Stop();
     ASSERT_TRUE(writer.Finish());
   }
-  auto loaded = control::LoadSession(file);
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded))
-      << std::get<control::SessionError>(loaded).message;
-  const auto& s = std::get<control::Session>(loaded);
+  auto loaded = session::LoadSession(file);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded))
+      << std::get<session::SessionError>(loaded).message;
+  const auto& s = std::get<session::Session>(loaded);
   std::string from_host;
   std::string from_device;
   std::vector<std::string> events;
@@ -193,7 +193,7 @@ TEST_F(DeviceServerTest, ServesOnTcpAndRecordsASession) {
     if (e.is_event) {
       events.push_back(e.event["event"].get<std::string>() + " " +
                        e.event["detail"].get<std::string>());
-    } else if (e.from == control::Origin::kHost) {
+    } else if (e.from == session::Origin::kHost) {
       from_host.append(e.bytes.begin(), e.bytes.end());
     } else {
       from_device.append(e.bytes.begin(), e.bytes.end());

@@ -15,7 +15,7 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 
 namespace moco::conformance {
@@ -279,14 +279,14 @@ TEST(DfmocoBroken, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   };
   EXPECT_TRUE(has("shrunk to 1 step(s):")) << ConsoleReport(r, true);
   EXPECT_TRUE(has("  sa")) << ConsoleReport(r, true);
-  auto loaded = control::LoadSession(session);
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
-  const auto& s = std::get<control::Session>(loaded);
+  auto loaded = session::LoadSession(session);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const auto& s = std::get<session::Session>(loaded);
   EXPECT_EQ(s.header.protocol, wire::Protocol::kDfmoco);
   EXPECT_EQ(s.header.clock, "virtual");
   bool sa_sent = false;
   for (const auto& e : s.entries) {
-    if (e.from != control::Origin::kHost) continue;
+    if (e.from != session::Origin::kHost) continue;
     sa_sent = sa_sent || std::string(e.bytes.begin(), e.bytes.end()) == "sa\r\n";
   }
   EXPECT_TRUE(sa_sent);

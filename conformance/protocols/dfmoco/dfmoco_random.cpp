@@ -9,7 +9,7 @@
 #include "conformance/core/sequence.h"
 #include "conformance/core/transcript.h"
 #include "conformance/protocols/dfmoco/dfmoco_suites.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/registry.h"
 
 namespace moco::conformance {
@@ -295,14 +295,14 @@ TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   };
   EXPECT_TRUE(has("shrunk to 1 step(s):")) << ConsoleReport(r, true);
   EXPECT_TRUE(has("  MOTOR_STOP_ALL")) << ConsoleReport(r, true);
-  auto loaded = control::LoadSession(session);
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
-  const auto& s = std::get<control::Session>(loaded);
+  auto loaded = session::LoadSession(session);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const auto& s = std::get<session::Session>(loaded);
   EXPECT_EQ(s.header.protocol, wire::Protocol::kDmc);
   EXPECT_EQ(s.header.clock, "virtual");
   bool stop_all_sent = false;
   for (const auto& e : s.entries) {
-    if (e.from != control::Origin::kHost) continue;
+    if (e.from != session::Origin::kHost) continue;
     auto f = dmc::DecodeFrame(e.bytes);
     stop_all_sent = stop_all_sent || (f.ok() && f->type == ToWire(MsgType::kMotorStopAll));
   }

@@ -8,7 +8,7 @@
 #include "conformance/core/sequence.h"
 #include "conformance/core/transcript.h"
 #include "conformance/protocols/dmc/dmc_suites.h"
-#include "control/session.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "devices/stackshot3x/stackshot3x.h"
 
 namespace moco::conformance {
@@ -145,14 +145,14 @@ TEST(StackshotBroken, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   bool stop_step = false;
   for (const std::string& line : log) stop_step = stop_step || line.rfind("  CC_RAIL_STOP", 0) == 0;
   EXPECT_TRUE(stop_step) << ConsoleReport(r, true);
-  auto loaded = control::LoadSession(session);
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
-  const auto& s = std::get<control::Session>(loaded);
+  auto loaded = session::LoadSession(session);
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const auto& s = std::get<session::Session>(loaded);
   EXPECT_EQ(s.header.protocol, wire::Protocol::kStackshot);
   EXPECT_EQ(s.header.clock, "virtual");
   bool stop_sent = false;
   for (const auto& e : s.entries) {
-    if (e.from != control::Origin::kHost) continue;
+    if (e.from != session::Origin::kHost) continue;
     auto p = stackshot::DecodePacket(e.bytes);
     stop_sent = stop_sent || (p.ok() && p->command == stackshot::Id(Command::kRailStop));
   }

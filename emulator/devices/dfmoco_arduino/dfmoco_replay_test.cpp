@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "control/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/dfmoco_arduino/dfmoco_test_support.h"
+#include "session/session.h"
 
 namespace moco::devices {
 namespace {
@@ -25,20 +25,20 @@ std::string Text(const wire::Bytes& b) { return std::string(b.begin(), b.end());
 
 TEST(DfmocoReplay, UnoWorkflowMatchesByteForByte) {
   const auto loaded =
-      control::LoadSession(SourceDir() / "fixtures/sessions/dfmoco-uno-workflow.jsonl");
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded))
-      << std::get<control::SessionError>(loaded).message;
-  const control::Session& session = std::get<control::Session>(loaded);
-  ASSERT_EQ(session.header.protocol, control::Protocol::kDfmoco);
+      session::LoadSession(SourceDir() / "fixtures/sessions/dfmoco-uno-workflow.jsonl");
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded))
+      << std::get<session::SessionError>(loaded).message;
+  const session::Session& session = std::get<session::Session>(loaded);
+  ASSERT_EQ(session.header.protocol, wire::Protocol::kDfmoco);
   ASSERT_EQ(session.header.device, "dfmoco-uno");
   ASSERT_EQ(session.header.clock, "virtual");
   ASSERT_FALSE(session.entries.empty());
 
   testing::Bench b(LoadDfmocoProfile(SourceDir() / "fixtures/profiles/dfmoco-uno.json"));
   std::vector<testing::ChunkRecordingSink::Chunk> want;
-  for (const control::SessionEntry& e : session.entries) {
+  for (const session::SessionEntry& e : session.entries) {
     ASSERT_FALSE(e.is_event);
-    if (e.from == control::Origin::kDevice) {
+    if (e.from == session::Origin::kDevice) {
       want.push_back({e.t_ns, Text(e.bytes)});
       continue;
     }

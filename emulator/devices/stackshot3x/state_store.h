@@ -2,7 +2,7 @@
 // non-volatile memory (stackshot-protocol.txt CC_SERIAL_NUMBER, CC_NVM_ACCESS,
 // CC_RAIL_CONFIG_SAVE "commits the data to NVM", CC_RAIL_CONFIG_AXIS, CC_LOG):
 // the interface and an in-memory store. The file store belongs to whoever
-// serves the device (transport/file_state_store.h): a device opens no file.
+// serves the device (serve/file_state_store.h): a device opens no file.
 #ifndef MOCO_DEVICES_STACKSHOT3X_STATE_STORE_H_
 #define MOCO_DEVICES_STACKSHOT3X_STATE_STORE_H_
 

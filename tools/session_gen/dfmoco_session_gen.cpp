@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "control/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
+#include "session/session.h"
 #include "wire/dfmoco.h"
 
 namespace {
@@ -46,13 +46,13 @@ class Recorder final : public moco::devices::ByteSink {
  public:
   explicit Recorder(const moco::sim::Scheduler& s) : s_(s) {}
   void Write(moco::wire::ByteView bytes) override {
-    moco::control::SessionEntry e;
+    moco::session::SessionEntry e;
     e.t_ns = s_.Now();
-    e.from = moco::control::Origin::kDevice;
+    e.from = moco::session::Origin::kDevice;
     e.bytes.assign(bytes.begin(), bytes.end());
     entries.push_back(std::move(e));
   }
-  std::vector<moco::control::SessionEntry> entries;
+  std::vector<moco::session::SessionEntry> entries;
 
  private:
   const moco::sim::Scheduler& s_;
@@ -76,13 +76,13 @@ int main(int argc, char** argv) {
     moco::sim::Scheduler sched;
     Recorder rec(sched);
     moco::devices::DfmocoArduino dev(sched, rec, profile);
-    std::vector<moco::control::SessionEntry> entries;
+    std::vector<moco::session::SessionEntry> entries;
     dev.PowerOn();
     for (const auto& [t, line] : HostScript()) {
       sched.RunUntil(t);
-      moco::control::SessionEntry e;
+      moco::session::SessionEntry e;
       e.t_ns = t;
-      e.from = moco::control::Origin::kHost;
+      e.from = moco::session::Origin::kHost;
       e.bytes.assign(line.begin(), line.end());
       // Device output written before this instant goes first.
       for (auto& d : rec.entries) entries.push_back(std::move(d));
@@ -93,8 +93,8 @@ int main(int argc, char** argv) {
     sched.RunUntil(9000 * kNsPerMs);
     for (auto& d : rec.entries) entries.push_back(std::move(d));
 
-    moco::control::SessionHeader header;
-    header.protocol = moco::control::Protocol::kDfmoco;
+    moco::session::SessionHeader header;
+    header.protocol = moco::wire::Protocol::kDfmoco;
     header.device = "dfmoco-uno";
     header.clock = "virtual";
     header.note =
@@ -106,20 +106,20 @@ int main(int argc, char** argv) {
     auto write = [&](const nlohmann::json& j) {
       out << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
     };
-    write(moco::control::HeaderToJson(header));
+    write(moco::session::HeaderToJson(header));
     const moco::dfmoco::Dialect dialect = profile.Dialect();
-    for (moco::control::SessionEntry& e : entries) {
+    for (moco::session::SessionEntry& e : entries) {
       const std::string text(e.bytes.begin(), e.bytes.end());
       std::string_view line(text);
       line.remove_suffix(2);  // every chunk here is one "\r\n" line
-      if (e.from == moco::control::Origin::kHost) {
+      if (e.from == moco::session::Origin::kHost) {
         const auto cmd = moco::dfmoco::ParseHostLine(line, dialect);
         e.decoded.push_back(cmd.ok() ? moco::dfmoco::Describe(*cmd) : "parse error");
       } else {
         const auto reply = moco::dfmoco::ParseDeviceLine(line, dialect);
         e.decoded.push_back(reply.ok() ? moco::dfmoco::Describe(*reply, dialect) : "?");
       }
-      nlohmann::json j = moco::control::EntryToJson(e);
+      nlohmann::json j = moco::session::EntryToJson(e);
       j["text"] = text;
       write(j);
     }

@@ -6,17 +6,17 @@
 // `mocosim plot` and rig_plot_test.cpp plot it; the CTest
 // plot_boom_session_fixture_is_current checks the file is this program's output.
 //   cmake --build --preset dev --target boom_session_gen &&
-//   build/dev/emulator/plot/boom_session_gen fixtures/profiles/dmc16-boom.json
+//   build/dev/tools/session_gen/boom_session_gen fixtures/profiles/dmc16-boom.json
 //   fixtures/sessions/dmc16-boom-move.jsonl  (one command line)
 #include <cstdio>
 #include <exception>
 #include <string>
 
-#include "control/device_recorder.h"
-#include "control/session.h"
 #include "devices/dmc16/dmc16.h"
 #include "devices/dmc16/dmc16_profile.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
+#include "tools/session_gen/device_recorder.h"
 #include "wire/dmc.h"
 
 namespace {
@@ -56,8 +56,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "boom_session_gen: %s\n", e.what());
     return 2;
   }
-  control::SessionHeader h;
-  h.protocol = control::Protocol::kDmc;
+  session::SessionHeader h;
+  h.protocol = wire::Protocol::kDmc;
   h.device = "dmc16";
   h.clock = "virtual";
   h.note =
@@ -65,10 +65,10 @@ int main(int argc, char** argv) {
       "t = 0: HI, SET_SPEED of motors 1-5, then at 0.5 s one combined move: track (1) 0.4 m, "
       "swing (2) -30 deg (away from the light stand), boom (3) 15 deg, pan (4) -40 deg, "
       "tilt (5) 10 deg, 1 s ramps each, all at rest by 5.51 s; status at 6 s. Written by "
-      "emulator/plot/boom_session_gen.cpp";
-  control::SessionWriter writer(argv[2], h);
+      "tools/session_gen/boom_session_gen.cpp";
+  session::SessionWriter writer(argv[2], h);
   sim::Scheduler scheduler;
-  control::DeviceRecorder sink(scheduler, writer);
+  session_gen::DeviceRecorder sink(scheduler, writer);
   devices::Dmc16 device(scheduler, sink, std::move(profile));
   device.PowerOn();
   uint32_t id = 2000;

@@ -1,6 +1,6 @@
 // Served DMC-16s end to end over a real PTY and a real TCP socket, the run
 // file reader, and start-up errors that name the problem.
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 #include <sys/stat.h>
 
@@ -15,14 +15,17 @@
 #include <thread>
 
 #include "base/file_io.h"
-#include "control/session.h"
+#include "session/session.h"
 #include "transport/dmc_host_client.h"
 #include "wire/stackshot.h"
 
-namespace moco::transport {
+namespace moco::serve {
 namespace {
 
+namespace asio = transport::asio;
+namespace testing = transport::testing;
 using testing::DmcHostClient;
+using transport::DeviceServer;
 namespace fs = std::filesystem;
 
 fs::path TempDir() {
@@ -90,10 +93,10 @@ TEST(Serve, Dmc16EndToEndOverPtyAndTcpWithRecording) {
     io.join();
     EXPECT_FALSE(fs::exists(dir / "dmc16")) << "the symlink is removed on stop";
   }
-  auto loaded = control::LoadSession(dir / "pty.jsonl");
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
-  const control::Session& s = std::get<control::Session>(loaded);
-  EXPECT_EQ(s.header.protocol, control::Protocol::kDmc);
+  auto loaded = session::LoadSession(dir / "pty.jsonl");
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const session::Session& s = std::get<session::Session>(loaded);
+  EXPECT_EQ(s.header.protocol, wire::Protocol::kDmc);
   bool saw_move = false;
   for (const auto& entry : s.entries) {
     for (const auto& d : entry.decoded)
@@ -121,7 +124,7 @@ TEST(Serve, DeviceEventsAndControlActionsAreLoggedAndRecorded) {
       log.emplace_back(l);
     });
     control::ControlChannel channel(e.scheduler());
-    channel.AddDevice(e.name(0), e.device(0), &e.server(0));
+    channel.AddDevice(e.name(0), e.device(0), &e.link_control(0));
     e.AttachControl(channel);
     e.Start();
     std::thread io([&] { e.Run(); });
@@ -155,11 +158,11 @@ TEST(Serve, DeviceEventsAndControlActionsAreLoggedAndRecorded) {
   for (const std::string& l : log) logged = logged || l.find("\"collision\"") != std::string::npos;
   EXPECT_TRUE(logged) << "device events are logged at warn";
 
-  auto loaded = control::LoadSession(dir / "boom.jsonl");
-  ASSERT_TRUE(std::holds_alternative<control::Session>(loaded));
-  const control::Session& s = std::get<control::Session>(loaded);
-  const control::SessionEntry* collision = nullptr;
-  const control::SessionEntry* estop = nullptr;
+  auto loaded = session::LoadSession(dir / "boom.jsonl");
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const session::Session& s = std::get<session::Session>(loaded);
+  const session::SessionEntry* collision = nullptr;
+  const session::SessionEntry* estop = nullptr;
   for (const auto& entry : s.entries) {
     if (!entry.is_event) continue;
     if (entry.event.value("event", "") == "collision" && collision == nullptr) collision = &entry;
@@ -701,4 +704,4 @@ TEST(RunConfig, ErrorsSpeakOfTheRunFileAndItsDocumentNotAProfile) {
 }
 
 }  // namespace
-}  // namespace moco::transport
+}  // namespace moco::serve

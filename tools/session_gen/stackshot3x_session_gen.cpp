@@ -5,15 +5,15 @@
 // replay test (emulator/devices/session_replay_test.cpp) checks the device
 // still answers it byte for byte and nanosecond for nanosecond.
 //   cmake --build --preset dev --target stackshot3x_session_gen &&
-//   build/dev/emulator/devices/stackshot3x/stackshot3x_session_gen
+//   build/dev/tools/session_gen/stackshot3x_session_gen
 //       fixtures/sessions/stackshot3x-workflow.jsonl   (one command line)
 #include <cstdio>
 #include <string>
 
-#include "control/device_recorder.h"
-#include "control/session.h"
 #include "devices/stackshot3x/stackshot3x.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
+#include "tools/session_gen/device_recorder.h"
 #include "wire/stackshot.h"
 
 namespace {
@@ -33,8 +33,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: stackshot3x_session_gen OUT.jsonl\n");
     return 2;
   }
-  control::SessionHeader h;
-  h.protocol = control::Protocol::kStackshot;
+  session::SessionHeader h;
+  h.protocol = wire::Protocol::kStackshot;
   h.device = "stackshot3x";
   h.clock = "virtual";
   h.note =
@@ -42,9 +42,9 @@ int main(int argc, char** argv) {
       "packets end in the constant checksum 0x69 (FACTS): PING 0x5A (answer 0xA5), software id, "
       "a move of 5 mm forward on X polled with CC_RAIL_STATUS every 100 ms, the position, one "
       "shutter pulse of 0.2 s (SHUTTER status bit set while it lasts), CC_RAIL_STOP";
-  control::SessionWriter writer(argv[1], h);
+  session::SessionWriter writer(argv[1], h);
   sim::Scheduler scheduler;
-  control::DeviceRecorder sink(scheduler, writer);
+  session_gen::DeviceRecorder sink(scheduler, writer);
   devices::Stackshot3x device(scheduler, sink);
   device.PowerOn();
   auto send = [&](double t_s, const stackshot::HostCommand& c) {

@@ -4,15 +4,15 @@
 // byte for byte and nanosecond for nanosecond. Values checked by hand are
 // listed in the session's note.
 //   cmake --build --preset dev --target dmc16_session_gen &&
-//   build/dev/emulator/devices/dmc16/dmc16_session_gen fixtures/sessions/dmc16-workflow.jsonl
+//   build/dev/tools/session_gen/dmc16_session_gen fixtures/sessions/dmc16-workflow.jsonl
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include "control/device_recorder.h"
-#include "control/session.h"
 #include "devices/dmc16/dmc16.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
+#include "tools/session_gen/device_recorder.h"
 #include "wire/dmc.h"
 
 namespace {
@@ -26,8 +26,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: dmc16_session_gen OUT.jsonl\n");
     return 2;
   }
-  control::SessionHeader h;
-  h.protocol = control::Protocol::kDmc;
+  session::SessionHeader h;
+  h.protocol = wire::Protocol::kDmc;
   h.device = "dmc16";
   h.clock = "virtual";
   h.note =
@@ -37,9 +37,9 @@ int main(int argc, char** argv) {
       "frame (ERR_CHECKSUM), an unknown type (ERR_UNSUPPORTED), a 24-frame upload, RUN_MOVE "
       "at 24 fps with 500 ms pre/post-roll (pre-roll start 2400 - 480*0.5/2 = 2280), GO with "
       "a report per frame, RT_END after the post-roll (2860 + 120 = 2980)";
-  control::SessionWriter writer(argv[1], h);
+  session::SessionWriter writer(argv[1], h);
   sim::Scheduler scheduler;
-  control::DeviceRecorder sink(scheduler, writer);
+  session_gen::DeviceRecorder sink(scheduler, writer);
   devices::Dmc16 device(scheduler, sink);
   device.PowerOn();
   uint32_t id = 1000;

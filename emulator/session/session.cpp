@@ -1,11 +1,11 @@
 // Session files: timestamped host/device traffic in JSON Lines (docs/sessions.md).
-#include "control/session.h"
+#include "session/session.h"
 
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
 
-namespace moco::control {
+namespace moco::session {
 namespace {
 
 using nlohmann::json;
@@ -268,4 +268,4 @@ bool SessionWriter::Finish(std::string* error) {
   return true;
 }
 
-}  // namespace moco::control
+}  // namespace moco::session

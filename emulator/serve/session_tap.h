@@ -1,16 +1,16 @@
 // Records a link's tap as a session file (docs/sessions.md): traffic lines
-// with the scheduler timestamps and link events, through control::SessionWriter.
-#ifndef MOCO_TRANSPORT_SESSION_TAP_H_
-#define MOCO_TRANSPORT_SESSION_TAP_H_
+// with the scheduler timestamps and link events, through session::SessionWriter.
+#ifndef MOCO_SERVE_SESSION_TAP_H_
+#define MOCO_SERVE_SESSION_TAP_H_
 
 #include <memory>
 #include <optional>
 
-#include "control/session.h"
+#include "session/session.h"
 #include "transport/traffic.h"
 #include "wire/transcript.h"
 
-namespace moco::transport {
+namespace moco::serve {
 
 // A TrafficObserver writing every chunk and event to a SessionWriter:
 // kToDevice -> "from": "host", kToHost -> "from": "device"; an event becomes
@@ -18,20 +18,20 @@ namespace moco::transport {
 // its header should say "clock": "virtual" (times are scheduler times).
 // With a protocol, each traffic line also carries "decoded": the one-line
 // descriptions of the messages that chunk completed.
-class SessionTap final : public TrafficObserver {
+class SessionTap final : public transport::TrafficObserver {
  public:
-  explicit SessionTap(control::SessionWriter& writer,
+  explicit SessionTap(session::SessionWriter& writer,
                       std::optional<wire::Protocol> protocol = std::nullopt)
       : writer_(writer),
         decoder_(protocol ? std::make_unique<wire::TranscriptDecoder>(*protocol) : nullptr) {}
-  void OnTraffic(sim::TimeNs t_ns, Direction dir, wire::ByteView bytes) override;
+  void OnTraffic(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override;
   void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override;
 
  private:
-  control::SessionWriter& writer_;
+  session::SessionWriter& writer_;
   std::unique_ptr<wire::TranscriptDecoder> decoder_;
 };
 
-}  // namespace moco::transport
+}  // namespace moco::serve
 
-#endif  // MOCO_TRANSPORT_SESSION_TAP_H_
+#endif  // MOCO_SERVE_SESSION_TAP_H_

@@ -1,8 +1,9 @@
 // Session files: timestamped host/device traffic in JSON Lines (docs/sessions.md).
 // Read by `mocosim decode`, `mococheck replay` and `mococheck fuzz`; written by
-// `mocosim --record`.
-#ifndef MOCO_CONTROL_SESSION_H_
-#define MOCO_CONTROL_SESSION_H_
+// `mocosim --record`. The recording format is its own layer (docs/architecture.md):
+// below devices, transport, control and conformance, it uses only base and wire.
+#ifndef MOCO_SESSION_SESSION_H_
+#define MOCO_SESSION_SESSION_H_
 
 #include <cstdint>
 #include <filesystem>
@@ -16,7 +17,7 @@
 #include "wire/bytes.h"
 #include "wire/transcript.h"
 
-namespace moco::control {
+namespace moco::session {
 
 inline constexpr int kSessionFormatVersion = 1;
 
@@ -117,6 +118,6 @@ class SessionWriter {
   bool finished_ = false;
 };
 
-}  // namespace moco::control
+}  // namespace moco::session
 
-#endif  // MOCO_CONTROL_SESSION_H_
+#endif  // MOCO_SESSION_SESSION_H_

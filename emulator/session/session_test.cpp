@@ -1,6 +1,6 @@
 // Tests for the session file format of docs/sessions.md: parsing, errors that
 // name the line and the fix, the write-then-rename rule, and round trips.
-#include "control/session.h"
+#include "session/session.h"
 
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
@@ -15,7 +15,7 @@
 #include <iterator>
 #include <thread>
 
-namespace moco::control {
+namespace moco::session {
 namespace {
 
 Session Ok(std::variant<Session, SessionError> r) {
@@ -334,4 +334,4 @@ TEST(SessionReaderFiles, DevicesDirectoriesAndEndlessLinesAreRefusedNotRead) {
 }
 
 }  // namespace
-}  // namespace moco::control
+}  // namespace moco::session

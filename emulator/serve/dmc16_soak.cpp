@@ -25,9 +25,9 @@
 #include <thread>
 #include <vector>
 
-#include "control/session.h"
+#include "serve/serve.h"
+#include "session/session.h"
 #include "transport/dmc_host_client.h"
-#include "transport/serve.h"
 #include "wire/transcript.h"
 
 namespace {
@@ -179,8 +179,8 @@ void DriveHostAhead(int fd, double seconds, uint64_t ahead, HostResult& r) {
 // Problems `mocosim decode --strict` would count in a recording; -1 when it
 // cannot be read.
 long RecordingProblems(const std::filesystem::path& path, size_t* entries) {
-  auto loaded = moco::control::LoadSession(path);
-  const auto* session = std::get_if<moco::control::Session>(&loaded);
+  auto loaded = moco::session::LoadSession(path);
+  const auto* session = std::get_if<moco::session::Session>(&loaded);
   if (session == nullptr) return -1;
   *entries = session->entries.size();
   moco::wire::TranscriptDecoder decoder(session->header.protocol);
@@ -190,12 +190,12 @@ long RecordingProblems(const std::filesystem::path& path, size_t* entries) {
   };
   for (const auto& e : session->entries) {
     if (e.is_event) continue;
-    count(decoder.Feed(e.from == moco::control::Origin::kHost ? moco::wire::Side::kHost
+    count(decoder.Feed(e.from == moco::session::Origin::kHost ? moco::wire::Side::kHost
                                                               : moco::wire::Side::kDevice,
                        e.bytes));
   }
   count(decoder.Finish());
-  if (!moco::control::SessionWarning(*session).empty()) ++problems;
+  if (!moco::session::SessionWarning(*session).empty()) ++problems;
   return problems;
 }
 
@@ -274,10 +274,10 @@ int main(int argc, char** argv) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("moco_soak_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  moco::transport::EmulatorConfig config;
-  config.log_level = moco::transport::LogLevel::kError;
+  moco::serve::EmulatorConfig config;
+  config.log_level = moco::serve::LogLevel::kError;
   for (long d = 0; d < devices; ++d) {
-    moco::transport::DeviceConfig c;
+    moco::serve::DeviceConfig c;
     c.model = "dmc16";
     c.name = "dmc16-" + std::to_string(d + 1);
     // Even devices on PTYs, odd on TCP. Unpaced at a fixed rate: 2k
@@ -287,7 +287,7 @@ int main(int argc, char** argv) {
     if (record) c.record_path = (dir / (c.name + ".jsonl")).string();
     config.devices.push_back(c);
   }
-  auto emulator = std::make_unique<moco::transport::Emulator>(config, [](std::string_view l) {
+  auto emulator = std::make_unique<moco::serve::Emulator>(config, [](std::string_view l) {
     std::fprintf(stderr, "%.*s\n", static_cast<int>(l.size()), l.data());
   });
   emulator->Start();

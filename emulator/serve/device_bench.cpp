@@ -20,9 +20,9 @@
 
 #include "devices/dmc16/dmc16.h"
 #include "devices/registry.h"
+#include "serve/serve.h"
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
-#include "transport/serve.h"
 #include "transport/test_support.h"
 
 namespace {
@@ -91,13 +91,13 @@ std::vector<double> Echo(const std::string& spec, int n) {
 
 // Request->response of a served DMC-16.
 std::vector<double> Device(const std::string& spec, const dmc::HostMessage& request, int n) {
-  moco::transport::EmulatorConfig config;
-  config.log_level = moco::transport::LogLevel::kError;
-  moco::transport::DeviceConfig d;
+  moco::serve::EmulatorConfig config;
+  config.log_level = moco::serve::LogLevel::kError;
+  moco::serve::DeviceConfig d;
   d.endpoint = spec;
   d.no_pacing = true;
   config.devices.push_back(d);
-  moco::transport::Emulator emulator(config, [](std::string_view) {});
+  moco::serve::Emulator emulator(config, [](std::string_view) {});
   emulator.Start();
   std::thread t([&] { emulator.Run(); });
   const int fd = Open(emulator.server(0));
@@ -206,14 +206,14 @@ class LineReader {
 // unpaced) and the timing of the once-a-second `mp` reports of a move.
 void Dfmoco(const std::string& pty, int n) {
   for (bool paced : {false, true}) {
-    moco::transport::EmulatorConfig config;
-    config.log_level = moco::transport::LogLevel::kError;
-    moco::transport::DeviceConfig d;
+    moco::serve::EmulatorConfig config;
+    config.log_level = moco::serve::LogLevel::kError;
+    moco::serve::DeviceConfig d;
     d.model = "dfmoco";
     d.endpoint = pty;
     d.no_pacing = !paced;
     config.devices.push_back(d);
-    moco::transport::Emulator emulator(config, [](std::string_view) {});
+    moco::serve::Emulator emulator(config, [](std::string_view) {});
     emulator.Start();
     std::thread t([&] { emulator.Run(); });
     const int fd = Open(emulator.server(0));

@@ -1,8 +1,8 @@
 // The file-backed non-volatile memory of a served device (ARCHITECTURE: a
 // device keeps state through the StateStore interface; storage belongs to
 // whoever serves it). docs/files.md describes the files.
-#ifndef MOCO_TRANSPORT_FILE_STATE_STORE_H_
-#define MOCO_TRANSPORT_FILE_STATE_STORE_H_
+#ifndef MOCO_SERVE_FILE_STATE_STORE_H_
+#define MOCO_SERVE_FILE_STATE_STORE_H_
 
 #include <filesystem>
 #include <optional>
@@ -13,7 +13,7 @@
 #include "base/file_io.h"
 #include "devices/stackshot3x/state_store.h"
 
-namespace moco::transport {
+namespace moco::serve {
 
 using devices::StateLoad;
 using devices::StateStore;
@@ -61,6 +61,6 @@ class FileStateStore final : public StateStore {
   std::string error_;
 };
 
-}  // namespace moco::transport
+}  // namespace moco::serve
 
-#endif  // MOCO_TRANSPORT_FILE_STATE_STORE_H_
+#endif  // MOCO_SERVE_FILE_STATE_STORE_H_

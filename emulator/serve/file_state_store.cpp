@@ -1,9 +1,9 @@
 // The file-backed non-volatile memory of a served device.
-#include "transport/file_state_store.h"
+#include "serve/file_state_store.h"
 
 #include <utility>
 
-namespace moco::transport {
+namespace moco::serve {
 
 FileStateStore::FileStateStore(std::filesystem::path path, int supported_version)
     : path_(std::move(path)), supported_version_(supported_version) {}
@@ -107,4 +107,4 @@ bool FileStateStore::Save(const nlohmann::json& state) {
   return true;
 }
 
-}  // namespace moco::transport
+}  // namespace moco::serve

@@ -1,5 +1,5 @@
 // Serving emulated devices in one process (see serve.h).
-#include "transport/serve.h"
+#include "serve/serve.h"
 
 #include <csignal>
 #include <cstdlib>
@@ -10,15 +10,27 @@
 #include <sstream>
 
 #include "base/file_io.h"
-#include "control/session.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
-#include "transport/file_state_store.h"
+#include "serve/file_state_store.h"
+#include "serve/link_control_adapter.h"
+#include "serve/session_tap.h"
+#include "session/session.h"
 #include "transport/link_faults.h"
-#include "transport/session_tap.h"
 #include "wire/transcript.h"
 
-namespace moco::transport {
+namespace moco::serve {
+
+using transport::DeviceServer;
+using transport::Direction;
+using transport::ErrorCode;
+using transport::FaultConfig;
+using transport::LogFn;
+using transport::LogToStderr;
+using transport::ParseFaultConfig;
+using transport::ServeOptions;
+using transport::TrafficObserver;
+namespace asio = transport::asio;
 
 LogLevel ParseLogLevel(std::string_view text) {
   if (text == "error") return LogLevel::kError;
@@ -125,11 +137,12 @@ struct Emulator::Served {
   DeviceConfig config;
   bool default_state = false;             // state_path is DefaultStatePath(name)
   std::unique_ptr<FileStateStore> store;  // outlives `device`
-  std::unique_ptr<control::SessionWriter> writer;
+  std::unique_ptr<session::SessionWriter> writer;
   std::unique_ptr<SessionTap> tap;
   std::unique_ptr<DebugTap> debug;
   TeeObserver tee;
   std::unique_ptr<DeviceServer> server;
+  std::unique_ptr<DeviceServerLink> link;  // the server as control reaches it
   std::unique_ptr<devices::Device> device;
 };
 
@@ -200,6 +213,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       };
       try {
         s->server = std::make_unique<DeviceServer>(driver_, d.endpoint, opts);
+        s->link = std::make_unique<DeviceServerLink>(*s->server);
       } catch (const std::exception& e) {
         throw std::runtime_error(d.name + ": " + e.what());
       }
@@ -221,12 +235,12 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       }
       // Last, so that a device failing to start leaves no recording behind.
       if (!d.record_path.empty()) {
-        control::SessionHeader h;
+        session::SessionHeader h;
         h.protocol = model->protocol;
         h.device = std::string(model->name);
         h.clock = "virtual";
         h.note = "recorded by mocosim from " + s->server->Where();  // the bound port, not :0
-        s->writer = std::make_unique<control::SessionWriter>(d.record_path, h);
+        s->writer = std::make_unique<session::SessionWriter>(d.record_path, h);
         s->tap = std::make_unique<SessionTap>(*s->writer, model->protocol);
         s->tee.Add(s->tap.get());
         if (s->writer->replaces_existing()) {
@@ -251,9 +265,10 @@ Emulator::~Emulator() { Stop(); }
 const std::string& Emulator::name(size_t i) const { return served_[i]->config.name; }
 devices::Device& Emulator::device(size_t i) { return *served_[i]->device; }
 DeviceServer& Emulator::server(size_t i) { return *served_[i]->server; }
+control::LinkControl& Emulator::link_control(size_t i) { return *served_[i]->link; }
 const std::string& Emulator::state_path(size_t i) const { return served_[i]->config.state_path; }
 
-void Emulator::RecordEvent(const std::string& name, const control::SessionEntry& entry) {
+void Emulator::RecordEvent(const std::string& name, const session::SessionEntry& entry) {
   for (auto& s : served_) {
     if (s->config.name == name && s->writer && !stopped_) s->writer->Append(entry);
   }
@@ -418,4 +433,4 @@ EmulatorConfig LoadRunConfig(const std::string& path) {
   }
 }
 
-}  // namespace moco::transport
+}  // namespace moco::serve

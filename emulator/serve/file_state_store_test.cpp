@@ -2,7 +2,7 @@
 // corrupt file kept aside numbered with a message naming it, symlinks written
 // through, unknown versions refused, a lock against a second user, special
 // files; and a StackShot 3X keeping its NVM across devices on one file.
-#include "transport/file_state_store.h"
+#include "serve/file_state_store.h"
 
 #include <sys/stat.h>
 
@@ -17,7 +17,7 @@
 
 #include "devices/stackshot3x/stackshot3x_test_support.h"
 
-namespace moco::transport {
+namespace moco::serve {
 namespace {
 
 using devices::testing::Read;
@@ -257,4 +257,4 @@ TEST(Stackshot3xTest, CorruptStateFileIsKeptAsideAndDefaultsUsed) {
 }
 
 }  // namespace
-}  // namespace moco::transport
+}  // namespace moco::serve

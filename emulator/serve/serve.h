@@ -2,8 +2,8 @@
 // the io_context, the real-time driver of the one clock, one DeviceServer per
 // device, session recordings, the control socket and scenario, and a clean
 // shutdown on SIGINT/SIGTERM/SIGHUP (symlinks removed, recordings closed).
-#ifndef MOCO_TRANSPORT_SERVE_H_
-#define MOCO_TRANSPORT_SERVE_H_
+#ifndef MOCO_SERVE_SERVE_H_
+#define MOCO_SERVE_SERVE_H_
 
 #include <functional>
 #include <memory>
@@ -15,14 +15,15 @@
 #include <nlohmann/json.hpp>
 
 #include "control/control_channel.h"
-#include "control/session.h"
+#include "control/link_control.h"
 #include "devices/device.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
 #include "transport/asio.h"
 #include "transport/device_server.h"
 #include "transport/realtime_driver.h"
 
-namespace moco::transport {
+namespace moco::serve {
 
 enum class LogLevel { kError, kWarn, kInfo, kDebug };
 // "error", "warn", "info", "debug"; throws std::invalid_argument otherwise.
@@ -68,9 +69,8 @@ EmulatorConfig ParseRunConfig(const nlohmann::json& j, const std::string& where,
                               const std::string& base_dir);
 EmulatorConfig LoadRunConfig(const std::string& path);
 
-// Hooks for the control socket and scenario, set up by the caller that owns
-// moco_control (kept out of this library so that transport does not depend
-// on the control channel).
+// Hooks for the control socket and scenario, set up by the caller (mocosim's
+// main.cpp builds the control channel, socket and scenario run).
 struct EmulatorHooks {
   // Called after Start() with every device served; may return a handler for
   // control-socket lines (nullptr: none). Runs on the io thread.
@@ -83,7 +83,7 @@ class Emulator {
   // Builds every device and opens every endpoint. Throws std::runtime_error
   // (ProfileError, ConfigError, a taken port, an unusable PTY path) with a
   // message naming the device and the fix; nothing is left open then.
-  Emulator(EmulatorConfig config, LogFn log = LogToStderr);
+  Emulator(EmulatorConfig config, transport::LogFn log = transport::LogToStderr);
   ~Emulator();
   Emulator(const Emulator&) = delete;
   Emulator& operator=(const Emulator&) = delete;
@@ -97,21 +97,24 @@ class Emulator {
   // Idempotent; safe from an io handler.
   void Stop();
 
-  asio::io_context& io() { return io_; }
+  transport::asio::io_context& io() { return io_; }
   sim::Scheduler& scheduler() { return scheduler_; }
-  RealtimeDriver& driver() { return driver_; }
+  transport::RealtimeDriver& driver() { return driver_; }
   size_t size() const { return served_.size(); }
   // REQUIRES: i < size().
   const std::string& name(size_t i) const;
   devices::Device& device(size_t i);
-  DeviceServer& server(size_t i);
+  transport::DeviceServer& server(size_t i);
+  // The link of device i as the control channel reaches it
+  // (ControlChannel::AddDevice).
+  control::LinkControl& link_control(size_t i);
   // The state file in use for device i ("" for models without NVM).
   const std::string& state_path(size_t i) const;
   const EmulatorConfig& config() const { return config_; }
   void Log(LogLevel level, std::string_view line) const;
   void SetHooks(EmulatorHooks hooks) { hooks_ = std::move(hooks); }
   // Appends an event line to the recording of device `name` (if it records).
-  void RecordEvent(const std::string& name, const control::SessionEntry& entry);
+  void RecordEvent(const std::string& name, const session::SessionEntry& entry);
   // Logs and records what happens through `channel`: every executed action
   // (info; power cycles and link cuts are recorded by the link itself) and
   // every device event (warn: a stall, a collision), each in the recording
@@ -123,17 +126,17 @@ class Emulator {
   struct Served;
 
   EmulatorConfig config_;
-  LogFn log_;
+  transport::LogFn log_;
   EmulatorHooks hooks_;
-  asio::io_context io_;
+  transport::asio::io_context io_;
   sim::Scheduler scheduler_;
-  RealtimeDriver driver_;
+  transport::RealtimeDriver driver_;
   std::vector<std::unique_ptr<Served>> served_;
-  std::unique_ptr<asio::signal_set> signals_;
+  std::unique_ptr<transport::asio::signal_set> signals_;
   bool stopped_ = false;
   int exit_code_ = 0;
 };
 
-}  // namespace moco::transport
+}  // namespace moco::serve
 
-#endif  // MOCO_TRANSPORT_SERVE_H_
+#endif  // MOCO_SERVE_SERVE_H_
