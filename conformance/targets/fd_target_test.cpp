@@ -66,8 +66,8 @@ TEST(FdTarget, HandshakeErrorAndResetSuitesPassOverARealPty) {
     RunOptions o;
     o.cases = "connect/*,errors/*,motor/reset-position";
     const RunReport r = RunDmc(target, o);
-    ASSERT_TRUE(r.hi.has_value());
-    EXPECT_EQ(r.hi->motor_count, 16);
+    ASSERT_TRUE(r.device_info.contains("motor_count"));
+    EXPECT_EQ(r.device_info["motor_count"], 16);
     EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, true);
     ExpectPassed(r, {"DMC-HI-001", "DMC-HI-002", "DMC-CSUM-001", "DMC-CSUM-002", "DMC-ACK-001",
                      "DMC-ACK-003", "DMC-ERR-009", "DMC-RST-002"});
