@@ -355,7 +355,7 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
             const double half = 180.0 * m.blur_percent_x10 / 1000.0;
             Ack(id, type,
                 playback_.ShootFrame(m.frame, m.direction == dmc::kDirectionBackward ? -1 : 1,
-                             m.exposure_ms, 180.0 - half, 180.0 + half, m.motors));
+                                     m.exposure_ms, 180.0 - half, 180.0 + half, m.motors));
           },
           [&](const dmc::RtShootFrame2& m) {
             if (m.open_angle_deg > 360 || m.close_angle_deg > 360 ||
@@ -364,8 +364,8 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
               return;
             }
             Ack(id, type,
-                playback_.ShootFrame(m.frame, 1, m.exposure_ms, m.open_angle_deg,
-                                     m.close_angle_deg, m.motors));
+                playback_.ShootFrame(m.frame, 1, m.exposure_ms, m.open_angle_deg, m.close_angle_deg,
+                                     m.motors));
           },
           [&](const dmc::RtGo&) { Ack(id, type, playback_.Go()); },
           [&](const dmc::RtStopLoop&) { Ack(id, type, playback_.StopLoop()); },
@@ -374,14 +374,17 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
             Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : virtual_.Configure(m));
           },
           [&](const dmc::VirtMove& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Move(m)));
+            Ack(id, type,
+                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Move(m)));
           },
           [&](const dmc::VirtJog& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Jog(m)));
+            Ack(id, type,
+                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Jog(m)));
           },
           [&](const dmc::VirtJogOnLine& m) {
             Ack(id, type,
-                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.JogOnLine(m)));
+                playback_.Playing() ? AckCode::kErrMoving
+                                    : AfterVirtualMotion(virtual_.JogOnLine(m)));
           },
           [&](const dmc::VirtStop& m) {
             // Stopping during playback ends the run, as MOTOR_STOP does.
@@ -708,8 +711,8 @@ nlohmann::json Dmc16::State() const {
       {"time_ns", scheduler_.Now()},
       {"mode", ModeName()},
       {"move_time_x1000", playback_.MoveTimeX1000()},
-      {"on_frame", playback_.on_frame() ? nlohmann::json(*playback_.on_frame())
-                                        : nlohmann::json(nullptr)},
+      {"on_frame",
+       playback_.on_frame() ? nlohmann::json(*playback_.on_frame()) : nlohmann::json(nullptr)},
       {"estop", rig_.estop_engaged()},
       {"motors", motors},
       {"gio", {{"outputs", gio_.outputs()}, {"inputs", gio_.inputs()}}},

@@ -59,7 +59,6 @@ AckCode AckForMoveStatus(sim::MoveStatus s) {
   return AckCode::kErrGeneral;
 }
 
-
 Playback::Playback(sim::Scheduler& scheduler, sim::Rig& rig,
                    const std::vector<ScriptPlanner*>& planners, const RtMove& upload,
                    const Dmc16Profile& profile, sim::DmxUniverse& dmx, sim::GioPort& gio,
@@ -193,8 +192,8 @@ AckCode Playback::PositionFrame(uint32_t frame) {
   mode_ = Mode::kIdle;
   run_.reset();
   on_frame_ = frame;
-  move_time_x1000_ = static_cast<uint32_t>(
-      std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
+  move_time_x1000_ =
+      static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
   hooks_.ensure_position_reports();
   return AckCode::kOk;
 }
@@ -317,7 +316,7 @@ AckCode Playback::RunMove(const dmc::RtRunMove& m) {
 }
 
 AckCode Playback::ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, double open_deg,
-                               double close_deg, const std::vector<dmc::BlurMotor>& motors) {
+                             double close_deg, const std::vector<dmc::BlurMotor>& motors) {
   if (Playing()) {
     return AckCode::kErrMoving;
   }
@@ -450,7 +449,7 @@ void Playback::Script(int motor, std::vector<sim::Segment> segments, int64_t tar
 }
 
 void Playback::AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
-                       std::vector<sim::Segment>& out) const {
+                          std::vector<sim::Segment>& out) const {
   const double now_s = static_cast<double>(scheduler_.Now() - p.t_first_frame_ns) / kNsPerSecondF;
   for (uint32_t k = k0; k < k1; ++k) {
     const double v = PassVelocity(motor, p, k);
@@ -715,7 +714,6 @@ void Playback::Abort(bool send_end) {
   on_frame_.reset();
   FinishRun(send_end && live);
 }
-
 
 std::string_view Playback::ModeName() const {
   switch (mode_) {
