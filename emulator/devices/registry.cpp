@@ -2,6 +2,7 @@
 #include "devices/registry.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/dmc16/dmc16.h"
@@ -9,14 +10,39 @@
 
 namespace moco::devices {
 
+namespace {
+
+// One factory per model: the profile file (empty: the built-in defaults),
+// then the device.
+std::unique_ptr<Device> MakeDmc16(const std::string& profile_path, sim::Scheduler& scheduler,
+                                  ByteSink& out, StateStore* /*state*/) {
+  Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
+  return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
+}
+
+std::unique_ptr<Device> MakeDfmoco(const std::string& profile_path, sim::Scheduler& scheduler,
+                                   ByteSink& out, StateStore* /*state*/) {
+  DfmocoProfile profile = profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
+  return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
+}
+
+std::unique_ptr<Device> MakeStackshot3x(const std::string& profile_path, sim::Scheduler& scheduler,
+                                        ByteSink& out, StateStore* state) {
+  Stackshot3xProfile profile =
+      profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
+  return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
+}
+
+}  // namespace
+
 const std::vector<DeviceModel>& DeviceModels() {
   static const std::vector<DeviceModel> kModels = {
       {"dmc16", "DMC-16 motion controller, DMC v2 binary protocol", wire::Protocol::kDmc,
-       "fixtures/profiles/dmc16.json"},
+       "fixtures/profiles/dmc16.json", false, &MakeDmc16},
       {"dfmoco", "DFMoco Arduino (Uno or Mega), Dragonframe's ASCII sketch protocol",
-       wire::Protocol::kDfmoco, "fixtures/profiles/dfmoco-uno.json"},
+       wire::Protocol::kDfmoco, "fixtures/profiles/dfmoco-uno.json", false, &MakeDfmoco},
       {"stackshot3x", "Cognisys StackShot 3X three-axis controller, StackShot binary protocol",
-       wire::Protocol::kStackshot, "fixtures/profiles/stackshot3x.json", true},
+       wire::Protocol::kStackshot, "fixtures/profiles/stackshot3x.json", true, &MakeStackshot3x},
   };
   return kModels;
 }
@@ -30,19 +56,8 @@ const DeviceModel* FindDeviceModel(std::string_view name) {
 
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
                                      sim::Scheduler& scheduler, ByteSink& out, StateStore* state) {
-  if (model == "dmc16") {
-    Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
-    return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
-  }
-  if (model == "dfmoco") {
-    DfmocoProfile profile =
-        profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
-    return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
-  }
-  if (model == "stackshot3x") {
-    Stackshot3xProfile profile =
-        profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
-    return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
+  if (const DeviceModel* m = FindDeviceModel(model)) {
+    return m->create(profile_path, scheduler, out, state);
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {

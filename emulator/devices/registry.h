@@ -15,12 +15,18 @@
 
 namespace moco::devices {
 
+// Builds a powered-off device of one model (see CreateDevice).
+using DeviceFactory = std::unique_ptr<Device> (*)(const std::string& profile_path,
+                                                  sim::Scheduler& scheduler, ByteSink& out,
+                                                  StateStore* state);
+
 struct DeviceModel {
   std::string_view name;             // "dmc16"
   std::string_view description;      // one line for --help
   wire::Protocol protocol;           // what its serial line speaks
   std::string_view default_profile;  // e.g. "fixtures/profiles/dmc16.json" (informational)
   bool keeps_state = false;          // has NVM kept in a state file (--state)
+  DeviceFactory create = nullptr;    // how CreateDevice builds it
 };
 
 // Every model, in a stable order.

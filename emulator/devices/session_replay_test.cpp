@@ -12,6 +12,7 @@
 
 #include "devices/registry.h"
 #include "session/session.h"
+#include "devices/test_support.h"
 #include "sim/scheduler.h"
 
 namespace moco::devices {
@@ -22,21 +23,6 @@ std::filesystem::path SourceDir() {
   return dir != nullptr ? std::filesystem::path(dir) : std::filesystem::current_path();
 }
 
-struct Chunk {
-  sim::TimeNs t_ns;
-  wire::Bytes bytes;
-};
-
-class Recorder final : public ByteSink {
- public:
-  explicit Recorder(const sim::Scheduler& s) : s_(s) {}
-  void Write(wire::ByteView b) override { chunks.push_back({s_.Now(), {b.begin(), b.end()}}); }
-  std::vector<Chunk> chunks;
-
- private:
-  const sim::Scheduler& s_;
-};
-
 void Replay(const std::string& file, const std::string& model) {
   const auto loaded = session::LoadSession(SourceDir() / "fixtures/sessions" / file);
   ASSERT_TRUE(std::holds_alternative<session::Session>(loaded))
@@ -44,14 +30,14 @@ void Replay(const std::string& file, const std::string& model) {
   const session::Session& session = std::get<session::Session>(loaded);
   ASSERT_EQ(session.header.clock, "virtual");
   sim::Scheduler scheduler;
-  Recorder out(scheduler);
+  testing::RecordingSink out(scheduler);
   auto device = CreateDevice(model, "", scheduler, out);
   device->PowerOn();
-  std::vector<Chunk> want;
+  std::vector<testing::RecordingSink::Chunk> want;
   for (const session::SessionEntry& e : session.entries) {
     if (e.is_event) continue;
     if (e.from == session::Origin::kDevice) {
-      want.push_back({e.t_ns, e.bytes});
+      want.push_back({e.t_ns, std::string(e.bytes.begin(), e.bytes.end())});
       continue;
     }
     scheduler.RunUntil(e.t_ns);

@@ -503,7 +503,8 @@ Bytes Encode(uint32_t id, const DeviceMessage& m);
 void EncodeData(const HostMessage& m, Bytes& out);
 void EncodeData(const DeviceMessage& m, Bytes& out);
 
-// One line for transcripts, e.g. "MOTOR_MOVE motor=3 position=-1200".
+// One line for transcripts, e.g. "MOTOR_MOVE motor=3 position=-1200"
+// (dmc_describe.cpp).
 std::string Describe(const HostMessage& m);
 std::string Describe(const DeviceMessage& m);
 

@@ -17,37 +17,18 @@
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "session/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
+#include "devices/faulty_sink.h"
 
 namespace moco::conformance {
 namespace {
-
-// Hands the device's bytes on in pieces of the given sizes, round robin.
-class ChunkingSink final : public devices::ByteSink {
- public:
-  ChunkingSink(devices::ByteSink& out, std::vector<size_t> cuts)
-      : out_(out), cuts_(std::move(cuts)) {}
-  void Write(wire::ByteView bytes) override {
-    size_t at = 0;
-    while (at < bytes.size()) {
-      const size_t n = cuts_.empty() ? bytes.size() : cuts_[next_++ % cuts_.size()];
-      const size_t len = std::min(n, bytes.size() - at);
-      out_.Write(bytes.subspan(at, len));
-      at += len;
-    }
-  }
-
- private:
-  devices::ByteSink& out_;
-  std::vector<size_t> cuts_;
-  size_t next_ = 0;
-};
 
 // A DFMoco Arduino with `faults`, its output cut by `cuts` (empty: whole).
 class TestDfmoco final : public devices::Device {
  public:
   TestDfmoco(sim::Scheduler& s, devices::ByteSink& out, devices::DfmocoProfile profile,
              devices::DfmocoFaults faults, std::vector<size_t> cuts)
-      : sink_(out, std::move(cuts)), inner_(s, sink_, std::move(profile), std::move(faults)) {}
+      : sink_(out, devices::FaultySink::CutInto(std::move(cuts))),
+        inner_(s, sink_, std::move(profile), std::move(faults)) {}
   std::string_view Model() const override { return "dfmoco-test"; }
   devices::LineSettings Line() const override { return inner_.Line(); }
   void PowerOn() override { inner_.PowerOn(); }
@@ -57,7 +38,7 @@ class TestDfmoco final : public devices::Device {
   void OnHostLink(bool open) override { inner_.OnHostLink(open); }
 
  private:
-  ChunkingSink sink_;
+  devices::FaultySink sink_;  // the output in pieces of `cuts`, round robin
   devices::DfmocoArduino inner_;
 };
 

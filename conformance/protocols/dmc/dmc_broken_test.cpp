@@ -12,6 +12,7 @@
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
 #include "session/session.h"
+#include "devices/faulty_sink.h"
 #include "devices/registry.h"
 
 namespace moco::conformance {
@@ -24,31 +25,15 @@ using dmc::ToWire;
 using Breakage = std::function<void(const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
                                     devices::ByteSink& out)>;
 
-// Frames the device's output and hands each frame to the breakage.
-class FilterSink final : public devices::ByteSink {
- public:
-  FilterSink(sim::Scheduler& s, devices::ByteSink& out, Breakage b)
-      : scheduler_(s), out_(out), breakage_(std::move(b)) {}
-  void Write(wire::ByteView bytes) override {
-    decoder_.Feed(bytes, [&](const dmc::FrameEvent& e) {
-      if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
-        breakage_(*f, wire::Bytes(f->raw.begin(), f->raw.end()), scheduler_, out_);
-      }
-    });
-  }
-
- private:
-  sim::Scheduler& scheduler_;
-  devices::ByteSink& out_;
-  Breakage breakage_;
-  dmc::FrameDecoder decoder_;
-};
-
 // The real DMC-16 with a broken output stage.
 class BrokenDmc16 final : public devices::Device {
  public:
   BrokenDmc16(sim::Scheduler& s, devices::ByteSink& out, Breakage b, const std::string& profile)
-      : sink_(s, out, std::move(b)), inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
+      : sink_(out,
+              [&s, b = std::move(b)](const dmc::FrameRef& f, devices::ByteSink& o) {
+                b(f, wire::Bytes(f.raw.begin(), f.raw.end()), s, o);
+              }),
+        inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
   std::string_view Model() const override { return "dmc16-broken"; }
   devices::LineSettings Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
@@ -58,7 +43,7 @@ class BrokenDmc16 final : public devices::Device {
   void OnHostLink(bool open) override { inner_->OnHostLink(open); }
 
  private:
-  FilterSink sink_;
+  devices::FaultySink sink_;  // hands each frame the device writes to the breakage
   std::unique_ptr<devices::Device> inner_;
 };
 

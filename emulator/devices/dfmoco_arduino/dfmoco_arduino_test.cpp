@@ -204,7 +204,7 @@ TEST(DfmocoArduino, EveryLineOutEndsInCrLf) {
   Bench b;
   Settled(b);
   Ask(b, "mm 1 3000", 3 * kSec);
-  for (const testing::ChunkRecordingSink::Chunk& c : b.sink.chunks) {
+  for (const testing::RecordingSink::Chunk& c : b.sink.chunks) {
     ASSERT_GE(c.bytes.size(), 2u);
     EXPECT_EQ(c.bytes.substr(c.bytes.size() - 2), "\r\n") << c.bytes;
     EXPECT_EQ(c.bytes.find("\r\n"), c.bytes.size() - 2) << "one line per write";

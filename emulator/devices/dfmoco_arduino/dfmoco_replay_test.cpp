@@ -35,7 +35,7 @@ TEST(DfmocoReplay, UnoWorkflowMatchesByteForByte) {
   ASSERT_FALSE(session.entries.empty());
 
   testing::Bench b(LoadDfmocoProfile(SourceDir() / "fixtures/profiles/dfmoco-uno.json"));
-  std::vector<testing::ChunkRecordingSink::Chunk> want;
+  std::vector<testing::RecordingSink::Chunk> want;
   for (const session::SessionEntry& e : session.entries) {
     ASSERT_FALSE(e.is_event);
     if (e.from == session::Origin::kDevice) {

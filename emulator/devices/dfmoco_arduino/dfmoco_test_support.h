@@ -1,5 +1,6 @@
-// Test bench for the DFMoco device in virtual time: a ByteSink that records
-// every write with the scheduler's time, and helpers to feed host lines.
+// Test bench for the DFMoco device in virtual time: the device's writes
+// recorded with the scheduler's time (devices/test_support.h), and helpers to
+// feed host lines.
 #ifndef MOCO_DEVICES_DFMOCO_ARDUINO_DFMOCO_TEST_SUPPORT_H_
 #define MOCO_DEVICES_DFMOCO_ARDUINO_DFMOCO_TEST_SUPPORT_H_
 
@@ -10,34 +11,10 @@
 
 #include "devices/device.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
+#include "devices/test_support.h"
 #include "sim/scheduler.h"
 
 namespace moco::devices::testing {
-
-// Records each Write as one chunk with its time (named apart from the DMC-16
-// tests' frame-decoding RecordingSink: two classes of one name in one
-// namespace would break the one-definition rule in a binary holding both).
-class ChunkRecordingSink final : public ByteSink {
- public:
-  struct Chunk {
-    sim::TimeNs t_ns = 0;
-    std::string bytes;
-    bool operator==(const Chunk&) const = default;
-  };
-  explicit ChunkRecordingSink(const sim::Scheduler& scheduler) : scheduler_(scheduler) {}
-  void Write(wire::ByteView bytes) override {
-    chunks.push_back(Chunk{scheduler_.Now(), std::string(bytes.begin(), bytes.end())});
-  }
-  std::string All() const {
-    std::string s;
-    for (const Chunk& c : chunks) s += c.bytes;
-    return s;
-  }
-  std::vector<Chunk> chunks;
-
- private:
-  const sim::Scheduler& scheduler_;
-};
 
 // One output line (terminator removed) and the time its chunk was written.
 struct TimedLine {
@@ -61,7 +38,7 @@ struct Bench {
   std::vector<TimedLine> TakeLines() {
     std::vector<TimedLine> out;
     for (; taken < sink.chunks.size(); ++taken) {
-      const ChunkRecordingSink::Chunk& c = sink.chunks[taken];
+      const RecordingSink::Chunk& c = sink.chunks[taken];
       pending += c.bytes;
       size_t pos = 0;
       while ((pos = pending.find("\r\n")) != std::string::npos) {
@@ -78,7 +55,7 @@ struct Bench {
   }
 
   sim::Scheduler sched;
-  ChunkRecordingSink sink;
+  RecordingSink sink;
   DfmocoArduino dev;
   size_t taken = 0;
   std::string pending;

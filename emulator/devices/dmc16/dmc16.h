@@ -14,6 +14,7 @@
 
 #include "devices/device.h"
 #include "devices/dmc16/dmc16_profile.h"
+#include "devices/dmc16/playback.h"
 #include "devices/dmc16/rt_move.h"
 #include "devices/dmc16/script_planner.h"
 #include "devices/dmc16/virtual_axes.h"
@@ -73,38 +74,13 @@ class Dmc16 final : public Device, private sim::RigObserver {
   // The physical rig (profile `physical_rig`), or null.
   const physics::PhysicalRig* physical_rig() const { return physical_.get(); }
   const VirtualAxes& virtual_axes() const { return virtual_; }
+  const Playback& playback() const { return playback_; }
   // "idle", "armed-run", "armed-shoot", "running", "shooting", "jogging-all".
-  std::string_view ModeName() const;
+  std::string_view ModeName() const { return playback_.ModeName(); }
   // MOVE TIME the device reports now (thousandths of a frame).
-  uint32_t MoveTimeX1000() const { return move_time_x1000_; }
+  uint32_t MoveTimeX1000() const { return playback_.MoveTimeX1000(); }
 
  private:
-  enum class Mode : uint8_t { kIdle, kArmedRun, kArmedShoot, kPass, kShooting, kJogAll };
-  struct RunSetup {
-    dmc::RtRunMove request;
-    std::vector<int> motors;  // uploaded, enabled motors taking part
-  };
-  struct BlurAxis {
-    int motor = 0;
-    double x_open_steps = 0;   // continuous position when the shutter opens
-    double x_close_steps = 0;  // ... when it closes
-    int64_t pre_steps = 0;     // rest position before the ramp up
-    int64_t post_steps = 0;    // rest position after the ramp down
-  };
-  struct Pass {
-    uint32_t from_frame = 0;
-    uint32_t to_frame = 0;
-    int dir = 1;  // +1 forward through the frames, -1 backward
-    double fps = 0;
-    double preroll_s = 0;
-    double postroll_s = 0;
-    sim::TimeNs t_first_frame_ns = 0;  // when the rig passes from_frame
-    uint32_t frames_done = 0;          // frame intervals completed
-    bool video = false;
-    bool stills = false;
-    bool live = false;  // a RUN_MOVE pass (camera, DMX, triggers, bloop); false for JOG_ALL
-  };
-
   // --- protocol plumbing ---
   void OnFrame(const dmc::FrameRef& f);
   void Handle(uint32_t id, const dmc::HostMessage& m);
@@ -126,50 +102,12 @@ class Dmc16 final : public Device, private sim::RigObserver {
   dmc::AckCode OnConfigure(const dmc::MotorConfigure& m);
   dmc::AckCode OnSetSpeed(const dmc::MotorSetSpeed& m);
   dmc::AckCode OnSetLimits(const dmc::MotorSetLimits& m);
-  dmc::AckCode OnPositionFrame(const dmc::RtPositionFrame& m);
-  dmc::AckCode OnRunMove(const dmc::RtRunMove& m);
-  dmc::AckCode OnShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, double open_deg,
-                            double close_deg, const std::vector<dmc::BlurMotor>& motors);
-  dmc::AckCode OnGo();
-  dmc::AckCode OnStopLoop();
-  dmc::AckCode OnJogAll(const dmc::RtJogAll& m);
 
   // --- motion helpers ---
-  // A live pass, a shoot or a jog-all is under way (motion commands wait).
-  bool Playing() const {
-    return mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll;
-  }
-  static dmc::AckCode FromMoveStatus(sim::MoveStatus s);
   bool MotorValid(int motor) const { return motor >= 1 && motor <= profile_.motor_count; }
-  // Motors of the upload that are enabled (they take part in playback).
-  std::vector<int> PlaybackMotors() const;
-  // Whether every playback motor rests on its position at `frame`.
-  bool OnFramePosition(uint32_t frame) const;
-  // Starts motor `motor` on `segments` (from rest), ending at rest on `target`.
-  void Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps);
-  // Frame-path segments of `motor` for frame intervals [k0, k1) of the pass.
-  void AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
-                  std::vector<sim::Segment>& out) const;
-  int32_t PassPosition(int motor, const Pass& p, uint32_t k) const;
-  double PassVelocity(int motor, const Pass& p, uint32_t k) const;  // interval k, steps/s
-  // Pre-roll: rest position before the pass and the time to reach speed.
-  int64_t PrerollStart(int motor, const Pass& p) const;
-  int64_t PostrollEnd(int motor, const Pass& p) const;
-  dmc::AckCode CheckPass(const Pass& p) const;
-  Pass MakePass(uint32_t from, uint32_t to, double fps, double pre_s, double post_s) const;
-  void StartPass(const Pass& p);
-  void PlanWindow(uint32_t k0);
-  void OnFrameTick();
-  void EndPass();
-  void StartNextPassOrEnd();
-  void StartShoot();
-  void FinishRun(bool send_end);
-  void Abort(bool send_end);
-  void ApplyFrameOutputs(uint32_t frame);
   void EnsurePositionReports();
   void OnReportTimer();
   void CancelTimer(sim::Scheduler::TimerId& id);
-  void AddIoTimer(sim::TimeNs at_ns, sim::Callback cb);
   void CancelAllTimers();
   // Builds the physical rig from the profile (none when not enabled).
   void StartPhysicalRig();
@@ -204,29 +142,13 @@ class Dmc16 final : public Device, private sim::RigObserver {
   wire::Bytes tx_;        // scratch for encoding
   Dmc16Stats stats_;
 
-  Mode mode_ = Mode::kIdle;
-  std::optional<RunSetup> run_;
-  std::vector<BlurAxis> blur_;
-  uint32_t shoot_frame_ = 0;
-  uint32_t exposure_ms_ = 0;
-  Pass pass_;
-  bool stop_loop_ = false;
-  bool reposition_pending_ = false;  // a loop pass waits for the rig to reach its pre-roll
   uint32_t reported_inputs_ = 0;
-  uint32_t passes_done_ = 0;
-  std::optional<uint32_t> on_frame_;  // last frame the rig was sent to
-  uint32_t move_time_x1000_ = 0;
   sim::TimeNs last_stop_all_ns_ = -1;
   bool silent_stop_ = false;
 
   sim::Scheduler::TimerId report_timer_ = sim::Scheduler::kNoTimer;
-  sim::Scheduler::TimerId frame_timer_ = sim::Scheduler::kNoTimer;
-  sim::Scheduler::TimerId phase_timer_ = sim::Scheduler::kNoTimer;
-  struct IoTimer {
-    sim::Scheduler::TimerId id;
-    sim::TimeNs at_ns;
-  };
-  std::vector<IoTimer> io_timers_;  // camera and bloop edges of the running pass
+  // The real-time playback of the upload (after the rig, I/O, upload and planners it uses).
+  Playback playback_;
 };
 
 }  // namespace moco::devices

@@ -1,6 +1,6 @@
 // A DMC v2 host for tests of the emulated DMC-16 in virtual time: encodes
 // requests, feeds them to the device, decodes everything the device sends
-// with the time it was sent.
+// (recorded by devices/test_support.h) with the time it was sent.
 #ifndef MOCO_DEVICES_DMC16_DMC16_TEST_SUPPORT_H_
 #define MOCO_DEVICES_DMC16_DMC16_TEST_SUPPORT_H_
 
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "devices/dmc16/dmc16.h"
+#include "devices/test_support.h"
 #include "sim/scheduler.h"
 #include "wire/dmc.h"
 
@@ -24,31 +25,6 @@ struct Out {
   dmc::DeviceMessage msg;
 };
 
-// Collects the device's bytes with the scheduler time of each write.
-class RecordingSink final : public ByteSink {
- public:
-  explicit RecordingSink(const sim::Scheduler& s) : scheduler_(s) {}
-  void Write(wire::ByteView bytes) override {
-    bytes_.insert(bytes_.end(), bytes.begin(), bytes.end());
-    decoder_.Feed(bytes, [&](const dmc::FrameEvent& e) {
-      const auto* f = std::get_if<dmc::FrameRef>(&e);
-      ASSERT_NE(f, nullptr) << "the device sent a frame that does not decode";
-      dmc::Result<dmc::DeviceMessage> m = dmc::DecodeDeviceMessage(f->type, f->data);
-      ASSERT_TRUE(m.ok()) << "device frame of type " << dmc::TypeName(f->type)
-                          << " has a bad layout: " << m.error().detail;
-      out_.push_back(Out{scheduler_.Now(), f->id, f->type, m.value()});
-    });
-  }
-  std::vector<Out>& out() { return out_; }
-  const wire::Bytes& bytes() const { return bytes_; }
-
- private:
-  const sim::Scheduler& scheduler_;
-  dmc::FrameDecoder decoder_;
-  std::vector<Out> out_;
-  wire::Bytes bytes_;
-};
-
 class Host {
  public:
   explicit Host(Dmc16Profile profile = {}, bool power_on = true)
@@ -58,7 +34,23 @@ class Host {
 
   sim::Scheduler& scheduler() { return scheduler_; }
   Dmc16& device() { return device_; }
-  std::vector<Out>& out() { return sink_.out(); }
+  // Everything the device sent, decoded (frames written since the last call
+  // are decoded now, each with the time of its write).
+  std::vector<Out>& out() {
+    for (; decoded_ < sink_.chunks.size(); ++decoded_) {
+      const RecordingSink::Chunk& c = sink_.chunks[decoded_];
+      const wire::ByteView bytes(reinterpret_cast<const uint8_t*>(c.bytes.data()), c.bytes.size());
+      decoder_.Feed(bytes, [&](const dmc::FrameEvent& e) {
+        const auto* f = std::get_if<dmc::FrameRef>(&e);
+        ASSERT_NE(f, nullptr) << "the device sent a frame that does not decode";
+        dmc::Result<dmc::DeviceMessage> m = dmc::DecodeDeviceMessage(f->type, f->data);
+        ASSERT_TRUE(m.ok()) << "device frame of type " << dmc::TypeName(f->type)
+                            << " has a bad layout: " << m.error().detail;
+        out_.push_back(Out{c.t_ns, f->id, f->type, m.value()});
+      });
+    }
+    return out_;
+  }
   sim::TimeNs now() const { return scheduler_.Now(); }
 
   // Sends a request with a fresh ID; returns the ID.
@@ -110,6 +102,9 @@ class Host {
   sim::Scheduler scheduler_;
   RecordingSink sink_;
   Dmc16 device_;
+  dmc::FrameDecoder decoder_;
+  size_t decoded_ = 0;  // chunks of sink_ decoded into out_
+  std::vector<Out> out_;
   // Far from the device's own sequence (from 1), so that a reply is told
   // apart from an unsolicited message by its ID.
   uint32_t next_id_ = 0x10000;

@@ -9,29 +9,15 @@
 #include <vector>
 
 #include "devices/stackshot3x/stackshot3x.h"
+#include "devices/test_support.h"
 #include "wire/stackshot.h"
 
 namespace moco::devices::testing {
 
-class ByteRecorder final : public ByteSink {
- public:
-  void Write(wire::ByteView bytes) override {
-    bytes_.insert(bytes_.end(), bytes.begin(), bytes.end());
-  }
-  wire::Bytes Take() {
-    wire::Bytes out;
-    out.swap(bytes_);
-    return out;
-  }
-  const wire::Bytes& bytes() const { return bytes_; }
-
- private:
-  wire::Bytes bytes_;
-};
-
 struct SsBench {
   explicit SsBench(Stackshot3xProfile profile = {}, StateStore* external = nullptr)
-      : store(external != nullptr ? external : &memory),
+      : sink(sched),
+        store(external != nullptr ? external : &memory),
         dev(std::make_unique<Stackshot3x>(sched, sink, std::move(profile), store)) {
     dev->PowerOn();
   }
@@ -70,7 +56,7 @@ struct SsBench {
   }
 
   sim::Scheduler sched;
-  ByteRecorder sink;
+  RecordingSink sink;
   MemoryStateStore memory;
   StateStore* store;
   std::unique_ptr<Stackshot3x> dev;

@@ -1,0 +1,736 @@
+// The DMC-16's real-time playback engine (see playback.h). Section names in
+// comments are those of dmc-v2-protocol.txt; readings taken are listed in
+// docs/protocol-notes.md.
+#include "devices/dmc16/playback.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace moco::devices {
+
+using dmc::AckCode;
+using sim::kNsPerMs;
+using sim::TimeNs;
+
+namespace {
+
+// Frame intervals planned per motor at a time during playback: bounds the
+// plan's memory whatever the length of the move.
+constexpr uint32_t kWindowFrames = 32;
+constexpr double kNsPerSecondF = 1e9;
+
+int Sign(double v) { return v > 0 ? 1 : (v < 0 ? -1 : 0); }
+
+sim::Segment Seg(double duration_s, double v0, double a) {
+  sim::Segment s;
+  s.duration_s = duration_s;
+  s.v0_steps_per_s = v0;
+  s.a_steps_per_s2 = a;
+  return s;
+}
+
+TimeNs CeilNs(double seconds) { return static_cast<TimeNs>(std::ceil(seconds * kNsPerSecondF)); }
+
+uint32_t Intervals(uint32_t a, uint32_t b) { return a > b ? a - b : b - a; }
+
+}  // namespace
+
+AckCode AckForMoveStatus(sim::MoveStatus s) {
+  switch (s) {
+    case sim::MoveStatus::kOk:
+      return AckCode::kOk;
+    case sim::MoveStatus::kMoving:
+      return AckCode::kErrMoving;
+    case sim::MoveStatus::kSoftLimitLower:
+      return AckCode::kErrSoftLow;
+    case sim::MoveStatus::kSoftLimitUpper:
+      return AckCode::kErrSoftUp;
+    case sim::MoveStatus::kHardLimitLower:
+      return AckCode::kErrHardLow;
+    case sim::MoveStatus::kHardLimitUpper:
+      return AckCode::kErrHardUp;
+    case sim::MoveStatus::kBadArgument:
+      return AckCode::kErrRange;
+    case sim::MoveStatus::kDisabled:
+    case sim::MoveStatus::kEStop:
+      return AckCode::kErrGeneral;
+  }
+  return AckCode::kErrGeneral;
+}
+
+Playback::Playback(sim::Scheduler& scheduler, sim::Rig& rig,
+                   const std::vector<ScriptPlanner*>& planners, const RtMove& upload,
+                   const Dmc16Profile& profile, sim::DmxUniverse& dmx, sim::GioPort& gio,
+                   sim::CameraPort& camera, PlaybackHooks hooks)
+    : scheduler_(scheduler),
+      rig_(rig),
+      planners_(planners),
+      upload_(upload),
+      profile_(profile),
+      dmx_(dmx),
+      gio_(gio),
+      camera_(camera),
+      hooks_(std::move(hooks)) {}
+
+Playback::~Playback() { CancelTimers(); }
+
+// --- lifecycle ------------------------------------------------------------------------
+
+void Playback::Reset() {
+  CancelTimers();
+  mode_ = Mode::kIdle;
+  run_.reset();
+  blur_.clear();
+  stop_loop_ = false;
+  passes_done_ = 0;
+  on_frame_.reset();
+  move_time_x1000_ = 0;
+  reposition_pending_ = false;
+}
+
+void Playback::Halt() {
+  CancelTimers();
+  mode_ = Mode::kIdle;
+  run_.reset();
+}
+
+void Playback::CancelTimer(sim::Scheduler::TimerId& id) {
+  if (id != sim::Scheduler::kNoTimer) scheduler_.Cancel(id);
+  id = sim::Scheduler::kNoTimer;
+}
+
+void Playback::CancelTimers() {
+  CancelTimer(frame_timer_);
+  CancelTimer(phase_timer_);
+  for (IoTimer& t : io_timers_) CancelTimer(t.id);
+  io_timers_.clear();
+}
+
+// --- what the rest of the device does to playback ----------------------------------------
+
+void Playback::OnUploadBegin() {
+  mode_ = Mode::kIdle;
+  run_.reset();
+  on_frame_.reset();
+}
+
+void Playback::OnDirectMotion() {
+  if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
+  on_frame_.reset();
+}
+
+void Playback::Disarm() {
+  if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) mode_ = Mode::kIdle;
+  run_.reset();
+}
+
+bool Playback::OnRigAtRest() {
+  if (reposition_pending_) {
+    // A loop or ping-pong pass repositioned; it plays on by itself.
+    reposition_pending_ = false;
+    StartPass(pass_);
+    return true;
+  }
+  return Playing();
+}
+
+// --- real-time requests ---------------------------------------------------------------------
+
+std::vector<int> Playback::PlaybackMotors() const {
+  std::vector<int> out;
+  for (int m : upload_.Motors()) {
+    if (MotorValid(m) && rig_.motor(m).enabled()) out.push_back(m);
+  }
+  return out;
+}
+
+bool Playback::OnFramePosition(uint32_t frame) const {
+  if (!upload_.Contains(frame) || rig_.AnyMoving()) return false;
+  for (int m : PlaybackMotors()) {
+    if (rig_.motor(m).Position() != upload_.Position(m, frame)) return false;
+  }
+  return true;
+}
+
+void Playback::ApplyFrameOutputs(uint32_t frame) {
+  for (int ch : upload_.Channels()) {
+    if (ch <= profile_.dmx_channels) dmx_.Set(ch, upload_.Level(ch, frame));
+  }
+  if (upload_.trigger_mask() != 0) {
+    const uint32_t mask = upload_.trigger_mask();
+    gio_.SetOutputs((gio_.outputs() & ~mask) | (upload_.TriggersAt(frame) & mask));
+  }
+}
+
+AckCode Playback::PositionFrame(uint32_t frame) {
+  if (!upload_.complete()) return AckCode::kErrGeneral;
+  if (!upload_.Contains(frame)) return AckCode::kErrRange;
+  if (Playing()) {
+    return AckCode::kErrMoving;
+  }
+  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  const std::vector<int> motors = PlaybackMotors();
+  // Check every motor first so a refusal moves nothing.
+  for (int m_id : motors) {
+    const sim::SoftLimits& s = rig_.motor(m_id).soft_limits();
+    const int64_t p = upload_.Position(m_id, frame);
+    if (s.upper_enabled && p > s.upper_steps) return AckCode::kErrSoftUp;
+    if (s.lower_enabled && p < s.lower_steps) return AckCode::kErrSoftLow;
+  }
+  for (int m_id : motors) {
+    const AckCode code = AckForMoveStatus(rig_.motor(m_id).MoveTo(upload_.Position(m_id, frame)));
+    if (code != AckCode::kOk) {
+      rig_.StopAll();
+      return code;
+    }
+  }
+  // "send all motors (and DMX if applicable) to the uploaded frame position".
+  for (int ch : upload_.Channels()) {
+    if (ch <= profile_.dmx_channels) dmx_.Set(ch, upload_.Level(ch, frame));
+  }
+  mode_ = Mode::kIdle;
+  run_.reset();
+  on_frame_ = frame;
+  move_time_x1000_ =
+      static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
+  hooks_.ensure_position_reports();
+  return AckCode::kOk;
+}
+
+Playback::Pass Playback::MakePass(uint32_t from, uint32_t to, double fps, double pre_s,
+                                  double post_s) {
+  Pass p;
+  p.from_frame = from;
+  p.to_frame = to;
+  p.dir = to >= from ? 1 : -1;
+  p.fps = fps;
+  p.preroll_s = pre_s;
+  p.postroll_s = post_s;
+  return p;
+}
+
+int32_t Playback::PassPosition(int motor, const Pass& p, uint32_t k) const {
+  const int64_t frame = int64_t{p.from_frame} + int64_t{p.dir} * k;
+  return upload_.Position(motor, static_cast<uint32_t>(frame));
+}
+
+double Playback::PassVelocity(int motor, const Pass& p, uint32_t k) const {
+  return (static_cast<double>(PassPosition(motor, p, k + 1)) - PassPosition(motor, p, k)) * p.fps;
+}
+
+// Pre-roll (MSG_RT_RUN_MOVE): the rig starts at rest and accelerates uniformly
+// over PRE-ROLL TIME to the speed of the first frame interval, reaching the
+// start frame at full speed; it covers v*T/2, rounded down to whole steps so
+// the acceleration never exceeds v/T.
+int64_t Playback::PrerollStart(int motor, const Pass& p) const {
+  const double v = Intervals(p.from_frame, p.to_frame) == 0 ? 0 : PassVelocity(motor, p, 0);
+  const auto d = static_cast<int64_t>(std::floor(std::fabs(v) * p.preroll_s / 2));
+  return PassPosition(motor, p, 0) - Sign(v) * d;
+}
+
+// Post-roll: decelerates uniformly from the last interval's speed to rest
+// over POST-ROLL TIME, past the end frame.
+int64_t Playback::PostrollEnd(int motor, const Pass& p) const {
+  const uint32_t n = Intervals(p.from_frame, p.to_frame);
+  const double v = n == 0 ? 0 : PassVelocity(motor, p, n - 1);
+  const auto d = static_cast<int64_t>(std::floor(std::fabs(v) * p.postroll_s / 2));
+  return PassPosition(motor, p, n) + Sign(v) * d;
+}
+
+AckCode Playback::CheckPass(const Pass& p) const {
+  const uint32_t n = Intervals(p.from_frame, p.to_frame);
+  for (int m : PlaybackMotors()) {
+    const sim::SoftLimits& s = rig_.motor(m).soft_limits();
+    for (uint32_t k = 0; k <= n; ++k) {
+      const int32_t x = PassPosition(m, p, k);
+      if (s.upper_enabled && x > s.upper_steps) return AckCode::kErrSoftUp;
+      if (s.lower_enabled && x < s.lower_steps) return AckCode::kErrSoftLow;
+    }
+    const int64_t pre = PrerollStart(m, p);
+    const int64_t post = PostrollEnd(m, p);
+    if ((s.upper_enabled && pre > s.upper_steps) || (s.lower_enabled && pre < s.lower_steps)) {
+      return AckCode::kErrPreroll;
+    }
+    if ((s.upper_enabled && post > s.upper_steps) || (s.lower_enabled && post < s.lower_steps)) {
+      return AckCode::kErrPostroll;
+    }
+  }
+  return AckCode::kOk;
+}
+
+AckCode Playback::RunMove(const dmc::RtRunMove& m) {
+  if (Playing()) {
+    return AckCode::kErrMoving;
+  }
+  if (!upload_.complete()) return AckCode::kErrGeneral;
+  if (m.fps_x1000 == 0 || !upload_.Contains(m.start_frame) || !upload_.Contains(m.end_frame) ||
+      m.start_frame == m.end_frame) {
+    return AckCode::kErrRange;
+  }
+  const uint16_t flags = m.flags.value_or(0);
+  const bool loops = (flags & (dmc::kPlayPingPong | dmc::kPlayLoop)) != 0;
+  const bool camera = (flags & (dmc::kPlayCameraVideo | dmc::kPlayCameraStills)) != 0;
+  // FLAGS: "Only set if capability 0x0200 ... or 0x0400 ... are set".
+  if ((loops && !profile_.Has(dmc::kCapRtLooping)) ||
+      (camera && !profile_.Has(dmc::kCapRtCameraTrigger))) {
+    return AckCode::kErrRange;
+  }
+  if ((flags & dmc::kPlayCameraStills) != 0) {
+    const uint16_t open = m.camera_open_angle_deg.value_or(0);
+    const uint16_t close = m.camera_close_angle_deg.value_or(360);
+    if (open > 360 || close > 360 || close <= open) return AckCode::kErrRange;
+  }
+  if (m.bloop_dmx_channel > profile_.dmx_channels ||
+      (m.bloop_outputs & ~GioMask(profile_.gio_outputs)) != 0) {
+    return AckCode::kErrRange;
+  }
+  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  const double fps = m.fps_x1000 / static_cast<double>(dmc::kFpsScale);
+  const double pre_s = m.preroll_ms / 1000.0;
+  const double post_s = m.postroll_ms / 1000.0;
+  const Pass forward = MakePass(m.start_frame, m.end_frame, fps, pre_s, post_s);
+  if (AckCode c = CheckPass(forward); c != AckCode::kOk) return c;
+  if ((flags & dmc::kPlayPingPong) != 0) {
+    if (AckCode c = CheckPass(MakePass(m.end_frame, m.start_frame, fps, pre_s, post_s));
+        c != AckCode::kOk) {
+      return c;
+    }
+  }
+  // Move to the pre-roll position and wait for MSG_RT_GO.
+  for (int motor : PlaybackMotors()) {
+    const AckCode code = AckForMoveStatus(rig_.motor(motor).MoveTo(PrerollStart(motor, forward)));
+    if (code != AckCode::kOk) {
+      rig_.StopAll();
+      return code;
+    }
+  }
+  run_ = RunSetup{m, PlaybackMotors()};
+  pass_ = forward;
+  stop_loop_ = false;
+  passes_done_ = 0;
+  mode_ = Mode::kArmedRun;
+  on_frame_.reset();
+  hooks_.ensure_position_reports();
+  return AckCode::kOk;
+}
+
+AckCode Playback::ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, double open_deg,
+                             double close_deg, const std::vector<dmc::BlurMotor>& motors) {
+  if (Playing()) {
+    return AckCode::kErrMoving;
+  }
+  if (!upload_.complete()) return AckCode::kErrGeneral;
+  if (!upload_.Contains(frame) || exposure_ms == 0) return AckCode::kErrRange;
+  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  std::vector<BlurAxis> axes;
+  const double exposure_s = exposure_ms / 1000.0;
+  for (const dmc::BlurMotor& b : motors) {
+    if (!MotorValid(b.motor)) return AckCode::kErrRange;
+    for (const BlurAxis& a : axes) {
+      if (a.motor == b.motor) return AckCode::kErrRange;  // a motor listed twice
+    }
+    const sim::StepperMotor& motor = rig_.motor(b.motor);
+    if (!motor.enabled()) return AckCode::kErrGeneral;
+    // POS A at angle 0, POS B at angle 360; backward runs B towards A.
+    const double from = dir > 0 ? b.pos_a_steps : b.pos_b_steps;
+    const double to = dir > 0 ? b.pos_b_steps : b.pos_a_steps;
+    BlurAxis a;
+    a.motor = b.motor;
+    a.x_open_steps = from + (to - from) * open_deg / 360.0;
+    a.x_close_steps = from + (to - from) * close_deg / 360.0;
+    const double v = (a.x_close_steps - a.x_open_steps) / exposure_s;
+    if (std::fabs(v) > motor.profile().max_velocity_steps_per_s) return AckCode::kErrRange;
+    const double ramp = v * v / (2 * motor.profile().max_accel_steps_per_s2);
+    if (v > 0) {
+      a.pre_steps = static_cast<int64_t>(std::floor(a.x_open_steps - ramp));
+      a.post_steps = static_cast<int64_t>(std::ceil(a.x_close_steps + ramp));
+    } else if (v < 0) {
+      a.pre_steps = static_cast<int64_t>(std::ceil(a.x_open_steps + ramp));
+      a.post_steps = static_cast<int64_t>(std::floor(a.x_close_steps - ramp));
+    } else {
+      a.pre_steps = a.post_steps = std::llround(a.x_open_steps);
+    }
+    const sim::SoftLimits& s = motor.soft_limits();
+    if ((s.upper_enabled && a.pre_steps > s.upper_steps) ||
+        (s.lower_enabled && a.pre_steps < s.lower_steps)) {
+      return AckCode::kErrPreroll;
+    }
+    if ((s.upper_enabled && a.post_steps > s.upper_steps) ||
+        (s.lower_enabled && a.post_steps < s.lower_steps)) {
+      return AckCode::kErrPostroll;
+    }
+    axes.push_back(a);
+  }
+  // Motors of the move that are not blurred go to the frame's position.
+  std::vector<std::pair<int, int64_t>> targets;
+  for (const BlurAxis& a : axes) targets.emplace_back(a.motor, a.pre_steps);
+  for (int m : PlaybackMotors()) {
+    const bool blurred =
+        std::any_of(axes.begin(), axes.end(), [m](const BlurAxis& a) { return a.motor == m; });
+    if (!blurred) targets.emplace_back(m, upload_.Position(m, frame));
+  }
+  for (const auto& [m, target] : targets) {
+    const AckCode code = AckForMoveStatus(rig_.motor(m).MoveTo(target));
+    if (code != AckCode::kOk) {
+      rig_.StopAll();
+      return code;
+    }
+  }
+  for (int ch : upload_.Channels()) {
+    if (ch <= profile_.dmx_channels) dmx_.Set(ch, upload_.Level(ch, frame));
+  }
+  blur_ = std::move(axes);
+  shoot_frame_ = frame;
+  exposure_ms_ = exposure_ms;
+  run_.reset();
+  mode_ = Mode::kArmedShoot;
+  on_frame_.reset();
+  move_time_x1000_ =
+      static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
+  hooks_.ensure_position_reports();
+  return AckCode::kOk;
+}
+
+AckCode Playback::Go() {
+  if (mode_ != Mode::kArmedRun && mode_ != Mode::kArmedShoot) {
+    return mode_ == Mode::kIdle ? AckCode::kErrGeneral : AckCode::kErrMoving;
+  }
+  // "When the device has stopped moving, a MSG_RT_GO command will perform the run".
+  if (rig_.AnyMoving()) return AckCode::kErrMoving;
+  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  if (mode_ == Mode::kArmedRun) {
+    for (int m : run_->motors) {
+      if (rig_.motor(m).Position() != PrerollStart(m, pass_)) return AckCode::kErrNotInPosition;
+    }
+    StartPass(pass_);
+  } else {
+    for (const BlurAxis& a : blur_) {
+      if (rig_.motor(a.motor).Position() != a.pre_steps) return AckCode::kErrNotInPosition;
+    }
+    StartShoot();
+  }
+  return AckCode::kOk;
+}
+
+AckCode Playback::StopLoop() {
+  // "The currently running loop/ping-pong must stop after it reaches the next end point."
+  stop_loop_ = true;
+  return AckCode::kOk;
+}
+
+AckCode Playback::JogAll(const dmc::RtJogAll& m) {
+  if (Playing()) {
+    return AckCode::kErrMoving;
+  }
+  if (!upload_.complete()) return AckCode::kErrGeneral;
+  if (m.fps_x1000 == 0 || !upload_.Contains(m.destination_frame)) return AckCode::kErrRange;
+  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  // "The rig must already be on a frame position that is uploaded to the device."
+  if (!on_frame_ || !OnFramePosition(*on_frame_)) return AckCode::kErrNotInPosition;
+  if (*on_frame_ == m.destination_frame) return AckCode::kOk;
+  Pass p = MakePass(*on_frame_, m.destination_frame,
+                    m.fps_x1000 / static_cast<double>(dmc::kFpsScale), 0, 0);
+  if (AckCode c = CheckPass(p); c != AckCode::kOk) return c;
+  run_.reset();
+  mode_ = Mode::kIdle;
+  StartPass(p);
+  mode_ = Mode::kJogAll;
+  return AckCode::kOk;
+}
+
+// --- playback ---------------------------------------------------------------------------------
+
+void Playback::Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps) {
+  ScriptPlanner* planner = planners_[static_cast<size_t>(motor - 1)];
+  planner->Load(std::move(segments));
+  const sim::MoveStatus s = rig_.motor(motor).MoveTo(target_steps);
+  if (s != sim::MoveStatus::kOk) planner->Drop();
+}
+
+void Playback::AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
+                          std::vector<sim::Segment>& out) const {
+  const double now_s = static_cast<double>(scheduler_.Now() - p.t_first_frame_ns) / kNsPerSecondF;
+  for (uint32_t k = k0; k < k1; ++k) {
+    const double v = PassVelocity(motor, p, k);
+    const double end_s = (k + 1) / p.fps;
+    // The first interval of a window starts now (at or a few ns after the
+    // frame time): it ends on the ideal frame time so windows never drift.
+    const double start_s = k == k0 ? std::max(now_s, k / p.fps) : k / p.fps;
+    if (end_s > start_s) out.push_back(Seg(end_s - start_s, v, 0));
+  }
+}
+
+void Playback::StartPass(const Pass& p) {
+  pass_ = p;
+  pass_.t_first_frame_ns = scheduler_.Now() + CeilNs(p.preroll_s);
+  pass_.frames_done = 0;
+  const uint16_t flags = run_ ? run_->request.flags.value_or(0) : 0;
+  pass_.live = run_.has_value();
+  pass_.video = pass_.live && (flags & dmc::kPlayCameraVideo) != 0;
+  pass_.stills = pass_.live && (flags & dmc::kPlayCameraStills) != 0;
+  mode_ = run_ ? Mode::kPass : Mode::kJogAll;
+  hooks_.stop_position_reports();
+  PlanWindow(0);
+  frame_timer_ = scheduler_.At(pass_.t_first_frame_ns, [this] { OnFrameTick(); });
+}
+
+// Plans frame intervals [k0, k0 + kWindowFrames) of every playback motor, with
+// the pre-roll before the first window and the post-roll after the last; a
+// window that is not the last ends in a brake to rest that the next window
+// replaces before it begins (so a lost window can never run a motor away).
+void Playback::PlanWindow(uint32_t k0) {
+  const uint32_t n = Intervals(pass_.from_frame, pass_.to_frame);
+  const uint32_t k1 = std::min(n, k0 + kWindowFrames);
+  for (int m : (run_ ? run_->motors : PlaybackMotors())) {
+    std::vector<sim::Segment> segs;
+    if (k0 == 0) {
+      // Idle, then accelerate uniformly to the first interval's speed so as
+      // to pass the start frame at t_first_frame_ns.
+      const double v = n == 0 ? 0 : PassVelocity(m, pass_, 0);
+      const double d =
+          std::fabs(static_cast<double>(PassPosition(m, pass_, 0) - rig_.motor(m).Position()));
+      const double accel_s = (v != 0 && d > 0) ? 2 * d / std::fabs(v) : 0;
+      const double lead_s =
+          static_cast<double>(pass_.t_first_frame_ns - scheduler_.Now()) / kNsPerSecondF;
+      if (lead_s > accel_s) segs.push_back(Seg(lead_s - accel_s, 0, 0));
+      if (accel_s > 0) segs.push_back(Seg(accel_s, 0, v / accel_s));
+    }
+    AppendPath(m, pass_, k0, k1, segs);
+    const double v_end = n == 0 ? 0 : PassVelocity(m, pass_, k1 - 1);
+    int64_t target = PassPosition(m, pass_, k1);
+    if (k1 == n) {
+      target = PostrollEnd(m, pass_);
+    } else if (v_end != 0) {
+      const sim::StepperMotor& motor = rig_.motor(m);
+      const double a = motor.profile().max_accel_steps_per_s2 * motor.profile().hard_stop_multiple;
+      target += Sign(v_end) * static_cast<int64_t>(std::ceil(v_end * v_end / (2 * a)));
+      const sim::SoftLimits& s = motor.soft_limits();
+      if (s.upper_enabled)
+        target =
+            std::min<int64_t>(target, std::max<int64_t>(s.upper_steps, PassPosition(m, pass_, k1)));
+      if (s.lower_enabled)
+        target =
+            std::max<int64_t>(target, std::min<int64_t>(s.lower_steps, PassPosition(m, pass_, k1)));
+    }
+    const double d = std::fabs(static_cast<double>(target - PassPosition(m, pass_, k1)));
+    if (v_end != 0 && d > 0)
+      segs.push_back(Seg(2 * d / std::fabs(v_end), v_end, -v_end * std::fabs(v_end) / (2 * d)));
+    Script(m, std::move(segs), target);
+  }
+  if (k1 == n) {
+    // The pass ends when the post-roll has run its course on every motor.
+    TimeNs end = pass_.t_first_frame_ns + CeilNs(n / pass_.fps);
+    for (int m : (run_ ? run_->motors : PlaybackMotors())) {
+      end = std::max(end, rig_.motor(m).CurrentPlan().EndNs());
+    }
+    CancelTimer(phase_timer_);
+    phase_timer_ = scheduler_.At(end, [this] {
+      phase_timer_ = sim::Scheduler::kNoTimer;
+      EndPass();
+    });
+  }
+}
+
+void Playback::OnFrameTick() {
+  frame_timer_ = sim::Scheduler::kNoTimer;
+  const uint32_t n = Intervals(pass_.from_frame, pass_.to_frame);
+  const uint32_t k = pass_.frames_done;
+  const auto frame =
+      static_cast<uint32_t>(int64_t{pass_.from_frame} + int64_t{pass_.dir} * int64_t{k});
+  move_time_x1000_ =
+      static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
+  if (pass_.live) {
+    const dmc::RtRunMove& req = run_->request;
+    if (req.sync_dmx == 1) ApplyFrameOutputs(frame);
+    if (k == 0 && passes_done_ == 0 && (req.bloop_outputs != 0 || req.bloop_dmx_channel != 0)) {
+      // Bloop: a sync mark on the GIO outputs and/or a DMX channel at the
+      // start of the move, for about BLOOP TIME.
+      const uint32_t outputs = req.bloop_outputs;
+      const int channel = req.bloop_dmx_channel;
+      const uint8_t before = channel != 0 ? dmx_.Value(channel) : 0;
+      gio_.SetOutputs(gio_.outputs() | outputs);
+      if (channel != 0) dmx_.Set(channel, 255);
+      AddIoTimer(scheduler_.Now() + TimeNs{req.bloop_time_ms} * kNsPerMs,
+                 [this, outputs, channel, before] {
+                   gio_.SetOutputs(gio_.outputs() & ~outputs);
+                   if (channel != 0) dmx_.Set(channel, before);
+                 });
+    }
+    if (pass_.video && k == 0) camera_.Set(sim::CameraPort::kShutter, true);
+    if (pass_.video && k == n) camera_.Set(sim::CameraPort::kShutter, false);
+    if (pass_.stills && k < n) {
+      const double open = req.camera_open_angle_deg.value_or(0) / 360.0;
+      const double close = req.camera_close_angle_deg.value_or(360) / 360.0;
+      const TimeNs t0 = pass_.t_first_frame_ns;
+      const TimeNs t_open = t0 + CeilNs((k + open) / pass_.fps);
+      const TimeNs t_close = t0 + CeilNs((k + close) / pass_.fps);
+      AddIoTimer(t_open, [this] { camera_.Set(sim::CameraPort::kShutter, true); });
+      AddIoTimer(t_close, [this] { camera_.Set(sim::CameraPort::kShutter, false); });
+    }
+  }
+  // "it must send a MSG_MOTOR_GET_POSITION each time it reaches a new frame".
+  hooks_.send_position_update();
+  if (k > 0 && k < n && k % kWindowFrames == 0) PlanWindow(k);
+  // Forget I/O timers that already ran so the list stays short on long moves.
+  const TimeNs now = scheduler_.Now();
+  io_timers_.erase(std::remove_if(io_timers_.begin(), io_timers_.end(),
+                                  [now](const IoTimer& t) { return t.at_ns < now; }),
+                   io_timers_.end());
+  if (k < n) {
+    ++pass_.frames_done;
+    frame_timer_ = scheduler_.At(pass_.t_first_frame_ns + CeilNs((k + 1) / pass_.fps),
+                                 [this] { OnFrameTick(); });
+  }
+}
+
+void Playback::AddIoTimer(TimeNs at_ns, sim::Callback cb) {
+  io_timers_.push_back(IoTimer{scheduler_.At(at_ns, std::move(cb)), at_ns});
+}
+
+void Playback::EndPass() {
+  ++passes_done_;
+  if (mode_ == Mode::kJogAll) {
+    // JOG_ALL ends on its destination frame, which is a frame position again.
+    on_frame_ = pass_.to_frame;
+    mode_ = Mode::kIdle;
+    hooks_.send_position_update();
+    hooks_.ensure_position_reports();
+    return;
+  }
+  StartNextPassOrEnd();
+}
+
+void Playback::StartNextPassOrEnd() {
+  const uint16_t flags = run_ ? run_->request.flags.value_or(0) : 0;
+  const bool ping_pong = (flags & dmc::kPlayPingPong) != 0;
+  const bool loop = (flags & dmc::kPlayLoop) != 0;
+  if (!run_ || stop_loop_ || !(ping_pong || loop)) {
+    FinishRun(true);
+    return;
+  }
+  // Loop: back to the start's pre-roll and play again; ping-pong: play the
+  // range the other way. The rig repositions at full speed, then goes on by
+  // itself (OnMotionFinished) without another GO.
+  Pass next = pass_;
+  if (ping_pong) std::swap(next.from_frame, next.to_frame);
+  next = MakePass(next.from_frame, next.to_frame, pass_.fps, pass_.preroll_s, pass_.postroll_s);
+  pass_ = next;
+  mode_ = Mode::kArmedRun;
+  bool any = false;
+  for (int m : run_->motors) {
+    const sim::MoveStatus st = rig_.motor(m).MoveTo(PrerollStart(m, pass_));
+    if (st != sim::MoveStatus::kOk) {
+      FinishRun(true);
+      rig_.StopAll();
+      return;
+    }
+    any = any || rig_.motor(m).IsMoving();
+  }
+  mode_ = Mode::kPass;  // still playing: no host command may interfere
+  reposition_pending_ = true;
+  if (!any) {
+    reposition_pending_ = false;
+    StartPass(pass_);
+  } else {
+    hooks_.ensure_position_reports();
+  }
+}
+
+void Playback::StartShoot() {
+  mode_ = Mode::kShooting;
+  const double exposure_s = exposure_ms_ / 1000.0;
+  double lead_s = 0;
+  struct Ramp {
+    double v, accel_s, decel_s;
+  };
+  std::vector<Ramp> ramps;
+  for (const BlurAxis& a : blur_) {
+    const double v = (a.x_close_steps - a.x_open_steps) / exposure_s;
+    Ramp r{v, 0, 0};
+    if (v != 0) {
+      r.accel_s = 2 * std::fabs(a.x_open_steps - static_cast<double>(a.pre_steps)) / std::fabs(v);
+      r.decel_s = 2 * std::fabs(static_cast<double>(a.post_steps) - a.x_close_steps) / std::fabs(v);
+    }
+    lead_s = std::max(lead_s, r.accel_s);
+    ramps.push_back(r);
+  }
+  // All blurred motors reach speed together, as the shutter opens.
+  TimeNs end = scheduler_.Now();
+  for (size_t i = 0; i < blur_.size(); ++i) {
+    const BlurAxis& a = blur_[i];
+    const Ramp& r = ramps[i];
+    if (r.v == 0) continue;
+    std::vector<sim::Segment> segs;
+    if (lead_s > r.accel_s) segs.push_back(Seg(lead_s - r.accel_s, 0, 0));
+    if (r.accel_s > 0) segs.push_back(Seg(r.accel_s, 0, r.v / r.accel_s));
+    segs.push_back(Seg(exposure_s, r.v, 0));
+    if (r.decel_s > 0) segs.push_back(Seg(r.decel_s, r.v, -r.v / r.decel_s));
+    Script(a.motor, std::move(segs), a.post_steps);
+    end = std::max(end, rig_.motor(a.motor).CurrentPlan().EndNs());
+  }
+  const TimeNs t_open = scheduler_.Now() + CeilNs(lead_s);
+  const TimeNs exposure_ns = TimeNs{exposure_ms_} * kNsPerMs;
+  AddIoTimer(t_open, [this, exposure_ns] { camera_.Expose(exposure_ns); });
+  end = std::max(end, t_open + exposure_ns);
+  CancelTimer(phase_timer_);
+  phase_timer_ = scheduler_.At(end, [this] {
+    phase_timer_ = sim::Scheduler::kNoTimer;
+    FinishRun(true);
+  });
+}
+
+// The run or shot is over: back to idle, RT_END to the host ("After a
+// MSG_RT_RUN_MOVE or MSG_RT_SHOOT_FRAME has finished shooting, the device
+// sends MSG_RT_END").
+void Playback::FinishRun(bool send_end) {
+  CancelTimer(frame_timer_);
+  CancelTimer(phase_timer_);
+  reposition_pending_ = false;
+  mode_ = Mode::kIdle;
+  run_.reset();
+  blur_.clear();
+  hooks_.send_position_update();
+  if (send_end) hooks_.send_rt_end();
+  hooks_.ensure_position_reports();
+}
+
+// Ends whatever playback is going on (a stop, a limit, the e-stop); an armed
+// but not started run is simply disarmed.
+void Playback::Abort(bool send_end) {
+  const bool playing = Playing();
+  const bool live = mode_ == Mode::kPass || mode_ == Mode::kShooting;
+  if (mode_ == Mode::kArmedRun || mode_ == Mode::kArmedShoot) {
+    mode_ = Mode::kIdle;
+    run_.reset();
+    blur_.clear();
+  }
+  if (!playing) return;
+  for (IoTimer& t : io_timers_) CancelTimer(t.id);
+  io_timers_.clear();
+  for (ScriptPlanner* p : planners_) p->Drop();
+  camera_.Set(sim::CameraPort::kShutter, false);
+  rig_.StopAll();
+  on_frame_.reset();
+  FinishRun(send_end && live);
+}
+
+std::string_view Playback::ModeName() const {
+  switch (mode_) {
+    case Mode::kIdle:
+      return "idle";
+    case Mode::kArmedRun:
+      return "armed-run";
+    case Mode::kArmedShoot:
+      return "armed-shoot";
+    case Mode::kPass:
+      return "running";
+    case Mode::kShooting:
+      return "shooting";
+    case Mode::kJogAll:
+      return "jogging-all";
+  }
+  return "idle";
+}
+
+}  // namespace moco::devices

@@ -1,0 +1,211 @@
+// The DMC-16's real-time playback engine (dmc-v2-protocol.txt "Real-time
+// moves": MSG_RT_POSITION_FRAME, MSG_RT_RUN_MOVE, MSG_RT_SHOOT_FRAME /
+// _FRAME_2, MSG_RT_GO, MSG_RT_STOP_LOOP, MSG_RT_JOG_ALL, MSG_RT_END): plays
+// the uploaded move on the rig in virtual time. It arms a run (the rig goes
+// to the pre-roll position) or a shot (the blurred motors go to their ramp
+// start), and on GO plays the frame path window by window with pre-roll and
+// post-roll, loop and ping-pong passes, per-frame DMX/GIO outputs, bloop,
+// camera video/stills edges and go-motion exposures; it sends a position
+// report at each frame and RT_END when a live run or shot ends.
+//
+// The device (dmc16.cpp) decodes and answers the requests; this class only
+// decides the ACK codes of the real-time requests and moves the rig. Its
+// output goes through the hooks, so it can be driven alone in tests.
+#ifndef MOCO_DEVICES_DMC16_PLAYBACK_H_
+#define MOCO_DEVICES_DMC16_PLAYBACK_H_
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "devices/dmc16/dmc16_profile.h"
+#include "devices/dmc16/rt_move.h"
+#include "devices/dmc16/script_planner.h"
+#include "sim/callback.h"
+#include "sim/io.h"
+#include "sim/rig.h"
+#include "sim/scheduler.h"
+#include "wire/dmc.h"
+
+namespace moco::devices {
+
+// The bits of `count` GIO lines (MSG_HI GIO OUT / INPUT COUNT, 0-32).
+inline uint32_t GioMask(int count) { return count >= 32 ? 0xffffffffu : (1u << count) - 1u; }
+
+// The device's mapping of a refused motor command to its ACK code.
+dmc::AckCode AckForMoveStatus(sim::MoveStatus s);
+
+// What playback tells the device to send; every hook must be set.
+struct PlaybackHooks {
+  // An unsolicited MSG_MOTOR_GET_POSITION now ("each time it reaches a new
+  // frame", and when a run ends).
+  std::function<void()> send_position_update;
+  // An unsolicited MSG_RT_END (a live run or a shot has finished).
+  std::function<void()> send_rt_end;
+  // The device's periodic position reports while anything moves ("about
+  // every 0.10 seconds").
+  std::function<void()> ensure_position_reports;
+  // Stops the periodic reports: a pass reports at each frame instead.
+  std::function<void()> stop_position_reports;
+};
+
+class Playback {
+ public:
+  enum class Mode : uint8_t { kIdle, kArmedRun, kArmedShoot, kPass, kShooting, kJogAll };
+
+  // Every reference must outlive this; `planners` (index motor-1, owned by
+  // the motors) may be filled after construction.
+  Playback(sim::Scheduler& scheduler, sim::Rig& rig, const std::vector<ScriptPlanner*>& planners,
+           const RtMove& upload, const Dmc16Profile& profile, sim::DmxUniverse& dmx,
+           sim::GioPort& gio, sim::CameraPort& camera, PlaybackHooks hooks);
+  ~Playback();
+  Playback(const Playback&) = delete;
+  Playback& operator=(const Playback&) = delete;
+
+  // --- the real-time requests: each returns the ACK code ---
+  // MSG_RT_POSITION_FRAME: every playback motor (and DMX) to the frame.
+  dmc::AckCode PositionFrame(uint32_t frame);
+  // MSG_RT_RUN_MOVE: checks the run and moves the rig to its pre-roll start.
+  dmc::AckCode RunMove(const dmc::RtRunMove& m);
+  // MSG_RT_SHOOT_FRAME / _2: `dir` +1 plays POS A towards POS B, -1 back;
+  // the shutter is open from `open_deg` to `close_deg` of the frame's 360.
+  dmc::AckCode ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, double open_deg,
+                          double close_deg, const std::vector<dmc::BlurMotor>& motors);
+  // MSG_RT_GO: plays the armed run or shot.
+  dmc::AckCode Go();
+  // MSG_RT_STOP_LOOP: the loop or ping-pong ends at its next end point.
+  dmc::AckCode StopLoop();
+  // MSG_RT_JOG_ALL: from the frame the rig is on to another, at an fps.
+  dmc::AckCode JogAll(const dmc::RtJogAll& m);
+
+  // --- what the rest of the device does to playback ---
+  // Ends whatever playback is going on (a stop, a limit, the e-stop), with
+  // RT_END when `send_end` and a live pass or shot was running; an armed
+  // but not started run is simply disarmed.
+  void Abort(bool send_end);
+  // A new upload begins (MSG_RT_UPLOAD_MOVE_BEGIN, not while Playing()).
+  void OnUploadBegin();
+  // A motor moved by another command: an armed run or shot is disarmed and
+  // the rig is no longer on a frame.
+  void OnDirectMotion();
+  // An armed run or shot is disarmed and the run forgotten (STOP_ALL).
+  void Disarm();
+  // A position was renamed (MSG_MOTOR_RESET_POSITION): not on a frame.
+  void ForgetFrame() { on_frame_.reset(); }
+  // Every motor came to rest. True when playback takes it (a repositioned
+  // loop pass starts, or a pass is under way); false when the device
+  // should report the stop.
+  bool OnRigAtRest();
+  // Power-on: everything forgotten, no timer.
+  void Reset();
+  // Power-off: timers cancelled, back to idle (the last frame is kept).
+  void Halt();
+
+  // --- observation ---
+  // A live pass, a shoot or a jog-all is under way (motion commands wait).
+  bool Playing() const {
+    return mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll;
+  }
+  // A pass (run or jog-all) reports positions at each frame instead of the cadence.
+  bool ReportsEachFrame() const { return mode_ == Mode::kPass || mode_ == Mode::kJogAll; }
+  Mode mode() const { return mode_; }
+  // "idle", "armed-run", "armed-shoot", "running", "shooting", "jogging-all".
+  std::string_view ModeName() const;
+  // MOVE TIME the device reports now (thousandths of a frame).
+  uint32_t MoveTimeX1000() const { return move_time_x1000_; }
+  // The frame the rig was last sent to, if it is still there by playback's account.
+  std::optional<uint32_t> on_frame() const { return on_frame_; }
+  // Passes completed since the run started (loop and ping-pong count each).
+  uint32_t passes_done() const { return passes_done_; }
+
+ private:
+  struct RunSetup {
+    dmc::RtRunMove request;
+    std::vector<int> motors;  // uploaded, enabled motors taking part
+  };
+  struct BlurAxis {
+    int motor = 0;
+    double x_open_steps = 0;   // continuous position when the shutter opens
+    double x_close_steps = 0;  // ... when it closes
+    int64_t pre_steps = 0;     // rest position before the ramp up
+    int64_t post_steps = 0;    // rest position after the ramp down
+  };
+  struct Pass {
+    uint32_t from_frame = 0;
+    uint32_t to_frame = 0;
+    int dir = 1;  // +1 forward through the frames, -1 backward
+    double fps = 0;
+    double preroll_s = 0;
+    double postroll_s = 0;
+    sim::TimeNs t_first_frame_ns = 0;  // when the rig passes from_frame
+    uint32_t frames_done = 0;          // frame intervals completed
+    bool video = false;
+    bool stills = false;
+    bool live = false;  // a RUN_MOVE pass (camera, DMX, triggers, bloop); false for JOG_ALL
+  };
+  struct IoTimer {
+    sim::Scheduler::TimerId id;
+    sim::TimeNs at_ns;
+  };
+
+  bool MotorValid(int motor) const { return motor >= 1 && motor <= profile_.motor_count; }
+  // Motors of the upload that are enabled (they take part in playback).
+  std::vector<int> PlaybackMotors() const;
+  // Whether every playback motor rests on its position at `frame`.
+  bool OnFramePosition(uint32_t frame) const;
+  // Starts motor `motor` on `segments` (from rest), ending at rest on `target`.
+  void Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps);
+  // Frame-path segments of `motor` for frame intervals [k0, k1) of the pass.
+  void AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
+                  std::vector<sim::Segment>& out) const;
+  int32_t PassPosition(int motor, const Pass& p, uint32_t k) const;
+  double PassVelocity(int motor, const Pass& p, uint32_t k) const;  // interval k, steps/s
+  // Pre-roll: rest position before the pass and the time to reach speed.
+  int64_t PrerollStart(int motor, const Pass& p) const;
+  int64_t PostrollEnd(int motor, const Pass& p) const;
+  dmc::AckCode CheckPass(const Pass& p) const;
+  static Pass MakePass(uint32_t from, uint32_t to, double fps, double pre_s, double post_s);
+  void StartPass(const Pass& p);
+  void PlanWindow(uint32_t k0);
+  void OnFrameTick();
+  void EndPass();
+  void StartNextPassOrEnd();
+  void StartShoot();
+  void FinishRun(bool send_end);
+  void ApplyFrameOutputs(uint32_t frame);
+  void CancelTimer(sim::Scheduler::TimerId& id);
+  void AddIoTimer(sim::TimeNs at_ns, sim::Callback cb);
+  void CancelTimers();
+
+  sim::Scheduler& scheduler_;
+  sim::Rig& rig_;
+  const std::vector<ScriptPlanner*>& planners_;
+  const RtMove& upload_;
+  const Dmc16Profile& profile_;
+  sim::DmxUniverse& dmx_;
+  sim::GioPort& gio_;
+  sim::CameraPort& camera_;
+  PlaybackHooks hooks_;
+
+  Mode mode_ = Mode::kIdle;
+  std::optional<RunSetup> run_;
+  std::vector<BlurAxis> blur_;
+  uint32_t shoot_frame_ = 0;
+  uint32_t exposure_ms_ = 0;
+  Pass pass_;
+  bool stop_loop_ = false;
+  bool reposition_pending_ = false;  // a loop pass waits for the rig to reach its pre-roll
+  uint32_t passes_done_ = 0;
+  std::optional<uint32_t> on_frame_;  // last frame the rig was sent to
+  uint32_t move_time_x1000_ = 0;
+
+  sim::Scheduler::TimerId frame_timer_ = sim::Scheduler::kNoTimer;
+  sim::Scheduler::TimerId phase_timer_ = sim::Scheduler::kNoTimer;
+  std::vector<IoTimer> io_timers_;  // camera and bloop edges of the running pass
+};
+
+}  // namespace moco::devices
+
+#endif  // MOCO_DEVICES_DMC16_PLAYBACK_H_
