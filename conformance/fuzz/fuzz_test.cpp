@@ -13,6 +13,7 @@
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
 #include "session/session.h"
+#include "devices/faulty_sink.h"
 #include "devices/registry.h"
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"
@@ -192,25 +193,14 @@ TEST(FuzzExecutor, ACampaignOverEveryProtocolFindsNoViolationInTheEmulator) {
 // A DMC-16 that never answers MOTOR_STATUS: the ACK rule must catch it.
 class MuteStatusDmc16 final : public devices::Device {
  public:
-  class Filter final : public devices::ByteSink {
-   public:
-    explicit Filter(devices::ByteSink& out) : out_(out) {}
-    void Write(wire::ByteView bytes) override {
-      decoder_.Feed(bytes, [&](const dmc::FrameEvent& e) {
-        const auto* f = std::get_if<dmc::FrameRef>(&e);
-        if (f == nullptr) return;
-        const auto type = static_cast<uint16_t>(f->type & ~dmc::kFlagAck);
-        if (type == dmc::ToWire(dmc::MsgType::kMotorStatus)) return;  // dropped
-        out_.Write(f->raw);
-      });
-    }
-
-   private:
-    devices::ByteSink& out_;
-    dmc::FrameDecoder decoder_;
-  };
   MuteStatusDmc16(sim::Scheduler& s, devices::ByteSink& out)
-      : filter_(out), inner_(devices::CreateDevice("dmc16", "", s, filter_)) {}
+      : filter_(out,
+                [](const dmc::FrameRef& f, devices::ByteSink& to) {
+                  const auto type = static_cast<uint16_t>(f.type & ~dmc::kFlagAck);
+                  if (type == dmc::ToWire(dmc::MsgType::kMotorStatus)) return;  // dropped
+                  to.Write(f.raw);
+                }),
+        inner_(devices::CreateDevice("dmc16", "", s, filter_)) {}
   std::string_view Model() const override { return "dmc16-mute-status"; }
   devices::LineSettings Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
@@ -220,7 +210,7 @@ class MuteStatusDmc16 final : public devices::Device {
   void OnHostLink(bool open) override { inner_->OnHostLink(open); }
 
  private:
-  Filter filter_;
+  devices::FaultySink filter_;
   std::unique_ptr<devices::Device> inner_;
 };
 
