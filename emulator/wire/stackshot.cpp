@@ -8,9 +8,12 @@
 #include <cstring>
 #include <type_traits>
 
+#include "base/format.h"
+
 namespace moco::stackshot {
 namespace {
 
+using base::Hex;
 using wire::Reader;
 using wire::Writer;
 
@@ -443,13 +446,6 @@ struct PayloadWriter {
 // ---------------------------------------------------------------------------
 // Describe helpers
 // ---------------------------------------------------------------------------
-std::string Hex(uint32_t v, int digits) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string s = "0x";
-  for (int i = digits - 1; i >= 0; --i) s.push_back(kDigits[(v >> (4 * i)) & 0xF]);
-  return s;
-}
-
 template <typename En>
 std::string EnumText(En v, std::string_view name) {
   if (!name.empty()) return std::string(name);
