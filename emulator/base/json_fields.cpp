@@ -85,6 +85,12 @@ const json* JsonFields::Find(std::string_view key) {
   return it == object_->end() ? nullptr : &*it;
 }
 
+std::optional<FieldProblem> JsonFields::TakeProblem() {
+  std::optional<FieldProblem> p = std::move(*problem_);
+  problem_->reset();
+  return p;
+}
+
 void JsonFields::Keep(FieldProblem p) {
   if (!problem_->has_value()) *problem_ = std::move(p);
 }

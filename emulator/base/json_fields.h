@@ -76,6 +76,9 @@ class JsonFields {
   bool failed() const { return problem_->has_value(); }
   // REQUIRES: failed().
   const FieldProblem& problem() const { return **problem_; }
+  // The kept problem, forgotten (here and in the readers sharing it), so that
+  // a caller that reports each problem as it comes may read on.
+  std::optional<FieldProblem> TakeProblem();
 
   bool Has(std::string_view key) const;
   // The path of `key` in this object: "motors[2].max_speed".

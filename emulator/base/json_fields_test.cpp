@@ -296,28 +296,31 @@ TEST(JsonFields, TheFirstProblemIsKept) {
   EXPECT_EQ(g.problem().Message(), "field \"a\" is wrong; fix it");
 }
 
+TEST(JsonFields, ATakenProblemIsForgottenAndReadingGoesOn) {
+  const json j = json::parse(R"({"a": "x", "c": {"d": "y"}})");
+  JsonFields f(j);
+  f.Int("a", 0, 0, 1);
+  std::optional<FieldProblem> p = f.TakeProblem();
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->field, "a");
+  EXPECT_FALSE(f.failed());
+  EXPECT_FALSE(f.TakeProblem().has_value());
+  JsonFields c = f.Child("c");
+  c.Bool("d", false);
+  ASSERT_TRUE(f.failed());  // shared with the child
+  EXPECT_EQ(c.TakeProblem()->field, "c.d");
+  EXPECT_FALSE(f.failed());
+}
+
 // Whatever the value, a read returns (the default or the value) and a problem,
 // if any, names the field it was read from.
 RC_GTEST_PROP(JsonFieldsProperty, AnyValueIsReadOrRefusedByName, ()) {
-  const int kind = *rc::gen::inRange(0, 5);
-  json value;
-  switch (kind) {
-    case 0:
-      value = *rc::gen::arbitrary<double>();
-      break;
-    case 1:
-      value = *rc::gen::arbitrary<int64_t>();
-      break;
-    case 2:
-      value = *rc::gen::arbitrary<std::string>();
-      break;
-    case 3:
-      value = *rc::gen::arbitrary<bool>();
-      break;
-    default:
-      value = json::array({*rc::gen::arbitrary<int>()});
-      break;
-  }
+  const json value = *rc::gen::oneOf(
+      rc::gen::map(rc::gen::arbitrary<double>(), [](double d) { return json(d); }),
+      rc::gen::map(rc::gen::arbitrary<int64_t>(), [](int64_t i) { return json(i); }),
+      rc::gen::map(rc::gen::arbitrary<std::string>(), [](std::string t) { return json(t); }),
+      rc::gen::map(rc::gen::arbitrary<bool>(), [](bool b) { return json(b); }),
+      rc::gen::map(rc::gen::arbitrary<int>(), [](int i) { return json::array({i}); }));
   const json j = {{"k", value}};
   JsonFields f(j, "p");
   const int read = *rc::gen::inRange(0, 6);

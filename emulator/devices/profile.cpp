@@ -18,13 +18,17 @@ ProfileReader::ProfileReader(base::JsonFields fields, std::string where)
   Check();
 }
 
-void ProfileReader::Check() const {
-  if (fields_.failed()) throw ProfileError(where_ + ": " + fields_.problem().Message());
+void ProfileReader::Check() {
+  // Taken, not kept: the reader stays usable after a refusal.
+  if (std::optional<base::FieldProblem> p = fields_.TakeProblem()) {
+    throw ProfileError(where_ + ": " + p->Message());
+  }
 }
 
 void ProfileReader::Fail(std::string_view key, std::string_view problem, std::string_view fix) {
-  fields_.Fail(key, problem, fix);
-  throw ProfileError(where_ + ": " + fields_.problem().Message());
+  fields_.Fail(key, problem, fix);  // recorded: every read before took its problem
+  Check();
+  throw ProfileError(where_ + ": field \"" + FieldName(key) + "\" " + std::string(problem));
 }
 
 int64_t ProfileReader::GetInt(std::string_view key, int64_t def, int64_t min, int64_t max) {

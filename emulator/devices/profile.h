@@ -61,7 +61,7 @@ class ProfileReader {
  private:
   ProfileReader(base::JsonFields fields, std::string where);
   // Throws the problem the reader has kept, if any.
-  void Check() const;
+  void Check();
 
   base::JsonFields fields_;
   std::string where_;
