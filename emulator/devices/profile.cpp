@@ -32,33 +32,23 @@ void ProfileReader::Fail(std::string_view key, std::string_view problem, std::st
 }
 
 int64_t ProfileReader::GetInt(std::string_view key, int64_t def, int64_t min, int64_t max) {
-  const int64_t x = fields_.Int(key, def, min, max);
-  Check();
-  return x;
+  return Checked(fields_.Int(key, def, min, max));
 }
 
 double ProfileReader::GetNumber(std::string_view key, double def, double min, double max) {
-  const double x = fields_.Number(key, def, min, max);
-  Check();
-  return x;
+  return Checked(fields_.Number(key, def, min, max));
 }
 
 bool ProfileReader::GetBool(std::string_view key, bool def) {
-  const bool x = fields_.Bool(key, def);
-  Check();
-  return x;
+  return Checked(fields_.Bool(key, def));
 }
 
 std::string ProfileReader::GetString(std::string_view key, std::string_view def, size_t max_bytes) {
-  std::string x = fields_.String(key, def, max_bytes);
-  Check();
-  return x;
+  return Checked(fields_.String(key, def, max_bytes));
 }
 
 uint32_t ProfileReader::GetFlags(std::string_view key, uint32_t def) {
-  const uint32_t x = fields_.Bits32(key, def);
-  Check();
-  return x;
+  return Checked(fields_.Bits32(key, def));
 }
 
 const nlohmann::json& ProfileReader::GetRaw(std::string_view key) {

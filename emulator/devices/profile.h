@@ -62,6 +62,12 @@ class ProfileReader {
   ProfileReader(base::JsonFields fields, std::string where);
   // Throws the problem the reader has kept, if any.
   void Check();
+  // `x` once Check() has passed.
+  template <typename T>
+  T Checked(T x) {
+    Check();
+    return x;
+  }
 
   base::JsonFields fields_;
   std::string where_;
