@@ -9,9 +9,10 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "base/json_fields.h"
 
 namespace moco::devices {
 
@@ -22,10 +23,11 @@ class ProfileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Reads one JSON object of a profile. Every Get* returns the default when the
-// key is absent and throws ProfileError when present with the wrong type or
-// out of range. Finish() throws for keys nobody read (a typo such as
-// "motor_cout" must not silently fall back to a default).
+// Reads one JSON object of a profile: base::JsonFields that throws
+// ProfileError at the first problem, prefixed with `where`. Every Get*
+// returns the default when the key is absent and throws when present with
+// the wrong type or out of range. Finish() throws for keys nobody read (a typo
+// such as "motor_cout" must not silently fall back to a default).
 class ProfileReader {
  public:
   // `where` prefixes messages, e.g. "profile fixtures/profiles/dmc16.json".
@@ -35,7 +37,7 @@ class ProfileReader {
   ProfileReader(const nlohmann::json& object, std::string where, std::string path = "",
                 std::string doc = "docs/profiles.md");
 
-  bool Has(std::string_view key) const;
+  bool Has(std::string_view key) const { return fields_.Has(key); }
   int64_t GetInt(std::string_view key, int64_t def, int64_t min, int64_t max);
   double GetNumber(std::string_view key, double def, double min, double max);
   bool GetBool(std::string_view key, bool def);
@@ -49,22 +51,26 @@ class ProfileReader {
   ProfileReader Child(std::string_view key);
 
   // Throws ProfileError naming the first key that was never read.
-  void Finish() const;
+  void Finish();
 
   // A ProfileError for `key` with the given complaint and fix.
-  [[noreturn]] void Fail(std::string_view key, std::string_view problem,
-                         std::string_view fix) const;
+  [[noreturn]] void Fail(std::string_view key, std::string_view problem, std::string_view fix);
   const std::string& where() const { return where_; }
-  std::string FieldName(std::string_view key) const;
+  std::string FieldName(std::string_view key) const { return fields_.FieldName(key); }
 
  private:
-  const nlohmann::json* Find(std::string_view key);
+  ProfileReader(base::JsonFields fields, std::string where);
+  // Throws the problem the reader has kept, if any.
+  void Check();
+  // `x` once Check() has passed.
+  template <typename T>
+  T Checked(T x) {
+    Check();
+    return x;
+  }
 
-  const nlohmann::json& object_;
+  base::JsonFields fields_;
   std::string where_;
-  std::string path_;
-  std::string doc_;
-  std::vector<std::string> read_;
 };
 
 // Parses `text` as a JSON object; a syntax error throws ProfileError with the

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/result.h"
 #include "physics/bullet/rig_dynamics.h"
 #include "physics/bullet/rig_path_svg.h"
 #include "session/session.h"
@@ -86,20 +87,7 @@ struct RigPlotError {
 };
 
 // A plot, or why there is none.
-class RigPlotResult {
- public:
-  RigPlotResult(RigPlot p) : plot_(std::move(p)) {}        // NOLINT: implicit
-  RigPlotResult(RigPlotError e) : error_(std::move(e)) {}  // NOLINT: implicit
-  bool ok() const { return plot_.has_value(); }
-  // REQUIRES: ok().
-  const RigPlot& value() const { return *plot_; }
-  // REQUIRES: !ok().
-  const RigPlotError& error() const { return error_; }
-
- private:
-  std::optional<RigPlot> plot_;
-  RigPlotError error_;
-};
+using RigPlotResult = base::Result<RigPlot, RigPlotError>;
 
 // Replays `session` into a fresh DMC-16 built from the profile file at
 // `profile_path` (which must have a `physical_rig`): the device is powered on

@@ -27,17 +27,6 @@ std::string Describe(const DecodeError& e) {
   return std::string(KindName(e.kind)) + " at byte " + std::to_string(e.offset) + ": " + e.detail;
 }
 
-std::string ToHex(ByteView bytes) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string s;
-  s.reserve(bytes.size() * 2);
-  for (uint8_t b : bytes) {
-    s.push_back(kDigits[b >> 4]);
-    s.push_back(kDigits[b & 0xF]);
-  }
-  return s;
-}
-
 std::optional<Bytes> FromHex(std::string_view text) {
   Bytes out;
   int high = -1;

@@ -16,6 +16,9 @@
 #include <variant>
 #include <vector>
 
+#include "base/format.h"
+#include "base/result.h"
+
 namespace moco::wire {
 
 using Bytes = std::vector<uint8_t>;
@@ -45,24 +48,7 @@ std::string Describe(const DecodeError& e);
 
 // Result of a decode: the value, or the reason it failed.
 template <typename T>
-class Result {
- public:
-  Result(T value) : v_(std::move(value)) {}            // NOLINT: implicit by design
-  Result(DecodeError error) : v_(std::move(error)) {}  // NOLINT: implicit by design
-  bool ok() const { return v_.index() == 0; }
-  explicit operator bool() const { return ok(); }
-  // REQUIRES: ok().
-  const T& value() const& { return std::get<0>(v_); }
-  T& value() & { return std::get<0>(v_); }
-  T&& value() && { return std::get<0>(std::move(v_)); }
-  const T& operator*() const& { return value(); }
-  const T* operator->() const { return &value(); }
-  // REQUIRES: !ok().
-  const DecodeError& error() const { return std::get<1>(v_); }
-
- private:
-  std::variant<T, DecodeError> v_;
-};
+using Result = base::Result<T, DecodeError>;
 
 // Appends fixed-width values to a byte vector. The vector must outlive the writer.
 class Writer {
@@ -185,8 +171,8 @@ struct Overloaded : Ts... {
 template <class... Ts>
 Overloaded(Ts...) -> Overloaded<Ts...>;
 
-// Lower-case hex without separators ("44460100").
-std::string ToHex(ByteView bytes);
+// Lower-case hex without separators ("44460100"): base::HexBytes.
+inline std::string ToHex(ByteView bytes) { return base::HexBytes(bytes); }
 // Parses hex, ignoring spaces, colons and dashes; nullopt on an odd digit
 // count or a non-hex character.
 std::optional<Bytes> FromHex(std::string_view text);

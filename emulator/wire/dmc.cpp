@@ -6,6 +6,7 @@
 #include <type_traits>
 #include <utility>
 
+
 namespace moco::dmc {
 namespace {
 

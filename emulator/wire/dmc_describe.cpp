@@ -7,6 +7,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "base/format.h"
 #include "wire/dmc.h"
 
 namespace moco::dmc {
@@ -27,7 +28,7 @@ class Line {
     s_ += ' ';
     s_ += key;
     s_ += '=';
-    s_ += HexText(v, digits);
+    s_ += base::Hex(v, digits);
     return *this;
   }
   Line& Text(const char* key, std::string_view v) {
@@ -52,12 +53,6 @@ class Line {
     return *this;
   }
   std::string& str() { return s_; }
-
-  static std::string HexText(uint32_t v, int digits) {
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "0x%0*x", digits, static_cast<unsigned>(v));
-    return buf;
-  }
 
  private:
   std::string s_;
@@ -159,7 +154,7 @@ std::string Text(const RtUploadMoveTriggers& m) {
   std::string points = "[";
   for (size_t i = 0; i < m.points.size(); ++i) {
     if (i != 0) points += ',';
-    points += std::to_string(m.points[i].frame_index) + ':' + Line::HexText(m.points[i].values, 8);
+    points += std::to_string(m.points[i].frame_index) + ':' + base::Hex(m.points[i].values, 8);
   }
   points += ']';
   l.Text("points", points);

@@ -3,17 +3,14 @@
 #include "wire/dmc_frame.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cstring>
+
+#include "base/format.h"
 
 namespace moco::dmc {
 namespace {
 
-std::string Hex(uint32_t v, int digits) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%0*x", digits, static_cast<unsigned>(v));
-  return buf;
-}
+using base::Hex;
 
 const char* PlainTypeName(uint16_t type) {
   switch (static_cast<MsgType>(type)) {

@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "base/format.h"
 #include "wire/stackshot.h"
 
 namespace moco::stackshot {
@@ -14,12 +15,7 @@ namespace {
 // ---------------------------------------------------------------------------
 // Describe helpers
 // ---------------------------------------------------------------------------
-std::string Hex(uint32_t v, int digits) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string s = "0x";
-  for (int i = digits - 1; i >= 0; --i) s.push_back(kDigits[(v >> (4 * i)) & 0xF]);
-  return s;
-}
+using base::Hex;
 
 template <typename En>
 std::string EnumText(En v, std::string_view name) {

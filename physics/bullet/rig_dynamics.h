@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "base/result.h"
+
 namespace moco::physics {
 
 // The six motor-driven joints, in chain order from the floor to the camera.
@@ -110,20 +112,7 @@ struct RigProfileError {
 };
 
 // A profile, or why there is none.
-class RigProfileResult {
- public:
-  RigProfileResult(RigProfile p) : profile_(std::move(p)) {}     // NOLINT: implicit
-  RigProfileResult(RigProfileError e) : error_(std::move(e)) {}  // NOLINT: implicit
-  bool ok() const { return profile_.has_value(); }
-  // REQUIRES: ok().
-  const RigProfile& value() const { return *profile_; }
-  // REQUIRES: !ok().
-  const RigProfileError& error() const { return error_; }
-
- private:
-  std::optional<RigProfile> profile_;
-  RigProfileError error_;
-};
+using RigProfileResult = base::Result<RigProfile, RigProfileError>;
 
 // Parses a rig profile from JSON text. `where` prefixes messages (a path).
 RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view where = "profile");

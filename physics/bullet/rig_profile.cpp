@@ -3,14 +3,15 @@
 // compensation table (FACTS "Boom compensation table"). Pure math, no Bullet.
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <limits>
 #include <numbers>
-#include <set>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "base/file_io.h"
+#include "base/json_fields.h"
 #include "physics/bullet/rig_dynamics.h"
 
 namespace moco::physics {
@@ -20,225 +21,87 @@ using nlohmann::json;
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
+using base::FieldProblem;
+using base::JsonFields;
+using base::kOptional;
+using base::kRequired;
+
 std::string Shown(const json& v) {
   std::string s = v.dump();
   if (s.size() > 40) s = s.substr(0, 37) + "...";
   return s;
 }
 
-const char* TypeName(const json& v) {
-  if (v.is_number()) return "a number";
-  if (v.is_string()) return "a string";
-  if (v.is_boolean()) return "a boolean";
-  if (v.is_array()) return "an array";
-  if (v.is_object()) return "an object";
-  return "null";
+// A refusal in the rig profiles' words: "joints.boom.kp: expected a number
+// 0.001..1000000000.0, found a string; write a number in N/m".
+RigProfileError RigError(const FieldProblem& p) {
+  const std::string field = p.field.empty() ? "(root)" : p.field;
+  std::string problem = p.problem;
+  switch (p.kind) {
+    case FieldProblem::Kind::kNotObject:
+    case FieldProblem::Kind::kType:
+      problem = "expected " + p.expected + ", found " + p.found;
+      break;
+    case FieldProblem::Kind::kMissing:
+      problem = "missing";
+      break;
+    case FieldProblem::Kind::kRange:
+      problem = p.value + " is out of range";
+      break;
+    case FieldProblem::Kind::kUnknown:
+      problem = "unknown field";
+      break;
+    case FieldProblem::Kind::kOther:
+      break;
+  }
+  return RigProfileError{field, field + ": " + problem + "; " + p.fix};
 }
 
-// Reads one JSON object. The first problem is kept (with its field path);
-// later reads return defaults, so parsing code needs no error checks between
-// fields. Finish() reports keys nobody read.
-class Reader {
- public:
-  Reader(const json* object, std::string path, std::optional<RigProfileError>* error)
-      : object_(object), path_(std::move(path)), error_(error) {
-    if (object_ != nullptr && !object_->is_object()) {
-      Fail("", std::string("expected an object, found ") + TypeName(*object_),
-           "write a JSON object { ... }");
-      object_ = nullptr;
-    }
+// Three numbers [x, y, z] in metres, each within +-1000 (above 0 when
+// `positive`).
+Point3 Vector(JsonFields& r, std::string_view key, Point3 def, base::Presence presence,
+              bool positive) {
+  const json* v = r.Raw(key);
+  if (v != nullptr && (!v->is_array() || v->size() != 3)) {
+    r.Fail(key, "expected [x, y, z], found " + Shown(*v), "write three numbers in metres");
+    return def;
   }
+  const double min = positive ? std::numeric_limits<double>::min() : -1e3;
+  const std::vector<double> xyz = r.Numbers(key, min, 1e3, 3, 3, presence);
+  if (xyz.size() != 3) return def;
+  return {xyz[0], xyz[1], xyz[2]};
+}
 
-  std::string Field(std::string_view key) const {
-    if (key.empty()) return path_.empty() ? "(root)" : path_;
-    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
-  }
-
-  void Fail(std::string_view key, const std::string& problem, const std::string& fix) {
-    if (error_->has_value()) return;
-    const std::string field = Field(key);
-    *error_ = RigProfileError{field, field + ": " + problem + "; " + fix};
-  }
-
-  bool failed() const { return error_->has_value(); }
-
-  const json* Find(std::string_view key) {
-    read_.insert(std::string(key));
-    if (object_ == nullptr) return nullptr;
-    auto it = object_->find(key);
-    return it == object_->end() ? nullptr : &*it;
-  }
-
-  // `required`: absence is an error; otherwise `def` is returned.
-  double Number(std::string_view key, double def, double min, double max, bool required,
-                std::string_view unit) {
-    const json* v = Find(key);
-    if (v == nullptr) {
-      if (required && object_ != nullptr) {
-        Fail(key, "missing", "add a number in " + std::string(unit) + " (" + Range(min, max) + ")");
-      }
-      return def;
-    }
-    if (!v->is_number()) {
-      Fail(key, std::string("expected a number, found ") + TypeName(*v),
-           "write a number in " + std::string(unit));
-      return def;
-    }
-    const double d = v->get<double>();
-    if (!std::isfinite(d) || d < min || d > max) {
-      Fail(key, Shown(*v) + " is out of range", "use a value in " + Range(min, max));
-      return def;
-    }
-    return d;
-  }
-
-  int64_t Integer(std::string_view key, int64_t def, int64_t min, int64_t max, bool required) {
-    const json* v = Find(key);
-    if (v == nullptr) {
-      if (required && object_ != nullptr) Fail(key, "missing", "add an integer");
-      return def;
-    }
-    if (!v->is_number_integer()) {
-      Fail(key, std::string("expected an integer, found ") + Shown(*v), "write a whole number");
-      return def;
-    }
-    const int64_t i = v->get<int64_t>();
-    if (i < min || i > max) {
-      Fail(key, Shown(*v) + " is out of range",
-           "use a value in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
-      return def;
-    }
-    return i;
-  }
-
-  std::string String(std::string_view key, std::string def) {
-    const json* v = Find(key);
-    if (v == nullptr) return def;
-    if (!v->is_string()) {
-      Fail(key, std::string("expected a string, found ") + TypeName(*v), "write a \"string\"");
-      return def;
-    }
-    return v->get<std::string>();
-  }
-
-  Point3 Vector(std::string_view key, Point3 def, bool required, bool positive) {
-    const json* v = Find(key);
-    if (v == nullptr) {
-      if (required && object_ != nullptr) Fail(key, "missing", "add [x, y, z] in metres");
-      return def;
-    }
-    if (!v->is_array() || v->size() != 3) {
-      Fail(key, "expected [x, y, z], found " + Shown(*v), "write three numbers in metres");
-      return def;
-    }
-    Point3 out{};
-    for (size_t i = 0; i < 3; ++i) {
-      const json& e = (*v)[i];
-      if (!e.is_number() || !std::isfinite(e.get<double>()) || std::abs(e.get<double>()) > 1e3 ||
-          (positive && e.get<double>() <= 0)) {
-        Fail(key, "element " + std::to_string(i) + " is " + Shown(e),
-             positive ? "write three positive numbers" : "write three numbers within +-1000");
-        return def;
-      }
-      out[i] = e.get<double>();
-    }
-    return out;
-  }
-
-  std::vector<double> Numbers(std::string_view key, double min, double max) {
-    const json* v = Find(key);
-    if (v == nullptr) {
-      if (object_ != nullptr) Fail(key, "missing", "add an array of numbers");
-      return {};
-    }
-    if (!v->is_array() || v->empty() || v->size() > 64) {
-      Fail(key, "expected an array of 1..64 numbers, found " + Shown(*v), "write e.g. [0, 5, 10]");
-      return {};
-    }
-    std::vector<double> out;
-    for (size_t i = 0; i < v->size(); ++i) {
-      const json& e = (*v)[i];
-      if (!e.is_number() || !std::isfinite(e.get<double>()) || e.get<double>() < min ||
-          e.get<double>() > max) {
-        Fail(key, "element " + std::to_string(i) + " is " + Shown(e),
-             "use numbers in " + Range(min, max));
-        return {};
-      }
-      out.push_back(e.get<double>());
-    }
-    return out;
-  }
-
-  Reader Child(std::string_view key, bool required) {
-    const json* v = Find(key);
-    if (v == nullptr && required && object_ != nullptr) Fail(key, "missing", "add the object");
-    return Reader(v, Field(key), error_);
-  }
-
-  const json* Array(std::string_view key) {
-    const json* v = Find(key);
-    if (v != nullptr && !v->is_array()) {
-      Fail(key, std::string("expected an array, found ") + TypeName(*v), "write [ ... ]");
-      return nullptr;
-    }
-    return v;
-  }
-
-  void Finish() {
-    if (object_ == nullptr) return;
-    for (auto it = object_->begin(); it != object_->end(); ++it) {
-      if (read_.count(it.key()) == 0) {
-        std::string known;
-        for (const std::string& k : read_) known += (known.empty() ? "" : ", ") + k;
-        Fail(it.key(), "unknown field", "check the spelling (known here: " + known + ")");
-        return;
-      }
-    }
-  }
-
- private:
-  static std::string Range(double min, double max) {
-    std::ostringstream s;
-    s << "[" << min << ", " << max << "]";
-    return s.str();
-  }
-
-  const json* object_;
-  std::string path_;
-  std::optional<RigProfileError>* error_;
-  std::set<std::string> read_;
-};
-
-BodySpec ReadBody(Reader& bodies, std::string_view name) {
-  Reader r = bodies.Child(name, true);
+BodySpec ReadBody(JsonFields& bodies, std::string_view name) {
+  JsonFields r = bodies.Child(name, kRequired);
   BodySpec b;
-  b.mass_kg = r.Number("mass_kg", 1.0, 1e-3, 1e4, true, "kg");
-  b.com_m = r.Vector("com_m", {0, 0, 0}, false, false);
-  b.inertia_kg_m2 = r.Vector("inertia_kg_m2", {0.01, 0.01, 0.01}, true, true);
+  b.mass_kg = r.Number("mass_kg", 1.0, 1e-3, 1e4, kRequired, "kg");
+  b.com_m = Vector(r, "com_m", {0, 0, 0}, kOptional, false);
+  b.inertia_kg_m2 = Vector(r, "inertia_kg_m2", {0.01, 0.01, 0.01}, kRequired, true);
   r.Finish();
   return b;
 }
 
-JointSpec ReadJoint(Reader& joints, Joint j) {
+JointSpec ReadJoint(JsonFields& joints, Joint j) {
   const bool prismatic = RigProfile::Prismatic(j);
   const double scale = prismatic ? 1.0 : kDegToRad;
   const std::string_view unit = prismatic ? "m" : "deg";
   const double span = prismatic ? 100.0 : 720.0;
-  Reader r = joints.Child(kJointNames[Index(j)], true);
+  JsonFields r = joints.Child(kJointNames[Index(j)], kRequired);
   JointSpec s;
-  s.min = r.Number("min", 0, -span, span, true, unit) * scale;
-  s.max = r.Number("max", 0, -span, span, true, unit) * scale;
+  s.min = r.Number("min", 0, -span, span, kRequired, unit) * scale;
+  s.max = r.Number("max", 0, -span, span, kRequired, unit) * scale;
   if (!r.failed() && !(s.min < s.max)) r.Fail("max", "must be above min", "swap min and max");
-  s.home = r.Number("home", 0, -span, span, false, unit) * scale;
+  s.home = r.Number("home", 0, -span, span, kOptional, unit) * scale;
   if (!r.failed() && (s.home < s.min || s.home > s.max)) {
     r.Fail("home", "lies outside [min, max]", "move home inside the end stops");
   }
-  s.motor_steps_per_rev = r.Integer("motor_steps_per_rev", 3200, 1, 1'000'000, true);
-  s.gear_ratio = r.Number("gear_ratio", 1, 1e-3, 1e5, true,
+  s.motor_steps_per_rev = r.Int("motor_steps_per_rev", 3200, 1, 1'000'000, kRequired);
+  s.gear_ratio = r.Number("gear_ratio", 1, 1e-3, 1e5, kRequired,
                           prismatic ? "motor rev per metre" : "motor rev per joint rev");
-  Reader curve = r.Child("pull_out", true);
-  s.pull_out_speed_rev_s = curve.Numbers("speed_rev_s", 0, 1e4);
-  s.pull_out_torque_n_m = curve.Numbers("torque_n_m", 0, 1e4);
+  JsonFields curve = r.Child("pull_out", kRequired);
+  s.pull_out_speed_rev_s = curve.Numbers("speed_rev_s", 0, 1e4, 1, 64, kRequired);
+  s.pull_out_torque_n_m = curve.Numbers("torque_n_m", 0, 1e4, 1, 64, kRequired);
   if (!curve.failed()) {
     if (s.pull_out_speed_rev_s.size() != s.pull_out_torque_n_m.size()) {
       curve.Fail("torque_n_m", "has a different length than speed_rev_s",
@@ -260,9 +123,9 @@ JointSpec ReadJoint(Reader& joints, Joint j) {
   curve.Finish();
   const std::string_view k_unit = prismatic ? "N/m" : "N m/rad";
   const std::string_view d_unit = prismatic ? "N s/m" : "N m s/rad";
-  s.kp = r.Number("kp", 0, 1e-3, 1e9, true, k_unit);
-  s.kd = r.Number("kd", 0, 0, 1e8, true, d_unit);
-  s.damping = r.Number("damping", 0, 0, 1e8, false, d_unit);
+  s.kp = r.Number("kp", 0, 1e-3, 1e9, kRequired, k_unit);
+  s.kd = r.Number("kd", 0, 0, 1e8, kRequired, d_unit);
+  s.damping = r.Number("damping", 0, 0, 1e8, kOptional, d_unit);
   r.Finish();
   return s;
 }
@@ -296,22 +159,21 @@ RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view wh
     return RigProfileError{
         "(root)", std::string(where) + ": not valid JSON; check brackets, commas and quotes"};
   }
-  std::optional<RigProfileError> error;
-  Reader root(&doc, "", &error);
+  JsonFields root(doc);
   RigProfile p;
   p.name = root.String("name", "rig");
-  p.gravity_m_s2 = root.Number("gravity_m_s2", 9.81, 0, 100, false, "m/s^2");
+  p.gravity_m_s2 = root.Number("gravity_m_s2", 9.81, 0, 100, kOptional, "m/s^2");
 
-  Reader geo = root.Child("geometry", true);
-  p.boom_length_m = geo.Number("boom_length_m", 1.5, 0.05, 50, true, "m");
-  p.level_extension_m = geo.Number("level_extension_m", 0, 0, 10, false, "m");
-  p.nodal_offset_m = geo.Vector("nodal_offset_m", {0, 0, 0}, false, false);
-  p.floor_z_m = geo.Number("floor_z_m", -1, -100, 0, true, "m (below the swing pivot)");
+  JsonFields geo = root.Child("geometry", kRequired);
+  p.boom_length_m = geo.Number("boom_length_m", 1.5, 0.05, 50, kRequired, "m");
+  p.level_extension_m = geo.Number("level_extension_m", 0, 0, 10, kOptional, "m");
+  p.nodal_offset_m = Vector(geo, "nodal_offset_m", {0, 0, 0}, kOptional, false);
+  p.floor_z_m = geo.Number("floor_z_m", -1, -100, 0, kRequired, "m (below the swing pivot)");
   geo.Finish();
 
-  Reader head = root.Child("head_box", true);
-  p.head_box_center_m = head.Vector("center_m", {0, 0, 0}, false, false);
-  p.head_box_half_m = head.Vector("half_extents_m", {0.1, 0.1, 0.1}, true, true);
+  JsonFields head = root.Child("head_box", kRequired);
+  p.head_box_center_m = Vector(head, "center_m", {0, 0, 0}, kOptional, false);
+  p.head_box_half_m = Vector(head, "half_extents_m", {0.1, 0.1, 0.1}, kRequired, true);
   head.Finish();
 
   if (const json* obstacles = root.Array("obstacles"); obstacles != nullptr) {
@@ -319,23 +181,23 @@ RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view wh
       root.Fail("obstacles", "has " + std::to_string(obstacles->size()) + " boxes",
                 "give at most " + std::to_string(kMaxObstacles));
     }
-    for (size_t i = 0; i < obstacles->size() && !error; ++i) {
-      Reader o(&(*obstacles)[i], "obstacles[" + std::to_string(i) + "]", &error);
+    for (size_t i = 0; i < obstacles->size() && !root.failed(); ++i) {
+      JsonFields o = root.Item("obstacles", i);
       Box b;
       b.name = o.String("name", "obstacle " + std::to_string(i + 1));
-      b.min_m = o.Vector("min_m", {0, 0, 0}, true, false);
-      b.max_m = o.Vector("max_m", {0, 0, 0}, true, false);
-      if (!error &&
+      b.min_m = Vector(o, "min_m", {0, 0, 0}, kRequired, false);
+      b.max_m = Vector(o, "max_m", {0, 0, 0}, kRequired, false);
+      if (!root.failed() &&
           !(b.min_m[0] < b.max_m[0] && b.min_m[1] < b.max_m[1] && b.min_m[2] < b.max_m[2])) {
         o.Fail("max_m", "must exceed min_m on every axis", "give the box's two opposite corners");
       }
-      if (!error && b.name == "floor") o.Fail("name", "\"floor\" is reserved", "rename it");
+      if (!root.failed() && b.name == "floor") o.Fail("name", "\"floor\" is reserved", "rename it");
       o.Finish();
       p.obstacles.push_back(std::move(b));
     }
   }
 
-  Reader bodies = root.Child("bodies", true);
+  JsonFields bodies = root.Child("bodies", kRequired);
   p.cart = ReadBody(bodies, "cart");
   p.swing = ReadBody(bodies, "swing");
   p.boom = ReadBody(bodies, "boom");
@@ -345,16 +207,18 @@ RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view wh
   p.camera = ReadBody(bodies, "camera");
   bodies.Finish();
 
-  Reader joints = root.Child("joints", true);
+  JsonFields joints = root.Child("joints", kRequired);
   for (size_t i = 0; i < kJointCount; ++i) p.joints[i] = ReadJoint(joints, static_cast<Joint>(i));
   joints.Finish();
 
-  Reader level = root.Child("parallelogram", false);
-  p.level_kp_n_m_rad = level.Number("kp_n_m_rad", 5e4, 1, 1e9, false, "N m/rad");
-  p.level_kd_n_m_s_rad = level.Number("kd_n_m_s_rad", 2e2, 0, 1e8, false, "N m s/rad");
+  JsonFields level = root.Child("parallelogram", kOptional);
+  p.level_kp_n_m_rad = level.Number("kp_n_m_rad", 5e4, 1, 1e9, kOptional, "N m/rad");
+  p.level_kd_n_m_s_rad = level.Number("kd_n_m_s_rad", 2e2, 0, 1e8, kOptional, "N m s/rad");
   level.Finish();
   root.Finish();
 
+  std::optional<RigProfileError> error;
+  if (root.failed()) error = RigError(root.problem());
   if (!error) {
     // The boom drive must hold the boom level at rest, or it stalls at once.
     const JointSpec& boom = p.joint(Joint::kBoom);

@@ -4,10 +4,10 @@
 #include <filesystem>
 
 #include <cstdint>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
+#include "base/format.h"
 #include "devices/profile.h"
 
 namespace moco::devices {
@@ -191,10 +191,6 @@ Dmc16Profile LoadDmc16Profile(const std::string& path) {
 }
 
 nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
-  char caps[16];
-  std::snprintf(caps, sizeof caps, "0x%04x", p.capabilities);
-  char virt_caps[16];
-  std::snprintf(virt_caps, sizeof virt_caps, "0x%04x", p.virtual_axes.capabilities);
   nlohmann::json sets = nlohmann::json::array();
   for (const Dmc16LimitSet& s : p.limit_sets) {
     nlohmann::json e = {{"set", s.set}};
@@ -212,7 +208,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
       {"gio_inputs", p.gio_inputs},
       {"hw_limit_sets", p.hw_limit_sets},
       {"upload_frame_count", p.upload_frame_count},
-      {"capabilities", caps},
+      {"capabilities", base::Hex(p.capabilities, 4)},
       {"protocol_version", p.protocol_version.value_or(0)},
       {"ack_width_bits", p.ack_width == dmc::AckWidth::k32 ? 32 : 16},
       {"baud", p.baud},
@@ -228,7 +224,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
       {"limit_sets", sets},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},
-        {"capabilities", virt_caps},
+        {"capabilities", base::Hex(p.virtual_axes.capabilities, 4)},
         {"jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s},
         {"jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s}}},
   };

@@ -1,41 +1,47 @@
 // The StackShot 3X active configuration as stored in NVM slots
 // (stackshot-protocol.txt CC_RAIL_CONFIG_SAVE / CC_RAIL_CONFIG_LOAD).
-#include <cmath>
+#include <array>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
 
+#include "base/json_fields.h"
 #include "devices/stackshot3x/stackshot3x.h"
 
 namespace moco::devices {
 namespace {
 
+using base::JsonFields;
+using base::kRequired;
 using nlohmann::json;
 
+// Every field of a saved configuration is required, of its member's type and
+// within its range; the value read replaces `out`.
 template <typename T>
-bool Take(const json& j, const char* key, T& out) {
-  const auto it = j.find(key);
-  if (it == j.end()) return false;
+void Take(JsonFields& f, const char* key, T& out) {
   if constexpr (std::is_same_v<T, bool>) {
-    if (!it->is_boolean()) return false;
+    out = f.Bool(key, out, kRequired);
   } else if constexpr (std::is_same_v<T, std::string>) {
-    if (!it->is_string()) return false;
+    out = f.String(key, out, 0, kRequired);
   } else if constexpr (std::is_floating_point_v<T>) {
-    if (!it->is_number()) return false;
+    const double max = std::numeric_limits<T>::max();
+    out = static_cast<T>(f.Number(key, out, -max, max, kRequired));
   } else {
-    if (!it->is_number_unsigned()) return false;
-    if (it->get<uint64_t>() > std::numeric_limits<T>::max()) return false;
+    out = static_cast<T>(f.Int(key, out, 0, std::numeric_limits<T>::max(), kRequired));
   }
-  out = it->get<T>();
-  if constexpr (std::is_floating_point_v<T>) {
-    if (!std::isfinite(out)) return false;
-  }
-  return true;
 }
 
 template <typename E>
-bool TakeEnum(const json& j, const char* key, E& out, unsigned max_exclusive) {
-  uint8_t v = 0;
-  if (!Take(j, key, v) || v >= max_exclusive) return false;
-  out = static_cast<E>(v);
-  return true;
+void TakeEnum(JsonFields& f, const char* key, E& out, unsigned max_exclusive) {
+  out = static_cast<E>(f.Int(key, static_cast<int64_t>(out), 0, max_exclusive - 1, kRequired));
+}
+
+// Two numbers [a, b].
+void TakePair(JsonFields& f, const char* key, std::array<float, 2>& out) {
+  const double max = std::numeric_limits<double>::max();
+  const std::vector<double> v = f.Numbers(key, -max, max, 2, 2, kRequired);
+  if (v.size() == 2) out = {static_cast<float>(v[0]), static_cast<float>(v[1])};
 }
 
 }  // namespace
@@ -90,56 +96,58 @@ json Stackshot3xConfig::ToJson() const {
 }
 
 std::optional<Stackshot3xConfig> Stackshot3xConfig::FromJson(const json& j) {
-  if (!j.is_object()) return std::nullopt;
+  // Keys it does not know are passed over: a state file may come from a later
+  // version.
+  JsonFields f(j);
   Stackshot3xConfig c;
-  bool ok = Take(j, "name", c.name) && Take(j, "backlight", c.backlight) &&
-            TakeEnum(j, "mode", c.mode, 8) &&
-            TakeEnum(j, "units", c.units, stackshot::kUnitsMaxSpec) &&
-            TakeEnum(j, "global_mode", c.global_mode, stackshot::kGlobalModeMax) &&
-            Take(j, "settle_time_s", c.settle_time_s) && Take(j, "timelapse_s", c.timelapse_s) &&
-            Take(j, "shutter_disable", c.shutter_disable) &&
-            Take(j, "auto_return", c.auto_return) && Take(j, "toff_final", c.toff_final) &&
-            TakeEnum(j, "io_mode", c.io_mode, stackshot::kIoModeMax) &&
-            TakeEnum(j, "io_dir", c.io_dir, stackshot::kDirectionMax);
-  if (!ok) return std::nullopt;
-  const auto sh = j.find("shutters");
-  const auto ax = j.find("axes");
-  if (sh == j.end() || !sh->is_array() || sh->size() != c.shutters.size()) return std::nullopt;
-  if (ax == j.end() || !ax->is_array() || ax->size() != c.axes.size()) return std::nullopt;
+  Take(f, "name", c.name);
+  Take(f, "backlight", c.backlight);
+  TakeEnum(f, "mode", c.mode, 8);
+  TakeEnum(f, "units", c.units, stackshot::kUnitsMaxSpec);
+  TakeEnum(f, "global_mode", c.global_mode, stackshot::kGlobalModeMax);
+  Take(f, "settle_time_s", c.settle_time_s);
+  Take(f, "timelapse_s", c.timelapse_s);
+  Take(f, "shutter_disable", c.shutter_disable);
+  Take(f, "auto_return", c.auto_return);
+  Take(f, "toff_final", c.toff_final);
+  TakeEnum(f, "io_mode", c.io_mode, stackshot::kIoModeMax);
+  TakeEnum(f, "io_dir", c.io_dir, stackshot::kDirectionMax);
+  const json* shutters = f.Array("shutters", kRequired);
+  const json* axes = f.Array("axes", kRequired);
+  if (f.failed() || shutters->size() != c.shutters.size() || axes->size() != c.axes.size()) {
+    return std::nullopt;
+  }
   for (size_t i = 0; i < c.shutters.size(); ++i) {
-    const json& s = (*sh)[i];
+    JsonFields s = f.Item("shutters", i);
     Shutter& o = c.shutters[i];
-    if (!s.is_object() || !Take(s, "num_pulses", o.num_pulses)) return std::nullopt;
-    for (const char* key : {"pulse_time_s", "off_time_s"}) {
-      const auto it = s.find(key);
-      if (it == s.end() || !it->is_array() || it->size() != 2) return std::nullopt;
-      auto& dst = std::string_view(key) == "pulse_time_s" ? o.pulse_time_s : o.off_time_s;
-      for (size_t k = 0; k < 2; ++k) {
-        if (!(*it)[k].is_number()) return std::nullopt;
-        dst[k] = (*it)[k].get<float>();
-      }
-    }
+    Take(s, "num_pulses", o.num_pulses);
+    TakePair(s, "pulse_time_s", o.pulse_time_s);
+    TakePair(s, "off_time_s", o.off_time_s);
   }
   for (size_t i = 0; i < c.axes.size(); ++i) {
-    const json& a = (*ax)[i];
+    JsonFields a = f.Item("axes", i);
     Axis& o = c.axes[i];
-    ok = a.is_object() && Take(a, "torque", o.torque) &&
-         Take(a, "holding_torque", o.holding_torque) &&
-         Take(a, "speed_mm_per_s", o.speed_mm_per_s) &&
-         Take(a, "move_speed_mm_per_s", o.move_speed_mm_per_s) &&
-         Take(a, "ramp_time_s", o.ramp_time_s) &&
-         Take(a, "distance_per_rev_mm", o.distance_per_rev_mm) &&
-         Take(a, "backlash_mm", o.backlash_mm) && Take(a, "reverse", o.reverse) &&
-         Take(a, "rotary_backlash_deg", o.rotary_backlash_deg) &&
-         Take(a, "rotary_ratio", o.rotary_ratio) && Take(a, "rotary_degrees", o.rotary_degrees) &&
-         TakeEnum(a, "shutter", o.shutter, stackshot::kShutterSettingMax) &&
-         Take(a, "num_steps", o.num_steps) && Take(a, "total_distance_mm", o.total_distance_mm) &&
-         Take(a, "distance_per_step_mm", o.distance_per_step_mm);
-    if (!ok || o.distance_per_rev_mm <= 0 || o.speed_mm_per_s <= 0 || o.move_speed_mm_per_s <= 0 ||
+    Take(a, "torque", o.torque);
+    Take(a, "holding_torque", o.holding_torque);
+    Take(a, "speed_mm_per_s", o.speed_mm_per_s);
+    Take(a, "move_speed_mm_per_s", o.move_speed_mm_per_s);
+    Take(a, "ramp_time_s", o.ramp_time_s);
+    Take(a, "distance_per_rev_mm", o.distance_per_rev_mm);
+    Take(a, "backlash_mm", o.backlash_mm);
+    Take(a, "reverse", o.reverse);
+    Take(a, "rotary_backlash_deg", o.rotary_backlash_deg);
+    Take(a, "rotary_ratio", o.rotary_ratio);
+    Take(a, "rotary_degrees", o.rotary_degrees);
+    TakeEnum(a, "shutter", o.shutter, stackshot::kShutterSettingMax);
+    Take(a, "num_steps", o.num_steps);
+    Take(a, "total_distance_mm", o.total_distance_mm);
+    Take(a, "distance_per_step_mm", o.distance_per_step_mm);
+    if (o.distance_per_rev_mm <= 0 || o.speed_mm_per_s <= 0 || o.move_speed_mm_per_s <= 0 ||
         o.ramp_time_s < 0) {
       return std::nullopt;
     }
   }
+  if (f.failed()) return std::nullopt;
   return c;
 }
 
