@@ -1,6 +1,8 @@
 // mococheck reports (see report.h).
 #include "conformance/core/report.h"
 
+#include "base/format.h"
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -11,14 +13,9 @@
 namespace moco::conformance {
 namespace {
 
-std::string Ms(TimeNs ns) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f ms", static_cast<double>(ns) / 1e6);
-  return buf;
-}
-
 std::string EvidenceText(const Evidence& e) {
-  std::string s = "expected: " + e.expected + "\nobserved: " + e.observed + "\nat: " + Ms(e.t_ns);
+  std::string s =
+      "expected: " + e.expected + "\nobserved: " + e.observed + "\nat: " + base::Ms(e.t_ns, 3);
   if (!e.hex.empty()) s += "\nbytes: " + e.hex;
   return s;
 }
@@ -65,7 +62,8 @@ std::string ConsoleCase(const CaseResult& c, bool verbose) {
                                     : "  ok    ") +
          full + "  (" + std::to_string(passed) + " rules passed" +
          (failed ? ", " + std::to_string(failed) + " failed" : "") +
-         (noted ? ", " + std::to_string(noted) + " noted" : "") + "; " + Ms(c.target_ns) + ")\n";
+         (noted ? ", " + std::to_string(noted) + " noted" : "") + "; " + base::Ms(c.target_ns, 3) +
+         ")\n";
     for (const auto& [id, o] : c.outcomes) {
       if (o.status == Status::kPass) {
         if (verbose) s += "        pass " + id + "\n";

@@ -6,6 +6,8 @@
 // time tolerance.
 #include "conformance/fuzz/replay.h"
 
+#include "base/format.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -27,12 +29,6 @@ std::string Describe(Protocol protocol, const wire::Bytes& bytes) {
   for (const auto& l : d.Finish()) s += (s.empty() ? "" : "; ") + l.text;
   if (s.empty()) s = wire::ToHex(bytes);
   return s;
-}
-
-std::string Ms(TimeNs t) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f ms", static_cast<double>(t) / 1e6);
-  return buf;
 }
 
 // Whether two DFMoco lines differ only in numbers within `tol` (positions).
@@ -245,7 +241,7 @@ ReplayResult Replay(const session::Session& session, Protocol protocol, Target& 
     const TimeNs dt = observed[i].t_ns - expected[i].t_ns;
     if (same && (dt > time_tol || dt < -time_tol)) {
       same = false;
-      why = "arrived " + Ms(dt) + " from the recorded time (tolerance " +
+      why = "arrived " + base::Ms(dt, 3) + " from the recorded time (tolerance " +
             std::to_string(result.time_tolerance_ms) + " ms)";
     }
     if (same) {
@@ -268,14 +264,14 @@ std::string ReplayText(const ReplayResult& r) {
        (r.from_power_on ? "" : "; boot messages not expected (target already running)") + "\n";
   for (const ReplayDifference& d : r.differences) {
     s += "  #" + std::to_string(d.index) + ": " + d.why + "\n";
-    s +=
-        "    recorded: " +
-        (d.expected_t_ns < 0 ? std::string("(nothing)") : Ms(d.expected_t_ns) + "  " + d.expected) +
-        "\n";
-    s +=
-        "    observed: " +
-        (d.observed_t_ns < 0 ? std::string("(nothing)") : Ms(d.observed_t_ns) + "  " + d.observed) +
-        "\n";
+    s += "    recorded: " +
+         (d.expected_t_ns < 0 ? std::string("(nothing)")
+                              : base::Ms(d.expected_t_ns, 3) + "  " + d.expected) +
+         "\n";
+    s += "    observed: " +
+         (d.observed_t_ns < 0 ? std::string("(nothing)")
+                              : base::Ms(d.observed_t_ns, 3) + "  " + d.observed) +
+         "\n";
   }
   s += r.ok() ? "result: MATCH\n" : "result: DIFFERENT\n";
   return s;

@@ -2,6 +2,8 @@
 // name the field and the fix, the canonical JSON form, and reply lines.
 #include "control/command_codec.h"
 
+#include "base/format.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -115,14 +117,6 @@ std::string Shown(const json& v) {
   if (s.size() > 40) s = s.substr(0, 37) + "...";
   return s;
 }
-namespace {
-
-std::string Hex32(uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%08x", v);
-  return buf;
-}
-}  // namespace
 
 std::string_view InputName(sim::SwitchInput in) {
   return in == sim::SwitchInput::kHigh ? "high" : "low";
@@ -435,7 +429,7 @@ json ToJson(const Command& command) {
                      j["bit"] = *c.bit;
                      j["level"] = c.level;
                    } else {
-                     j["bits"] = Hex32(c.bits);
+                     j["bits"] = base::Hex(c.bits, 8);
                    }
                  },
                  [&](const PowerCycleCommand& c) { j["off_ms"] = c.off_ms; },

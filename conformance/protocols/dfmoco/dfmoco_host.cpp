@@ -3,6 +3,8 @@
 // 1-5; FACTS "DFMoco").
 #include "conformance/protocols/dfmoco/dfmoco_host.h"
 
+#include "base/format.h"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -13,11 +15,7 @@ namespace {
 
 using dfmoco::DeviceReply;
 
-std::string Ms(TimeNs ns) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f ms", static_cast<double>(ns) / 1e6);
-  return buf;
-}
+using base::Ms;
 
 std::string Quote(std::string_view s) {
   std::string out = "\"";

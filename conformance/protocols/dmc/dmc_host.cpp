@@ -3,6 +3,8 @@
 // "MSG_MOTOR_STATUS", "MSG_MOTOR_GET_POSITION"; ERRATA 1.1-1.6, 1.9).
 #include "conformance/protocols/dmc/dmc_host.h"
 
+#include "base/format.h"
+
 #include <algorithm>
 
 namespace moco::conformance {
@@ -86,17 +88,7 @@ std::pair<std::string_view, std::string_view> DeadlineRule(uint16_t type) {
   return {"DMC-DL-003", "command"};
 }
 
-std::string Hex16(uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%04x", v);
-  return buf;
-}
-
-std::string Ms(TimeNs ns) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f ms", static_cast<double>(ns) / 1e6);
-  return buf;
-}
+using base::Ms;
 
 }  // namespace
 
@@ -217,7 +209,7 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
   auto decoded = dmc::DecodeDeviceMessage(f.type, f.data);
   if (decoded.ok()) rec.msg = decoded.value();
   verdicts_.Check("DMC-FRAME-004", dmc::HasReferenceParserType(f.type),
-                  [&] { return Ev(rec, "Type within 0x83FF", "Type " + Hex16(f.type)); });
+                  [&] { return Ev(rec, "Type within 0x83FF", "Type " + base::Hex(f.type, 4)); });
   verdicts_.Check("DMC-FRAME-005", decoded.ok(), [&] {
     return Ev(rec, "data fitting the layout of " + dmc::TypeName(f.type),
               wire::Describe(decoded.error()));
@@ -277,9 +269,10 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
   const uint16_t plain = static_cast<uint16_t>(rec.type & ~dmc::kFlagAck);
   const bool is_ack = (rec.type & dmc::kFlagAck) != 0;
   verdicts_.Check("DMC-ACK-004", plain == req.type, [&] {
-    return Ev(rec,
-              dmc::TypeName(req.type) + " or its ACK (" + Hex16(req.type | dmc::kFlagAck) + ")",
-              dmc::TypeName(rec.type));
+    return Ev(
+        rec,
+        dmc::TypeName(req.type) + " or its ACK (" + base::Hex(req.type | dmc::kFlagAck, 4) + ")",
+        dmc::TypeName(rec.type));
   });
   if (plain != req.type) return;
   const TimeNs latency = rec.t_ns - req.sent_ns;
@@ -303,7 +296,7 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
     const std::optional<uint32_t> code = AckCodeOf(&rec);
     if (!code) return;
     verdicts_.Check("DMC-ACK-007", IsKnownCode(*code),
-                    [&] { return Ev(rec, "a listed response code", Hex16(*code)); });
+                    [&] { return Ev(rec, "a listed response code", base::Hex(*code, 4)); });
     if (HasSpecificResponse(req.type)) {
       verdicts_.Check("DMC-ACK-008", *code != ToWire(AckCode::kOk), [&] {
         return Ev(rec, "the specific " + dmc::TypeName(req.type) + " response", "ACK OK");
@@ -358,7 +351,7 @@ void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
             hi_->motor_count >= 32 ? 0xffffffffu : ((1u << hi_->motor_count) - 1u);
         verdicts_.Check("DMC-STAT-002", (st->moving_bits & ~allowed) == 0, [&] {
           return Ev(rec, "bits only for motors 1-" + std::to_string(hi_->motor_count),
-                    "moving bits " + Hex16(st->moving_bits));
+                    "moving bits " + base::Hex(st->moving_bits, 4));
         });
       }
       verdicts_.Check("DMC-STAT-003", st->dmx_adjusting <= 1, [&] {
@@ -385,7 +378,7 @@ void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
             hi_->gio_in_count >= 32 ? 0xffffffffu : ((1u << hi_->gio_in_count) - 1u);
         verdicts_.Check("DMC-GIO-002", (g->triggers & ~allowed) == 0, [&] {
           return Ev(rec, "bits only for inputs 1-" + std::to_string(hi_->gio_in_count),
-                    Hex16(g->triggers));
+                    base::Hex(g->triggers, 4));
         });
       }
       break;
@@ -472,20 +465,21 @@ void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
     return Ev(rec, "UTF-8 name, \\0 to the end of the 32 bytes",
               !utf8 ? "not UTF-8" : "bytes after the first \\0 are not \\0");
   });
-  verdicts_.Check("DMC-HI-013", (hi.capabilities & ~0x07ffu) == 0,
-                  [&] { return Ev(rec, "capabilities within 0x07FF", Hex16(hi.capabilities)); });
+  verdicts_.Check("DMC-HI-013", (hi.capabilities & ~0x07ffu) == 0, [&] {
+    return Ev(rec, "capabilities within 0x07FF", base::Hex(hi.capabilities, 4));
+  });
   if ((hi.capabilities & dmc::kCapRealTime) != 0) {
     verdicts_.Check("DMC-HI-014", hi.upload_frame_count > 0,
                     [&] { return Ev(rec, "UPLOAD FRAME COUNT > 0", "0"); });
   }
   const uint32_t needs_rt =
       dmc::kCapGoMotion | dmc::kCapGoMotion2 | dmc::kCapRtLooping | dmc::kCapRtCameraTrigger;
-  verdicts_.Check("DMC-HI-015",
-                  (hi.capabilities & needs_rt) == 0 || (hi.capabilities & dmc::kCapRealTime) != 0,
-                  [&] {
-                    return Ev(rec, "real-time (0x0001) with " + Hex16(hi.capabilities & needs_rt),
-                              "capabilities " + Hex16(hi.capabilities));
-                  });
+  verdicts_.Check(
+      "DMC-HI-015", (hi.capabilities & needs_rt) == 0 || (hi.capabilities & dmc::kCapRealTime) != 0,
+      [&] {
+        return Ev(rec, "real-time (0x0001) with " + base::Hex(hi.capabilities & needs_rt, 4),
+                  "capabilities " + base::Hex(hi.capabilities, 4));
+      });
   if (hi_ && rec.request >= 0) {
     dmc::HiResponse a = *hi_, b = hi;
     verdicts_.Check("DMC-HI-012", a == b,

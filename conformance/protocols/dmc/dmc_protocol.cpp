@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "base/format.h"
 #include "wire/dmc_frame.h"
 
 namespace moco::conformance {
@@ -54,8 +55,7 @@ std::optional<dmc::HiResponse> DmcProtocol::Discover(DmcHost& probe) {
 }
 
 void DmcProtocol::Describe(const dmc::HiResponse& h, RunReport& report) {
-  char caps[16];
-  std::snprintf(caps, sizeof caps, "0x%04x", h.capabilities);
+  const std::string caps = base::Hex(h.capabilities, 4);
   const std::string fw = std::to_string(h.fw_major) + "." + std::to_string(h.fw_minor) + "." +
                          std::to_string(h.fw_rev);
   report.device = "\"" + h.NameText() + "\" fw " + fw + ", " + std::to_string(h.motor_count) +

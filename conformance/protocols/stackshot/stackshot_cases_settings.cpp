@@ -7,6 +7,7 @@
 #include <initializer_list>
 #include <limits>
 
+#include "base/format.h"
 #include "conformance/protocols/stackshot/stackshot_cases_internal.h"
 #include "devices/stackshot3x/stackshot3x.h"
 
@@ -245,12 +246,7 @@ std::optional<uint32_t> ReadSerial(SsHost& h) {
   return v->value;
 }
 
-std::string Hex32(std::optional<uint32_t> v) {
-  if (!v) return "no value";
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%08x", *v);
-  return buf;
-}
+std::string Hex32(std::optional<uint32_t> v) { return v ? base::Hex(*v, 8) : "no value"; }
 
 void NvmRegistersCase(SsCaseContext& c) {
   SsHost& h = c.host;

@@ -3,6 +3,8 @@
 // 1-4, 10; FACTS "StackShot" checksums and host timeouts).
 #include "conformance/protocols/stackshot/stackshot_host.h"
 
+#include "base/format.h"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -16,17 +18,7 @@ using stackshot::Command;
 constexpr ChecksumAlgorithm kAlgorithms[] = {
     ChecksumAlgorithm::kNegatedSum, ChecksumAlgorithm::kConstant69, ChecksumAlgorithm::kConstant00};
 
-std::string Ms(TimeNs ns) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f ms", static_cast<double>(ns) / 1e6);
-  return buf;
-}
-
-std::string Hex8(unsigned v) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "0x%02x", v);
-  return buf;
-}
+using base::Ms;
 
 // Commands the spec names without a layout (NAND, NOR, WIFI, WAD): any answer
 // is theirs to give.
@@ -161,8 +153,9 @@ void SsHost::OnPacket(const stackshot::DecodedPacket& d) {
       [&] { return Ev(r, "a response code (2-8) in the low nibble", ActionText(status)); });
   if (const auto* st = PayloadOf<stackshot::RailStatus>(&r);
       st != nullptr && r.packet.command == stackshot::Id(Command::kRailStatus)) {
-    verdicts_.Check("SS-STATUS-001", (st->bits & ~0x07u) == 0,
-                    [&] { return Ev(r, "status bits within 0x07", "status " + Hex8(st->bits)); });
+    verdicts_.Check("SS-STATUS-001", (st->bits & ~0x07u) == 0, [&] {
+      return Ev(r, "status bits within 0x07", "status " + base::Hex(st->bits, 2));
+    });
   }
   if (r.request < 0) {
     verdicts_.Fail("SS-ANS-002", Ev(r, "no packet without a request waiting for it",
@@ -181,11 +174,12 @@ void SsHost::CheckChecksum(const SsRecord& rec) {
     if (stackshot::ChecksumMatches(rec.packet, a)) matching.insert(a);
   }
   verdicts_.Check("SS-CSUM-001", matching.count(ChecksumAlgorithm::kNegatedSum) != 0, [&] {
-    return Ev(rec,
-              "checksum " +
-                  Hex8(stackshot::ComputeChecksum(ChecksumAlgorithm::kNegatedSum, rec.packet)) +
-                  " (negated sum)",
-              "checksum " + Hex8(rec.packet.checksum));
+    return Ev(
+        rec,
+        "checksum " +
+            base::Hex(stackshot::ComputeChecksum(ChecksumAlgorithm::kNegatedSum, rec.packet), 2) +
+            " (negated sum)",
+        "checksum " + base::Hex(rec.packet.checksum, 2));
   });
   std::set<ChecksumAlgorithm> both;
   for (ChecksumAlgorithm a : matching) {
@@ -198,7 +192,7 @@ void SsHost::CheckChecksum(const SsRecord& rec) {
       algos += (algos.empty() ? "" : " or ") + std::string(stackshot::ChecksumAlgorithmName(a));
     }
     return Ev(rec, "a checksum by " + algos + " as in the packets before",
-              "checksum " + Hex8(rec.packet.checksum));
+              "checksum " + base::Hex(rec.packet.checksum, 2));
   });
   // After a mismatch, judge the following packets on their own again.
   consistent_ =
@@ -305,7 +299,7 @@ void SsHost::CheckReply(const SsRequest& req, const SsRecord& rec) {
       const auto* pong = PayloadOf<stackshot::PingReply>(&rec);
       const stackshot::PingReply want = stackshot::PingAnswer(ping->value);
       verdicts_.Check("SS-PING-001", pong != nullptr && *pong == want, [&] {
-        return Ev(rec, "ping reply " + Hex8(want.value) + " 00", Show(&rec));
+        return Ev(rec, "ping reply " + base::Hex(want.value, 2) + " 00", Show(&rec));
       });
     }
   } else {

@@ -1,20 +1,14 @@
 // StackShot 3X for the runner (see stackshot_protocol.h).
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
 
+#include "base/format.h"
+
 #include <cstdio>
 #include <string>
 #include <utility>
 
 namespace moco::conformance {
-namespace {
-
-std::string Hex32(uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%08x", v);
-  return buf;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 std::optional<SsDeviceInfo> StackshotProtocol::Discover(SsHost& probe) {
   SsDeviceInfo d = DiscoverStackshot(probe);
@@ -34,7 +28,7 @@ void StackshotProtocol::Describe(const SsDeviceInfo& d, RunReport& report) {
   for (const auto& [key, value] : ids) {
     if (!value) continue;
     report.device_info[key] = *value;
-    report.device += std::string(", ") + key + " " + Hex32(*value);
+    report.device += std::string(", ") + key + " " + base::Hex(*value, 8);
   }
   report.device += d.three_axes ? ", axes X Y Z" : ", one axis";
 }
