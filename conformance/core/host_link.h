@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "conformance/core/verdicts.h"
 #include "conformance/targets/target.h"
 #include "wire/bytes.h"
 
@@ -92,6 +93,35 @@ class HostLink {
   std::function<void(wire::ByteView)> on_bytes_;
   std::vector<Chunk> traffic_;
   bool lost_ = false;
+};
+
+// What every protocol's host is made of (DmcHost, DfmHost, SsHost): its link
+// to the target, the verdicts it judges into and the timing options of the
+// checks. The host derives from it and hands the link its own byte handler.
+class HostBase {
+ public:
+  HostBase(const HostBase&) = delete;
+  HostBase& operator=(const HostBase&) = delete;
+
+  TimeNs Now() const { return link_.Now(); }
+  bool link_lost() const { return link_.lost(); }
+  const std::vector<Chunk>& traffic() const { return link_.traffic(); }
+  Verdicts& verdicts() { return verdicts_; }
+  const HostOptions& options() const { return options_; }
+  // Reads for `duration_ns`.
+  void Idle(TimeNs duration_ns) { link_.Idle(duration_ns); }
+
+ protected:
+  // `target` and `verdicts` must outlive the host; `on_bytes` gets every byte
+  // the device sends (it is first called after construction).
+  HostBase(Target& target, Verdicts& verdicts, HostOptions options,
+           std::function<void(wire::ByteView)> on_bytes)
+      : link_(target, std::move(on_bytes)), verdicts_(verdicts), options_(std::move(options)) {}
+  ~HostBase() = default;
+
+  HostLink link_;
+  Verdicts& verdicts_;
+  HostOptions options_;
 };
 
 }  // namespace moco::conformance

@@ -8,6 +8,7 @@
 #include <map>
 #include <string_view>
 
+#include "base/format.h"
 #include "conformance/core/report.h"
 #include "conformance/core/transcript.h"
 
@@ -15,12 +16,6 @@ namespace moco::conformance {
 namespace {
 
 std::string Esc(std::string_view s) { return XmlEscape(s); }
-
-std::string Ms(TimeNs ns) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f ms", static_cast<double>(ns) / 1e6);
-  return buf;
-}
 
 std::string Num(double v) {
   char buf[32];
@@ -66,10 +61,10 @@ std::string Plot(const Series& series) {
                   Num(kH) + "\" role=\"img\" aria-label=\"motor positions against time\">\n";
   s += "<rect x=\"" + Num(kL) + "\" y=\"" + Num(kT) + "\" width=\"" + Num(kW - kL - kR) +
        "\" height=\"" + Num(kH - kT - kB) + "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-  s += "<text x=\"" + Num(kL) + "\" y=\"" + Num(kH - 22) + "\" font-size=\"11\">" + Esc(Ms(t0)) +
-       "</text>\n";
+  s += "<text x=\"" + Num(kL) + "\" y=\"" + Num(kH - 22) + "\" font-size=\"11\">" +
+       Esc(base::Ms(t0, 3)) + "</text>\n";
   s += "<text x=\"" + Num(kW - kR) + "\" y=\"" + Num(kH - 22) +
-       "\" font-size=\"11\" text-anchor=\"end\">" + Esc(Ms(t1)) + "</text>\n";
+       "\" font-size=\"11\" text-anchor=\"end\">" + Esc(base::Ms(t1, 3)) + "</text>\n";
   s += "<text x=\"" + Num((kW + kL) / 2) + "\" y=\"" + Num(kH - 6) +
        "\" font-size=\"11\" text-anchor=\"middle\">time on the target's clock</text>\n";
   s += "<text x=\"" + Num(kL - 4) + "\" y=\"" + Num(kT + 10) +
@@ -89,7 +84,7 @@ std::string Plot(const Series& series) {
     for (const auto& [t, p] : v) {
       s += "<circle cx=\"" + Num(x(t)) + "\" cy=\"" + Num(y(p)) + "\" r=\"2\" fill=\"" + color +
            "\"><title>motor " + std::to_string(motor) + " at " + std::to_string(p) + " steps, " +
-           Esc(Ms(t)) + "</title></circle>\n";
+           Esc(base::Ms(t, 3)) + "</title></circle>\n";
     }
     s += "<text x=\"" + Num(kL + 8 + 80.0 * static_cast<double>(k - 1)) + "\" y=\"" + Num(kT + 14) +
          "\" font-size=\"11\" fill=\"" + color + "\">motor " + std::to_string(motor) + " (" +
@@ -190,7 +185,7 @@ std::string HtmlReport(const RunReport& report) {
     const bool case_failed = c.MustFailed();
     s += std::string("<details") + (case_failed ? " open" : "") + "><summary><span class=\"" +
          (case_failed ? "fail\">FAIL" : "pass\">ok") + "</span> " + Esc(full) + " &mdash; " +
-         Esc(c.summary) + " (" + Esc(Ms(c.target_ns)) + ")</summary>\n";
+         Esc(c.summary) + " (" + Esc(base::Ms(c.target_ns, 3)) + ")</summary>\n";
     const std::vector<TrafficLine> lines =
         DecodeTraffic(wire::ParseProtocol(report.protocol).value_or(Protocol::kDmc), c.traffic);
     for (const auto& [id, o] : c.outcomes) {
@@ -206,7 +201,7 @@ std::string HtmlReport(const RunReport& report) {
       for (const Evidence& e : o.evidence) {
         s += "<table><tr><th>expected</th><td>" + Esc(e.expected) +
              "</td></tr><tr><th>observed</th><td>" + Esc(e.observed) +
-             "</td></tr><tr><th>at</th><td>" + Esc(Ms(e.t_ns)) + "</td></tr>";
+             "</td></tr><tr><th>at</th><td>" + Esc(base::Ms(e.t_ns, 3)) + "</td></tr>";
         if (!e.hex.empty()) s += "<tr><th>bytes</th><td><code>" + Esc(e.hex) + "</code></td></tr>";
         s += "</table>\n" + TranscriptAround(lines, e.t_ns);
       }

@@ -111,9 +111,8 @@ std::string Show(const DfmLine* line) {
 }
 
 DfmHost::DfmHost(Target& target, Verdicts& verdicts, HostOptions options)
-    : link_(target, [this](wire::ByteView bytes) { OnBytes(bytes); }),
-      verdicts_(verdicts),
-      options_(std::move(options)) {}
+    : HostBase(target, verdicts, std::move(options),
+               [this](wire::ByteView bytes) { OnBytes(bytes); }) {}
 
 dfmoco::Dialect DfmHost::dialect() const {
   return hello_ ? dfmoco::DialectFrom(*hello_, false) : dfmoco::Dfmoco2(4);
@@ -505,8 +504,6 @@ int DfmHost::WaitFor(size_t from, TimeNs timeout_ns,
                      const std::function<bool(const DfmLine&)>& pred) {
   return link_.WaitFor(lines_, from, timeout_ns, pred);
 }
-
-void DfmHost::Idle(TimeNs duration_ns) { link_.Idle(duration_ns); }
 
 void DfmHost::Close() {
   if (closed_) return;

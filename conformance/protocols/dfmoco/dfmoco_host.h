@@ -51,7 +51,7 @@ struct DfmCommand {
   int answers = 0;
 };
 
-class DfmHost {
+class DfmHost : public HostBase {
  public:
   // `target` and `verdicts` must outlive the host. The target is open.
   DfmHost(Target& target, Verdicts& verdicts, HostOptions options);
@@ -78,20 +78,13 @@ class DfmHost {
   // Reads until a line with index >= `from` satisfies `pred` or `timeout_ns`
   // passes; returns its index or -1.
   int WaitFor(size_t from, TimeNs timeout_ns, const std::function<bool(const DfmLine&)>& pred);
-  // Reads for `duration_ns`.
-  void Idle(TimeNs duration_ns);
   // Ends the case: listens for the quiet time and settles the stream rules
   // (an unfinished line fails DFM-LINE-003). Call once.
   void Close();
 
-  TimeNs Now() const { return link_.Now(); }
-  bool link_lost() const { return link_.lost(); }
   // A deque: pointers to lines stay valid while more arrive.
   const std::deque<DfmLine>& lines() const { return lines_; }
   const std::vector<DfmCommand>& commands() const { return commands_; }
-  const std::vector<Chunk>& traffic() const { return link_.traffic(); }
-  Verdicts& verdicts() { return verdicts_; }
-  const HostOptions& options() const { return options_; }
 
   // The last `hi` the device sent (answer or unprompted), if any.
   const std::optional<dfmoco::HelloReply>& hello() const { return hello_; }
@@ -113,9 +106,6 @@ class DfmHost {
   void CheckHello(const DfmLine& line, const dfmoco::HelloReply& hello);
   Evidence Ev(const DfmLine& line, std::string expected, std::string observed) const;
 
-  HostLink link_;
-  Verdicts& verdicts_;
-  HostOptions options_;
   std::deque<DfmLine> lines_;
   std::vector<DfmCommand> commands_;
   std::optional<dfmoco::HelloReply> hello_;

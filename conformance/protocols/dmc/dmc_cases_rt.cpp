@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "base/format.h"
 #include "conformance/protocols/dmc/dmc_cases_internal.h"
 
 namespace moco::conformance::dmc_cases {
@@ -255,8 +256,7 @@ void VirtConfigForms(DmcCaseContext& c) {
   DmcHost& h = c.host;
   constexpr uint32_t kModes = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
                               dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
-  char caps[16];
-  std::snprintf(caps, sizeof caps, "0x%04x", c.device.capabilities);
+  const std::string caps = base::Hex(c.device.capabilities, 4);
   Expect(c, "DMC-VIRT-011", (c.device.capabilities & kModes) == kModes,
          "capabilities with 0x003c all set", caps);
   if ((c.device.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && c.device.motor_count >= 6) {

@@ -104,9 +104,8 @@ std::string Show(const DeviceRecord* rec) {
 }
 
 DmcHost::DmcHost(Target& target, Verdicts& verdicts, HostOptions options)
-    : link_(target, [this](wire::ByteView bytes) { OnBytes(bytes); }),
-      verdicts_(verdicts),
-      options_(options) {}
+    : HostBase(target, verdicts, std::move(options),
+               [this](wire::ByteView bytes) { OnBytes(bytes); }) {}
 
 Evidence DmcHost::Ev(const DeviceRecord& rec, std::string expected, std::string observed) const {
   return Evidence{std::move(expected), std::move(observed), wire::ToHex(rec.raw), rec.t_ns};
@@ -515,8 +514,6 @@ int DmcHost::WaitFor(size_t from, TimeNs timeout_ns,
                      const std::function<bool(const DeviceRecord&)>& pred) {
   return link_.WaitFor(records_, from, timeout_ns, pred);
 }
-
-void DmcHost::Idle(TimeNs duration_ns) { link_.Idle(duration_ns); }
 
 void DmcHost::Close() {
   if (closed_) return;

@@ -43,7 +43,7 @@ struct Request {
   int answers = 0;
 };
 
-class DmcHost {
+class DmcHost : public HostBase {
  public:
   // The first host ID; device-side IDs of unsolicited messages count from 1,
   // so the two ranges do not meet in a run.
@@ -70,20 +70,13 @@ class DmcHost {
   // Reads until a record with index >= `from` satisfies `pred` or `timeout_ns`
   // passes; returns its index or -1.
   int WaitFor(size_t from, TimeNs timeout_ns, const std::function<bool(const DeviceRecord&)>& pred);
-  // Reads for `duration_ns`.
-  void Idle(TimeNs duration_ns);
   // Ends the case: listens for the quiet time, gives up on any partial device
   // frame, and settles the stream rules. Call once.
   void Close();
 
-  TimeNs Now() const { return link_.Now(); }
-  bool link_lost() const { return link_.lost(); }
   // A deque: pointers to records stay valid while more arrive.
   const std::deque<DeviceRecord>& records() const { return records_; }
   const std::vector<Request>& requests() const { return requests_; }
-  const std::vector<Chunk>& traffic() const { return link_.traffic(); }
-  Verdicts& verdicts() { return verdicts_; }
-  const HostOptions& options() const { return options_; }
 
   // The last HI the device sent (answer or unsolicited), if any.
   const std::optional<dmc::HiResponse>& hi() const { return hi_; }
@@ -100,9 +93,6 @@ class DmcHost {
   void CheckSpecific(const Request& req, const DeviceRecord& rec);
   Evidence Ev(const DeviceRecord& rec, std::string expected, std::string observed) const;
 
-  HostLink link_;
-  Verdicts& verdicts_;
-  HostOptions options_;
   dmc::FrameDecoder decoder_;
   wire::Bytes history_;  // the device stream (for the bytes of bad frames)
   std::deque<DeviceRecord> records_;

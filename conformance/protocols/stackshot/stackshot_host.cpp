@@ -63,9 +63,8 @@ std::string Show(const SsRecord* rec) {
 }
 
 SsHost::SsHost(Target& target, Verdicts& verdicts, HostOptions options, ChecksumAlgorithm checksum)
-    : link_(target, [this](wire::ByteView bytes) { OnBytes(bytes); }),
-      verdicts_(verdicts),
-      options_(std::move(options)),
+    : HostBase(target, verdicts, std::move(options),
+               [this](wire::ByteView bytes) { OnBytes(bytes); }),
       checksum_(checksum),
       decoder_(/*from_device=*/true, ChecksumAlgorithm::kNegatedSum),
       consistent_(std::begin(kAlgorithms), std::end(kAlgorithms)) {}
@@ -330,8 +329,6 @@ const SsRecord* SsHost::Await(int index) {
   verdicts_.Pass("SS-ANS-001");
   return &records_[static_cast<size_t>(requests_[i].answer)];
 }
-
-void SsHost::Idle(TimeNs duration_ns) { link_.Idle(duration_ns); }
 
 void SsHost::Close() {
   if (closed_) return;

@@ -48,7 +48,7 @@ struct SsRecord {
   int request = -1;                             // the request it answers; -1: none
 };
 
-class SsHost {
+class SsHost : public HostBase {
  public:
   // `target` and `verdicts` must outlive the host. The target is open.
   // `checksum`: what the host puts in its checksum bytes.
@@ -69,20 +69,13 @@ class SsHost {
   const SsRecord* Await(int index);
   const SsRecord* Call(const stackshot::HostCommand& c) { return Await(Send(c)); }
 
-  // Reads for `duration_ns`.
-  void Idle(TimeNs duration_ns);
   // Ends the case: listens for the quiet time, judges a partial device packet
   // (SS-PKT-002) and the checksum family. Call once.
   void Close();
 
-  TimeNs Now() const { return link_.Now(); }
-  bool link_lost() const { return link_.lost(); }
   // A deque: pointers to records stay valid while more arrive.
   const std::deque<SsRecord>& records() const { return records_; }
   const std::vector<SsRequest>& requests() const { return requests_; }
-  const std::vector<Chunk>& traffic() const { return link_.traffic(); }
-  Verdicts& verdicts() { return verdicts_; }
-  const HostOptions& options() const { return options_; }
   stackshot::ChecksumAlgorithm checksum() const { return checksum_; }
   void set_checksum(stackshot::ChecksumAlgorithm c) { checksum_ = c; }
 
@@ -94,9 +87,6 @@ class SsHost {
   void CheckChecksum(const SsRecord& rec);
   Evidence Ev(const SsRecord& rec, std::string expected, std::string observed) const;
 
-  HostLink link_;
-  Verdicts& verdicts_;
-  HostOptions options_;
   stackshot::ChecksumAlgorithm checksum_;
   stackshot::PacketDecoder decoder_;
   std::vector<stackshot::DecodedPacket> scratch_;
