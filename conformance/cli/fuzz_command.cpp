@@ -98,10 +98,8 @@ Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub) {
   CLI::App* fuzz = app.add_subcommand(
       "fuzz", "Mutate recorded host traffic and check device invariants (in-process targets)");
   sub = fuzz;
-  fuzz->add_option("sessions", a->sessions, "Session files to mutate (same protocol)")
-      ->required();
-  fuzz->add_option("--target", a->target,
-                   "in-process:MODEL (default: the first session's device)");
+  fuzz->add_option("sessions", a->sessions, "Session files to mutate (same protocol)")->required();
+  fuzz->add_option("--target", a->target, "in-process:MODEL (default: the first session's device)");
   fuzz->add_option("--profile", a->profile, "Device profile for the in-process device")
       ->check(CLI::ExistingFile);
   AddNumber(fuzz, "--seed", a->seed, uint64_t{0}, UINT64_MAX, "Seed of the mutator");

@@ -59,18 +59,17 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
   if (request.protocol) {
     out.protocol = *request.protocol;
     if (model != nullptr && model->protocol != out.protocol) {
-      return "in-process:" + ts.address + " does not speak " + request.traffic_name +
-             " protocol " + std::string(ProtocolName(out.protocol));
+      return "in-process:" + ts.address + " does not speak " + request.traffic_name + " protocol " +
+             std::string(ProtocolName(out.protocol));
     }
   } else if (!request.protocol_option.empty()) {
     const auto p = wire::ParseProtocolOrAlias(request.protocol_option);
     if (!p) {
-      return "--protocol " + request.protocol_option + ": give " +
-             wire::NameList(kAllProtocols);
+      return "--protocol " + request.protocol_option + ": give " + wire::NameList(kAllProtocols);
     }
     if (model != nullptr && model->protocol != *p) {
-      return "--protocol " + request.protocol_option + " does not match in-process:" +
-             ts.address + ", which speaks " + std::string(ProtocolName(model->protocol)) +
+      return "--protocol " + request.protocol_option + " does not match in-process:" + ts.address +
+             ", which speaks " + std::string(ProtocolName(model->protocol)) +
              "; drop --protocol or pick the matching model";
     }
     out.protocol = *p;

@@ -12,9 +12,9 @@
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
-#include "session/session.h"
 #include "devices/faulty_sink.h"
 #include "devices/registry.h"
+#include "session/session.h"
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"
@@ -63,7 +63,8 @@ TEST(SplitHostStream, RecordedDmcSessionIsWholeFramesThatDecode) {
 
 TEST(SplitHostStream, DfmocoLinesKeepTheirLineEnds) {
   const std::string text = "hi\r\nmm 1 200\r\nms";
-  const Messages m = wire::SplitMessages(Protocol::kDfmoco, wire::Side::kHost, wire::Bytes(text.begin(), text.end()));
+  const Messages m = wire::SplitMessages(Protocol::kDfmoco, wire::Side::kHost,
+                                         wire::Bytes(text.begin(), text.end()));
   ASSERT_EQ(m.size(), 3u);
   EXPECT_EQ(std::string(m[1].begin(), m[1].end()), "mm 1 200\r\n");
   EXPECT_EQ(std::string(m[2].begin(), m[2].end()), "ms");  // unterminated, kept

@@ -35,7 +35,8 @@ bool DmcParts(const wire::Bytes& m, uint32_t& id, uint16_t& type, wire::Bytes& d
   type = h->type;
   const size_t have = m.size() - dmc::kHeaderSize;
   // Data runs to the declared length, or to what is there before the check bytes.
-  const size_t n = std::min<size_t>(h->length, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0);
+  const size_t n =
+      std::min<size_t>(h->length, have >= dmc::kCheckSize ? have - dmc::kCheckSize : 0);
   data.assign(m.begin() + dmc::kHeaderSize,
               m.begin() + static_cast<ptrdiff_t>(dmc::kHeaderSize + n));
   return true;

@@ -1,10 +1,10 @@
 // libFuzzer entry over the session mutator and the fuzz executor (see
 // mutator.h, executor.h), for ClusterFuzzLite / OSS-Fuzz: an input is a host
 // byte stream of one protocol (MOCO_FUZZ_PROTOCOL: its name in the wire
-// protocol table, "dmc", "dfmoco" or "stackshot"), cut into messages and played against a fresh in-process
-// device; a broken invariant aborts with its description. The custom
-// mutator is the structure-aware one `mococheck fuzz` uses, so mutants keep
-// valid lengths and checksums and reach the device's message logic.
+// protocol table, "dmc", "dfmoco" or "stackshot"), cut into messages and played against a fresh
+// in-process device; a broken invariant aborts with its description. The custom mutator is the
+// structure-aware one `mococheck fuzz` uses, so mutants keep valid lengths and checksums and reach
+// the device's message logic.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>

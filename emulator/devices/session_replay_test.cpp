@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "devices/registry.h"
-#include "session/session.h"
 #include "devices/test_support.h"
+#include "session/session.h"
 #include "sim/scheduler.h"
 
 namespace moco::devices {

@@ -15,9 +15,9 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
-#include "session/session.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/faulty_sink.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

@@ -11,9 +11,9 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
-#include "session/session.h"
 #include "devices/faulty_sink.h"
 #include "devices/registry.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {

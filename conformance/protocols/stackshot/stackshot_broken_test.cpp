@@ -10,8 +10,8 @@
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
-#include "session/session.h"
 #include "devices/stackshot3x/stackshot3x.h"
+#include "session/session.h"
 
 namespace moco::conformance {
 namespace {
