@@ -37,6 +37,30 @@ mocosim_cli_sighup_stops_cleanly_like_sigterm)
   done
   ;;
 
+# A SIGTERM sent the moment the PTY link appears (a supervisor stopping a
+# device it just started) is caught, not the default death: exit 0, the link
+# removed, the recording completed. The signal is sent from a tight poll so
+# it lands inside start-up, where the catch must already be in place.
+mocosim_cli_sigterm_during_start_up_stops_cleanly)
+  for round in 1 2 3 4 5 6 7 8; do
+    rm -f rec.jsonl
+    "$sim" dmc16 --pty "$work/dev" --record rec.jsonl >sim.log 2>&1 &
+    p=$!
+    pids="$pids $p"
+    n=0
+    while ! test -L "$work/dev"; do
+      n=$((n + 1))
+      [ $n -gt 200000 ] && fail "round $round: no PTY link"
+    done
+    kill -TERM "$p"
+    wait "$p"
+    rc=$?
+    [ "$rc" = 0 ] || fail "round $round: exit $rc, not 0 (143 is death by SIGTERM)"
+    test ! -L "$work/dev" || fail "round $round: PTY link left behind"
+    test -s rec.jsonl || fail "round $round: no recording"
+  done
+  ;;
+
 # A log line to a closed pipe does not kill mocosim: after the reader of its
 # stderr is gone it still stops cleanly and completes its recording.
 mocosim_cli_closed_log_pipe_does_not_kill_it)

@@ -149,6 +149,19 @@ struct Emulator::Served {
 Emulator::Emulator(EmulatorConfig config, LogFn log)
     : config_(std::move(config)), log_(std::move(log)), driver_(io_, scheduler_) {
   if (!log_) log_ = LogToStderr;
+  // SIGHUP (the terminal closed) stops as cleanly as SIGINT and SIGTERM:
+  // recordings completed, symlinks and the control socket removed. Caught
+  // from here on, before any PTY link exists or a line is logged, so a
+  // signal sent as soon as the device appears is never the default death;
+  // one that arrives before Run() is handled as Run() starts.
+  signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM, SIGHUP);
+  signals_->async_wait([this](const ErrorCode& ec, int sig) {
+    if (ec) return;
+    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                                        : sig == SIGHUP ? "SIGHUP"
+                                                                        : "SIGTERM"));
+    Stop();
+  });
   if (config_.devices.empty()) {
     throw ConfigError("no device to serve; give at least one (e.g. --pty /tmp/dmc16)");
   }
@@ -309,16 +322,6 @@ void Emulator::Start() {
             (s->default_state ? " (the default for this name; --state PATH for another)" : ""));
   }
   driver_.Kick();
-  // SIGHUP (the terminal closed) stops as cleanly as SIGINT and SIGTERM:
-  // recordings completed, symlinks and the control socket removed.
-  signals_ = std::make_unique<asio::signal_set>(io_, SIGINT, SIGTERM, SIGHUP);
-  signals_->async_wait([this](const ErrorCode& ec, int sig) {
-    if (ec) return;
-    Log(LogLevel::kInfo, std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
-                                                        : sig == SIGHUP ? "SIGHUP"
-                                                                        : "SIGTERM"));
-    Stop();
-  });
   if (hooks_.on_started) hooks_.on_started();
 }
 
