@@ -102,7 +102,7 @@ MoveStatus StepperMotor::Jog(int64_t destination_steps, int speed) {
   }
   const MoveStatus status = CheckCanMove(dest);
   if (status != MoveStatus::kOk) return status;
-  const double scale = static_cast<double>(speed) / kJogSpeedMax;
+  const double scale = JogSpeedFraction(speed);
   PlanRequest req;
   req.kind = PlanRequest::Kind::kMoveTo;
   req.target_steps = dest;

@@ -82,6 +82,15 @@ class StepSink {
 inline constexpr int kJogSpeedMin = 1;
 inline constexpr int kJogSpeedMax = 10000;
 
+// The share of the maximum velocity and acceleration a jog at `speed`
+// (kJogSpeedMin..kJogSpeedMax) runs at. dmc-v2-protocol.txt MSG_MOTOR_JOG: "A
+// value in between 1 and 10,000 should provide an appropriate speed between
+// 1% and 100% of the jog speed": 1 (inching) is 1%, 10000 is 100%, linear
+// between.
+constexpr double JogSpeedFraction(int speed) {
+  return 0.01 + 0.99 * static_cast<double>(speed - kJogSpeedMin) / (kJogSpeedMax - kJogSpeedMin);
+}
+
 class StepperMotor {
  public:
   // `scheduler` and `observer` (may be null) must outlive the motor. A null

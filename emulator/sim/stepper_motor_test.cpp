@@ -290,27 +290,44 @@ TEST_F(MotorTest, MoveToCurrentPositionDoesNotMove) {
   EXPECT_TRUE(rec_.finished.empty());
 }
 
-TEST_F(MotorTest, JogScalesVelocityAndAccelerationBySpeedOver10000) {
+TEST(JogSpeed, OneToTenThousandIsOnePercentToAllOfTheJogSpeed) {
+  // dmc-v2-protocol.txt MSG_MOTOR_JOG: "A value in between 1 and 10,000
+  // should provide an appropriate speed between 1% and 100% of the jog speed."
+  EXPECT_DOUBLE_EQ(JogSpeedFraction(1), 0.01);
+  EXPECT_DOUBLE_EQ(JogSpeedFraction(10000), 1.0);
+  EXPECT_NEAR(JogSpeedFraction(5000), 0.01 + 0.99 * 4999.0 / 9999.0, 1e-15);
+  for (int s = kJogSpeedMin; s < kJogSpeedMax; ++s) {
+    ASSERT_LT(JogSpeedFraction(s), JogSpeedFraction(s + 1)) << s;
+  }
+}
+
+TEST_F(MotorTest, JogRunsAtItsShareOfTheMaximaAndBrakesAtTheFullDeceleration) {
   motor_.SetProfile(Profile(1000, 500));
   EXPECT_EQ(motor_.Jog(10, 0), MoveStatus::kBadArgument);
   EXPECT_EQ(motor_.Jog(10, 10001), MoveStatus::kBadArgument);
   ASSERT_EQ(motor_.Jog(5000, 10000), MoveStatus::kOk);
   sched_.RunUntilIdle();
   EXPECT_NEAR(static_cast<double>(sched_.Now()), 7e9, 1);  // same as MoveTo
-  // Half speed: v = 500, a = 250 up: 2 s (500 steps); braking at the full
-  // 500: 1 s (250 steps); 4250 steps cruise = 8.5 s; total 11.5 s.
+  // Speed 5000: f = 0.01 + 0.99 * 4999 / 9999 of v = 1000 and a = 500. Up to
+  // v f at a f takes 2 s (v f steps); braking at the full 500 takes v f / 500 s
+  // ((v f)^2 / 1000 steps); the rest of the 5000 steps is cruise.
+  const double vf = 1000 * JogSpeedFraction(5000);
+  const double up_steps = vf;  // (v f)^2 / (2 a f) with a f = v f / 2
+  const double brake_steps = vf * vf / 1000;
+  const double want_s = 2 + (5000 - up_steps - brake_steps) / vf + vf / 500;
   const TimeNs t0 = sched_.Now();
   ASSERT_EQ(motor_.Jog(0, 5000), MoveStatus::kOk);
   sched_.RunUntilIdle();
-  EXPECT_NEAR(static_cast<double>(sched_.Now() - t0), 11.5e9, 2);
+  EXPECT_NEAR(static_cast<double>(sched_.Now() - t0), want_s * 1e9, 1e3);
   EXPECT_EQ(motor_.Position(), 0);
-  // Speed 1: inching at 1/10000 of the maxima: 0.1 step/s, 0.05 step/s^2:
-  // 0.1 step in the 2 s ramp, then 0.4 step at 0.1 step/s: the edge at 6 s.
+  // Speed 1 (inching): 1% of the maxima, 10 step/s and 5 step/s^2. One step
+  // never reaches 10 step/s: the step's edge comes at half a step, after
+  // sqrt(2 * 0.5 / 5) = 0.447 s of the ramp.
   ASSERT_EQ(motor_.Jog(1, 1), MoveStatus::kOk);
   const TimeNs t1 = sched_.Now();
-  sched_.RunUntil(t1 + 5'999'000'000);
+  sched_.RunUntil(t1 + 440'000'000);
   EXPECT_EQ(motor_.Position(), 0);
-  sched_.RunUntil(t1 + 6'001'000'000);
+  sched_.RunUntil(t1 + 455'000'000);
   EXPECT_EQ(motor_.Position(), 1);
   sched_.RunUntilIdle();
   EXPECT_EQ(motor_.Position(), 1);

@@ -367,7 +367,7 @@ AckCode VirtualAxes::Jog(const dmc::VirtJog& m) {
   w[m.axis - 1u] = m.destination_x100000 / kPositionScale;
   const auto targets = Solve(w);
   if (const auto* e = std::get_if<AckCode>(&targets)) return *e;
-  return MoveMotors(std::get<0>(targets), static_cast<double>(m.speed) / dmc::kJogSpeedMax);
+  return MoveMotors(std::get<0>(targets), sim::JogSpeedFraction(m.speed));
 }
 
 AckCode VirtualAxes::Stop(const dmc::VirtStop& m) {
@@ -392,7 +392,9 @@ AckCode VirtualAxes::JogOnLine(const dmc::VirtJogOnLine& m) {
   }
   const auto cam = physics::Camera(config_->geometry, Joints(false));
   if (!cam) return AckCode::kErrNotInPosition;
-  const double fraction = static_cast<double>(m.speed) / dmc::kJogSpeedMax;
+  // The same 1%..100% as MSG_MOTOR_JOG, with the sign giving the direction.
+  const double fraction =
+      m.speed < 0 ? -sim::JogSpeedFraction(-m.speed) : sim::JogSpeedFraction(m.speed);
   jog_ = {};
   jog_.axis = m.axis;
   // Camera-local Kuper axes: X right, Y up, Z out of the back of the camera
