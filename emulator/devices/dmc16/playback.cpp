@@ -153,6 +153,27 @@ bool Playback::OnFramePosition(uint32_t frame) const {
   return true;
 }
 
+std::optional<uint32_t> Playback::FrameTheRigIsOn(uint32_t toward) const {
+  if (on_frame_ && OnFramePosition(*on_frame_)) return on_frame_;
+  // The frame the rig last reached is gone (a new upload, a motor moved by
+  // another command): the rig is still on a frame when every motor of the
+  // move rests on that frame's uploaded position. Of several such frames (a
+  // hold), the one nearest `toward`.
+  if (!upload_.complete() || rig_.AnyMoving()) return std::nullopt;
+  std::optional<uint32_t> best;
+  uint64_t best_distance = 0;
+  for (uint32_t f = upload_.start_frame(); f <= upload_.end_frame(); ++f) {
+    if (!OnFramePosition(f)) continue;
+    const uint64_t d = f > toward ? f - toward : toward - f;
+    if (!best || d < best_distance) {
+      best = f;
+      best_distance = d;
+    }
+    if (f == upload_.end_frame()) break;  // end_frame may be the largest uint32_t
+  }
+  return best;
+}
+
 void Playback::ApplyFrameOutputs(uint32_t frame) {
   for (int ch : upload_.Channels()) {
     if (ch <= profile_.dmx_channels) dmx_.Set(ch, upload_.Level(ch, frame));
@@ -427,10 +448,12 @@ AckCode Playback::JogAll(const dmc::RtJogAll& m) {
   if (m.fps_x1000 == 0 || !upload_.Contains(m.destination_frame)) return AckCode::kErrRange;
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
   // "The rig must already be on a frame position that is uploaded to the device."
-  if (!on_frame_ || !OnFramePosition(*on_frame_)) return AckCode::kErrNotInPosition;
-  if (*on_frame_ == m.destination_frame) return AckCode::kOk;
-  Pass p = MakePass(*on_frame_, m.destination_frame,
-                    m.fps_x1000 / static_cast<double>(dmc::kFpsScale), 0, 0);
+  const std::optional<uint32_t> from = FrameTheRigIsOn(m.destination_frame);
+  if (!from) return AckCode::kErrNotInPosition;
+  on_frame_ = from;
+  if (*from == m.destination_frame) return AckCode::kOk;
+  Pass p =
+      MakePass(*from, m.destination_frame, m.fps_x1000 / static_cast<double>(dmc::kFpsScale), 0, 0);
   if (AckCode c = CheckPass(p); c != AckCode::kOk) return c;
   run_.reset();
   mode_ = Mode::kIdle;

@@ -155,6 +155,9 @@ class Playback {
   std::vector<int> PlaybackMotors() const;
   // Whether every playback motor rests on its position at `frame`.
   bool OnFramePosition(uint32_t frame) const;
+  // The uploaded frame whose positions the rig rests on (the one it last
+  // reached if it still does, else the one nearest `toward`), or nullopt.
+  std::optional<uint32_t> FrameTheRigIsOn(uint32_t toward) const;
   // Starts motor `motor` on `segments` (from rest), ending at rest on `target`.
   void Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps);
   // Frame-path segments of `motor` for frame intervals [k0, k1) of the pass.

@@ -308,9 +308,41 @@ TEST(Playback, JogAllGoesFromTheFrameTheRigIsOnWithoutRtEnd) {
   EXPECT_EQ(b.Pos(1), 300) << "no pre-roll or post-roll";
   EXPECT_EQ(b.playback.on_frame(), 40u);
   EXPECT_EQ(b.playback.ModeName(), "idle");
-  // A motor moved by another command leaves the frame.
+  // A motor moved off the frame by another command leaves it...
   b.playback.OnDirectMotion();
+  ASSERT_EQ(b.rig.motor(1).MoveTo(305), sim::MoveStatus::kOk);
+  b.Settle();
   EXPECT_EQ(b.playback.JogAll({24000, 20}), AckCode::kErrNotInPosition);
+  // ...and moved back onto an uploaded frame's position it is on that frame
+  // again: "The rig must already be on a frame position that is uploaded".
+  b.playback.OnDirectMotion();
+  ASSERT_EQ(b.rig.motor(1).MoveTo(200), sim::MoveStatus::kOk);  // frame 30 of the ramp
+  b.Settle();
+  ASSERT_EQ(b.playback.JogAll({24000, 20}), kOk);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 100);
+  EXPECT_EQ(b.playback.on_frame(), 20u);
+}
+
+TEST(Playback, JogAllAfterAReuploadStartsFromTheFrameTheRigRestsOn) {
+  Bench b;
+  b.UploadRamp(10, 200, 10);
+  ASSERT_EQ(b.playback.PositionFrame(20), kOk);
+  b.Settle();
+  ASSERT_EQ(b.playback.on_frame(), 20u);
+  // The host uploads an edited move; the motors have not moved and still
+  // rest on frame 20's position, which the new upload keeps.
+  b.playback.OnUploadBegin();
+  b.UploadRamp(10, 200, 10);
+  EXPECT_EQ(b.playback.on_frame(), std::nullopt);
+  ASSERT_EQ(b.playback.JogAll({24000, 30}), kOk);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 200);
+  EXPECT_EQ(b.playback.on_frame(), 30u);
+  // An upload on which the rig's position is no frame: not in position.
+  b.playback.OnUploadBegin();
+  b.UploadRamp(10, 200, 7);
+  EXPECT_EQ(b.playback.JogAll({24000, 40}), AckCode::kErrNotInPosition);
 }
 
 TEST(Playback, StillsTriggerOpensAndClosesTheShutterInEveryFrame) {
