@@ -59,6 +59,11 @@ class Verdicts {
     return Check(id, false, [&] { return std::move(e); });
   }
 
+  // While muted, checks are not recorded: the runner's preparation of the
+  // device before a case (settling it, enabling motors) is not a verdict.
+  void set_muted(bool muted) { muted_ = muted; }
+  bool muted() const { return muted_; }
+
   const std::map<std::string, RuleOutcome, std::less<>>& outcomes() const { return outcomes_; }
   // True when a MUST rule failed in this case.
   bool MustFailed() const;
@@ -69,6 +74,20 @@ class Verdicts {
 
   std::string filter_;
   std::map<std::string, RuleOutcome, std::less<>> outcomes_;
+  bool muted_ = false;
+};
+
+// Mutes `v` for its lifetime (restoring what it was).
+class MutedVerdicts {
+ public:
+  explicit MutedVerdicts(Verdicts& v) : v_(v), was_(v.muted()) { v_.set_muted(true); }
+  ~MutedVerdicts() { v_.set_muted(was_); }
+  MutedVerdicts(const MutedVerdicts&) = delete;
+  MutedVerdicts& operator=(const MutedVerdicts&) = delete;
+
+ private:
+  Verdicts& v_;
+  bool was_;
 };
 
 }  // namespace moco::conformance

@@ -417,6 +417,11 @@ const std::vector<Rule> kRules = {
      "(ERR_NOT_IN_POSITION)",
      "ERR_NOT_IN_POSITION 0x0016 ... if you attempt to jog all but aren't on a frame position.",
      "MSG_FLAG_ACK"},
+    {"DMC-RT-015", L::kShould, N::kRealTime,
+     "RT_GO is accepted as soon as the armed rig rests (no ERR_NOT_IN_POSITION while it arms)",
+     "When the device has stopped moving, a MSG_RT_GO command will perform the run or shoot of the "
+     "frame.",
+     "MSG_RT_GO"},
     {"DMC-GM-001", L::kMust, N::kGoMotion,
      "RT_SHOOT_FRAME then RT_GO are acknowledged OK and RT_END follows the exposure",
      "Set up a blur-motion frame capture", "MSG_RT_SHOOT_FRAME; MSG_RT_END"},

@@ -42,7 +42,19 @@ std::string Vec(const std::vector<int32_t>& v);
 // v[i], or 0 past its end.
 int32_t At(const std::vector<int32_t>& v, size_t i);
 
+// Whether `r` accepts a MOTOR_MOVE: the MOTOR_MOVE response, or an ACK OK
+// from a device that answers moves that way (the reference firmware does;
+// DMC-ACK-008 judges that form once, the cases judge the motion).
+bool MoveAccepted(const DeviceRecord* r);
+// MSG_RT_GO for an armed run or shot ("When the device has stopped moving, a
+// MSG_RT_GO command will perform the run or shoot of the frame"). A device
+// still arming answers ERR_NOT_IN_POSITION: the host retries every 10 ms for
+// up to kArmingLimit, DMC-RT-015 judges the delay, and the last answer is
+// returned for the case's own rule.
+const DeviceRecord* Go(DmcCaseContext& c);
+
 inline constexpr TimeNs kMs = sim::kNsPerMs;
+inline constexpr TimeNs kArmingLimit = 1000 * kMs;
 inline constexpr TimeNs kRestTimeout = 60'000 * kMs;
 
 // Moves `motor` to `to` and waits until nothing moves.

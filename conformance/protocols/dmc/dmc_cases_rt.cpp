@@ -86,7 +86,7 @@ void LiveRun(DmcCaseContext& c) {
   ExpectOk(c, "DMC-RT-009", h.Call(ShortRun(end)));
   WaitRest(h, kRestTimeout);
   const size_t mark = h.records().size();
-  ExpectOk(c, "DMC-RT-009", h.Call(dmc::RtGo{}));
+  ExpectOk(c, "DMC-RT-009", Go(c));
   const int e = h.WaitFor(mark, 20'000 * kMs,
                           [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-005", e >= 0, "RT_END after the run", "none within 20 s");
@@ -145,7 +145,7 @@ void StopRun(DmcCaseContext& c) {
   h.Call(ShortRun(10));
   WaitRest(h, kRestTimeout);
   const size_t mark = h.records().size();
-  h.Call(dmc::RtGo{});
+  Go(c);
   h.WaitFor(mark, 10'000 * kMs, [](const DeviceRecord& r) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
     return r.request < 0 && p != nullptr && p->move_time_x1000 >= 3000;
@@ -198,7 +198,7 @@ void Shoot(DmcCaseContext& c, bool second) {
   }
   WaitRest(h, kRestTimeout);
   const size_t mark = h.records().size();
-  ExpectOk(c, rule, h.Call(dmc::RtGo{}));
+  ExpectOk(c, rule, Go(c));
   const int e = h.WaitFor(mark, 10'000 * kMs,
                           [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, rule, e >= 0, "RT_END after the exposure", "none within 10 s");

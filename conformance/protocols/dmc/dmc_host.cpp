@@ -248,6 +248,28 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
     return;
   }
   if (ack_flag || !IsUnsolicitedKind(f.type)) {
+    // An answer under a wrong ID: the oldest request still waiting for an
+    // answer of this Type takes it. The wrong echo fails DMC-ACK-003, and the
+    // case goes on at the device's pace instead of waiting out the answer
+    // timeout of every request (a device that echoes IDs wrongly would
+    // otherwise take minutes to judge, and fail every rule behind an answer).
+    const uint16_t plain = static_cast<uint16_t>(f.type & ~dmc::kFlagAck);
+    int waiting = -1;
+    for (size_t i = 0; i < requests_.size() && waiting < 0; ++i) {
+      if (requests_[i].answers == 0 && requests_[i].type == plain) waiting = static_cast<int>(i);
+    }
+    if (waiting >= 0) {
+      Request& req = requests_[static_cast<size_t>(waiting)];
+      verdicts_.Fail("DMC-ACK-003",
+                     Ev(r, "the answer to " + dmc::TypeName(req.type) + " id=" +
+                               std::to_string(req.id) + " carrying that ID",
+                        dmc::TypeName(f.type) + " with id=" + std::to_string(f.id)));
+      records_.back().request = waiting;
+      ++req.answers;
+      req.answer = static_cast<int>(rec_index);
+      CheckAnswer(req, r);
+      return;
+    }
     verdicts_.Fail("DMC-ACK-003", Ev(r, "an answer carrying the ID of a request sent",
                                      dmc::TypeName(f.type) + " with id=" + std::to_string(f.id) +
                                          ", which no request had"));
@@ -486,7 +508,7 @@ void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
   }
 }
 
-const DeviceRecord* DmcHost::Await(uint32_t id) {
+const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns) {
   int index = -1;
   for (size_t i = requests_.size(); i-- > 0;) {
     if (requests_[i].id == id) {
@@ -495,14 +517,16 @@ const DeviceRecord* DmcHost::Await(uint32_t id) {
     }
   }
   if (index < 0) return nullptr;
-  const TimeNs give_up = requests_[static_cast<size_t>(index)].sent_ns + options_.answer_timeout_ns;
+  const TimeNs give_up =
+      requests_[static_cast<size_t>(index)].sent_ns + timeout_ns.value_or(options_.answer_timeout_ns);
   if (!link_.ReadUntil(give_up,
                        [&] { return requests_[static_cast<size_t>(index)].answer >= 0; })) {
     const Request& req = requests_[static_cast<size_t>(index)];
     verdicts_.Fail("DMC-ACK-001",
                    Evidence{"an answer to " + dmc::TypeName(req.type) + " id=" + std::to_string(id),
                             link_.lost() ? "the link closed"
-                                         : "nothing after " + Ms(options_.answer_timeout_ns),
+                                         : "nothing after " +
+                                               Ms(timeout_ns.value_or(options_.answer_timeout_ns)),
                             wire::ToHex(req.raw), req.sent_ns});
     return nullptr;
   }

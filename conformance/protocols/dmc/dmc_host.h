@@ -63,8 +63,8 @@ class DmcHost : public HostBase {
   uint32_t SendBytewise(const dmc::HostMessage& m);
 
   // Waits for the answer to request `id` (DMC-ACK-001 fails after the answer
-  // timeout); returns it or nullptr.
-  const DeviceRecord* Await(uint32_t id);
+  // timeout, or after `timeout_ns` when given); returns it or nullptr.
+  const DeviceRecord* Await(uint32_t id, std::optional<TimeNs> timeout_ns = std::nullopt);
   const DeviceRecord* Call(const dmc::HostMessage& m) { return Await(Send(m)); }
 
   // Reads until a record with index >= `from` satisfies `pred` or `timeout_ns`

@@ -1,6 +1,7 @@
 // DMC v2 for the runner (see dmc_protocol.h).
 #include "conformance/protocols/dmc/dmc_protocol.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -73,8 +74,58 @@ void DmcProtocol::Describe(const dmc::HiResponse& h, RunReport& report) {
                         {"capabilities", h.capabilities}};
 }
 
+namespace {
+
+using sim::kNsPerMs;
+
+// Brings a device that introduced itself back to a known state before a case,
+// as Dragonframe prepares a rig, without judging anything (a case is judged
+// on its own traffic, not on what an earlier case left behind):
+// - a frame an earlier case left unfinished (a header declaring a Length the
+//   device waits for: a 2048-byte buffer legitimately waits for 2002 bytes)
+//   is completed by a flush past the largest buffer any device may have,
+//   when a HI goes unanswered;
+// - motion left over is waited out (bounded);
+// - the motors the cases move are enabled with MOTOR_CONFIGURE (devices
+//   that start with motors disabled ignore moves until then), retried while
+//   the device refuses commands for a while after a stop.
+void Settle(DmcHost& host, const dmc::HiResponse& device) {
+  MutedVerdicts mute(host.verdicts());
+  constexpr TimeNs kQuickAnswer = 500 * kNsPerMs;
+  if (host.Await(host.Send(dmc::HiRequest{}), kQuickAnswer) == nullptr && !host.link_lost()) {
+    static const wire::Bytes kFlush(4096, 0x00);
+    host.SendNoise(kFlush);
+    host.Idle(100 * kNsPerMs);
+    if (host.Call(dmc::HiRequest{}) == nullptr) return;  // the greeting judges the silence
+  }
+  if (device.motor_count == 0) return;
+  const TimeNs until = host.Now() + 3000 * kNsPerMs;
+  for (;;) {
+    const auto* st = As<dmc::MotorStatusResponse>(host.Call(dmc::MotorStatusRequest{}));
+    if (st == nullptr || st->moving_bits == 0 || host.Now() >= until || host.link_lost()) break;
+    host.Idle(50 * kNsPerMs);
+  }
+  // Motors 1..8 cover every case (the boom rig's six included).
+  const uint8_t motors = std::min<uint8_t>(device.motor_count, 8);
+  const TimeNs busy_until = host.Now() + 3000 * kNsPerMs;
+  for (uint8_t m = 1; m <= motors; ++m) {
+    for (;;) {
+      const DeviceRecord* r = host.Call(dmc::MotorConfigure{m, dmc::kMotorEnabled});
+      const std::optional<uint32_t> code = AckCodeOf(r);
+      const bool busy = code && (*code == dmc::ToWire(dmc::AckCode::kErrHardLow) ||
+                                 *code == dmc::ToWire(dmc::AckCode::kErrMoving));
+      if (!busy || host.Now() >= busy_until || host.link_lost()) break;
+      host.Idle(100 * kNsPerMs);
+    }
+  }
+}
+
+}  // namespace
+
 std::optional<dmc::HiResponse> DmcProtocol::Greet(DmcHost& host, Target& /*target*/,
-                                                  const dmc::HiResponse& /*discovered*/) {
+                                                  const dmc::HiResponse& discovered) {
+  // A device that never introduced itself (an empty HI) is greeted only.
+  if (discovered.motor_count > 0 || discovered.NameText() != "") Settle(host, discovered);
   if (const auto* seen = As<dmc::HiResponse>(host.Call(dmc::HiRequest{}))) return *seen;
   return std::nullopt;
 }

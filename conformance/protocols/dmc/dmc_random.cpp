@@ -7,6 +7,7 @@
 
 #include "conformance/core/sequence.h"
 #include "conformance/core/transcript.h"
+#include "conformance/protocols/dmc/dmc_cases_internal.h"
 #include "conformance/protocols/dmc/dmc_suites.h"
 #include "session/session.h"
 
@@ -82,7 +83,7 @@ void Execute(DmcHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t mo
         break;
       case Step::Op::kMove:
         r = h.Call(dmc::MotorMove{s.motor, s.a});
-        if (As<dmc::MotorMoveResponse>(r) != nullptr) model[mi] = s.a;
+        if (dmc_cases::MoveAccepted(r)) model[mi] = s.a;
         break;
       case Step::Op::kStop:
         r = h.Call(dmc::MotorStop{s.motor});
