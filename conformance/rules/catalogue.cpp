@@ -81,7 +81,8 @@ const std::vector<Rule> kRules = {
      "A published DMC firmware built on dmc-lite writes the ACK response code as a 32-bit value "
      "(the spec says a 16-bit WORD)",
      "FACTS DMC v2"},
-    {"DMC-ACK-007", L::kMust, N::kNothing, "An ACK's response code is one the spec lists",
+    {"DMC-ACK-007", L::kMust, N::kNothing,
+     "An ACK's response code is one the spec lists (0x0010-0x0018, 0x0020-0x0023)",
      "OK 0x0010 ... ERR_HARD_LOW 0x0023", "MSG_FLAG_ACK"},
     {"DMC-ACK-008", L::kMust, N::kNothing,
      "A request with a specific response is answered with that response, not with ACK OK",
@@ -97,10 +98,13 @@ const std::vector<Rule> kRules = {
      "ERR_PREROLL 0x0017 A real-time move preroll failed ... ERR_SOFT_UP 0x0020 Software upper "
      "limit hit",
      "MSG_FLAG_ACK"},
-    {"DMC-ACK-011", L::kMust, N::kNothing,
+    {"DMC-ACK-011", L::kShould, N::kNothing,
      "Valid requests within the advertised capabilities are answered OK (or ERR_MOVING while "
      "motion is under way)",
      "OK 0x0010 Received, understood, and acted on message", "MSG_FLAG_ACK"},
+    {"DMC-ACK-012", L::kNote, N::kNothing,
+     "ACK code 0x0019 (the reference firmware's aim-point failure), which the spec does not list",
+     "an extra error code 0x0019 for an aim-point failure", "FACTS DMC v2"},
 
     // --- Reply deadlines (runner options; the spec gives no number) ---
     {"DMC-DL-001", L::kShould, N::kNothing,
@@ -282,9 +286,13 @@ const std::vector<Rule> kRules = {
     {"DMC-ERR-007", L::kMust, N::kNothing,
      "Noise between frames does not stop the device answering the next frame",
      "Marker 2 BYTES Start of message. Byte sequence: { 'D' 'F' }", "Message Format"},
-    {"DMC-ERR-008", L::kMust, N::kNothing,
-     "A header declaring an oversize Length does not stop the device answering the next frame",
-     "A Length above that is a framing error, not an allocation.", "ERRATA 1.2"},
+    {"DMC-ERR-008", L::kShould, N::kNothing,
+     "A header declaring a Length no device buffer holds (65535) does not stop the device "
+     "answering the next frame",
+     "A Length above that is a framing error, not an allocation. (The 1048 bytes are a minimum: "
+     "a device with a larger buffer rightly waits for a Length it can hold; the reference parser "
+     "drops a frame whose length exceeds its buffer.)",
+     "ERRATA 1.2; FACTS DMC v2"},
     {"DMC-ERR-009", L::kMust, N::kNothing,
      "A request delivered one byte at a time is answered as a whole one",
      "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
@@ -295,17 +303,19 @@ const std::vector<Rule> kRules = {
     {"DMC-ERR-011", L::kShould, N::kDmx, "MSG_DMX with START CHANNEL 0 is refused with ERR_RANGE",
      "START CHANNEL WORD First channel of lighting values, 1-512", "MSG_DMX"},
     {"DMC-ERR-012", L::kMust, N::kNothing,
-     "The largest frame the receive buffer must hold is answered",
+     "The largest frame the receive buffer must hold (1048 bytes, an unknown Type) is read whole "
+     "and answered ERR_UNSUPPORTED",
      "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
 
     // --- Soft limits ---
-    {"DMC-LIM-001", L::kMust, N::kMotors,
+    {"DMC-LIM-001", L::kShould, N::kMotors,
      "A move above an enabled upper soft limit is refused with ERR_SOFT_UP",
      "ERR_SOFT_UP 0x0020 Software upper limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
-    {"DMC-LIM-002", L::kMust, N::kMotors,
+    {"DMC-LIM-002", L::kShould, N::kMotors,
      "A move below an enabled lower soft limit is refused with ERR_SOFT_LOW",
      "ERR_SOFT_LOW 0x0021 Software lower limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
-    {"DMC-LIM-003", L::kMust, N::kMotors, "A refused move leaves the motor where it was",
+    {"DMC-LIM-003", L::kMust, N::kMotors,
+     "A move the device refuses (ERR_SOFT_UP / ERR_SOFT_LOW) leaves the motor where it was",
      "ERR_SOFT_UP 0x0020 Software upper limit hit", "MSG_FLAG_ACK"},
     {"DMC-LIM-004", L::kMust, N::kMotors, "A move within enabled soft limits is carried out",
      "LOWER LIMIT DWORD The lower software step limit; UPPER LIMIT DWORD The upper software step "
@@ -333,9 +343,11 @@ const std::vector<Rule> kRules = {
      "REASON BYTE 0=E-Stop/General, 1=Upper Limit, 2=Lower Limit, 100=Engine Exception; MOTOR BYTE "
      "... (only present if REASON is 1 or 2)",
      "MSG_MOTOR_HARD_STOP"},
-    {"DMC-UNS-004", L::kMust, N::kMotors,
-     "The device does not answer the host's ACKs of its unsolicited messages",
-     "The host answers them with an ACK", "ERRATA 1.9"},
+    {"DMC-UNS-004", L::kNote, N::kMotors,
+     "The device answers the host's ACK of its unsolicited messages (the reference firmware "
+     "answers ERR_UNSUPPORTED; ignoring it is as good)",
+     "The device must respond to every message it receives. / The host answers them with an ACK",
+     "MSG_FLAG_ACK; ERRATA 1.9; FACTS DMC v2"},
 
     // --- I/O and DMX ---
     {"DMC-GIO-001", L::kMust, N::kNothing, "GIO_IN is answered with a 4-byte GIO_IN response",
@@ -397,7 +409,7 @@ const std::vector<Rule> kRules = {
      "Optional trailing fields: ... the MSG_RT_RUN_MOVE fields after BLOOP TIME (FLAGS, camera "
      "angles) ... A device must accept each shorter form.",
      "ERRATA 1.7"},
-    {"DMC-RT-010", L::kShould, N::kRealTime,
+    {"DMC-RT-010", L::kNote, N::kRealTime,
      "RT_POSITION_FRAME outside the uploaded range is refused",
      "FRAME DWORD The frame to send all motors to", "MSG_RT_POSITION_FRAME"},
     {"DMC-RT-011", L::kShould, N::kRealTime, "RT_GO with nothing armed is refused",
@@ -405,7 +417,7 @@ const std::vector<Rule> kRules = {
      "When the device has stopped moving, a MSG_RT_GO command will perform the run or shoot of the "
      "frame.",
      "MSG_RT_GO"},
-    {"DMC-RT-012", L::kShould, N::kRealTime, "STOP_ALL during a live run ends it with RT_END",
+    {"DMC-RT-012", L::kNote, N::kRealTime, "STOP_ALL during a live run ends it with RT_END",
      "the device sends MSG_RT_END to notify Dragonframe that the process is over.", "MSG_RT_END"},
     {"DMC-RT-013", L::kMust, N::kRealTime,
      "RT_JOG_ALL from a frame position is acknowledged OK and reports each frame reached",

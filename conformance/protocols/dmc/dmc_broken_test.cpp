@@ -257,6 +257,125 @@ TEST(BrokenDevice, ThirtyTwoBitAckCodesAreANote) {
   EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
 }
 
+// The device time of a run: what its cases took on the target's clock.
+TimeNs DeviceTime(const RunReport& r) {
+  TimeNs t = 0;
+  for (const CaseResult& c : r.cases) t += c.target_ns;
+  return t;
+}
+
+// The MUST rules a run failed.
+std::vector<std::string> FailedMusts(const RunReport& r) {
+  std::vector<std::string> out;
+  for (const auto& [id, s] : r.rules) {
+    const Rule* rule = FindRule(id);
+    if (s.status == Status::kFail && rule != nullptr && rule->level == Level::kMust) {
+      out.push_back(id);
+    }
+  }
+  return out;
+}
+
+TEST(BrokenDevice, EveryAckUnderAWrongIdFailsAck003AloneAndTheRunKeepsItsPace) {
+  // (A specific response of a kind the device also sends unprompted, such
+  // as a position report, cannot be told from an unsolicited one by its ID.)
+  const RunReport good = RunBroken(PassThrough);
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if ((f.type & dmc::kFlagAck) != 0) raw = Reencode(f, f.id + 0x100, f.data);
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-003");
+  // The answers are taken by Type: none waits out its timeout, and the
+  // run's rules are judged on them (the fault fails its own rule only).
+  EXPECT_EQ(r.rules.at("DMC-ACK-001").status, Status::kPass);
+  EXPECT_EQ(FailedMusts(r), std::vector<std::string>{"DMC-ACK-003"}) << ConsoleReport(r, false);
+  EXPECT_LE(DeviceTime(r), 2 * DeviceTime(good));
+}
+
+TEST(BrokenDevice, PositionsSentUnderIdZeroBeforeAnAckOkAreReadAndOnlyTheFormFails) {
+  // The reference firmware answers MOTOR_GET_POSITION this way (FACTS DMC v2).
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorGetPosition) && f.id >= DmcHost::kFirstHostId) {
+          out.Write(Reencode(f, 0, f.data));
+          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::Ack{f.type, ToWire(dmc::AckCode::kOk)}});
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-008");
+  for (const char* rule :
+       {"DMC-MOVE-003", "DMC-POS-006", "DMC-RT-002", "DMC-RT-003", "DMC-STOP-001", "DMC-LIM-004"}) {
+    EXPECT_EQ(r.rules.at(rule).status, Status::kPass) << rule << "\n" << ConsoleReport(r, false);
+  }
+}
+
+TEST(BrokenDevice, AMoveAnsweredAckOkFailsTheFormAndItsMotionIsStillJudged) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorMove)) {
+          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::Ack{f.type, ToWire(dmc::AckCode::kOk)}});
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-008");
+  EXPECT_NE(r.rules.at("DMC-MOVE-002").status, Status::kFail) << ConsoleReport(r, false);
+  for (const char* rule : {"DMC-MOVE-003", "DMC-MOVE-004", "DMC-POS-004", "DMC-LIM-004"}) {
+    EXPECT_EQ(r.rules.at(rule).status, Status::kPass) << rule << "\n" << ConsoleReport(r, false);
+  }
+}
+
+TEST(BrokenDevice, PositionUpdatesThatStopAreCaughtByUns002) {
+  // A device whose updates stall (here: never sent) while the host ACKs none.
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorGetPosition) && f.id < DmcHost::kFirstHostId) return;
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-UNS-002");
+}
+
+TEST(BrokenDevice, AMaximumFrameAnsweredErrChecksumIsCaughtByErr012) {
+  // A buffer too small for 1048 bytes cuts the frame and finds its checksum bad.
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (0x0077 | dmc::kFlagAck)) {
+          raw = dmc::Encode(
+              f.id, dmc::DeviceMessage{dmc::Ack{0x0077, ToWire(dmc::AckCode::kErrChecksum)}});
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ERR-012");
+}
+
+TEST(BrokenDevice, AnRtEndSentWithTheGoAckIsCaughtByTheGoMotionRules) {
+  // The exposure is 200 ms: an RT_END right after GO ended no exposure.
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        out.Write(raw);
+        if (f.type == (ToWire(MsgType::kRtGo) | dmc::kFlagAck)) {
+          out.Write(dmc::Encode(7, dmc::DeviceMessage{dmc::RtEnd{}}));
+        }
+      });
+  ExpectCaught(r, "DMC-GM-001");
+  ExpectCaught(r, "DMC-GM-002");
+}
+
+TEST(BrokenDevice, TheReferenceFirmwaresAimPointCodeIsANoteNotAListedCode) {
+  // FACTS DMC v2: dmc-lite's extra code 0x0019; here every ERR_UNSUPPORTED.
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        const auto m = dmc::DecodeDeviceMessage(f.type, f.data);
+        const auto* a = m.ok() ? std::get_if<dmc::Ack>(&m.value()) : nullptr;
+        if (a != nullptr && a->code == ToWire(dmc::AckCode::kErrUnsupported)) {
+          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::Ack{a->type, 0x0019}});
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-012", Status::kNoted);
+  EXPECT_EQ(r.rules.at("DMC-ACK-007").status, Status::kPass);
+}
+
 TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   const std::filesystem::path session = std::filesystem::temp_directory_path() /
                                         ("mococheck_shrunk_" + std::to_string(getpid()) + ".jsonl");

@@ -248,9 +248,8 @@ void Move(DmcCaseContext& c) {
   r = h.Call(dmc::MotorMove{1, target});
   mv = As<dmc::MotorMoveResponse>(r);
   if (mv != nullptr || !MoveAccepted(r)) {
-    c.v.Check("DMC-MOVE-002", mv != nullptr && mv->moving == 0, [&] {
-      return EvOf(h, r, "MOTOR_MOVE moving=0 for the current position", Show(r));
-    });
+    c.v.Check("DMC-MOVE-002", mv != nullptr && mv->moving == 0,
+              [&] { return EvOf(h, r, "MOTOR_MOVE moving=0 for the current position", Show(r)); });
   }
   MoveAndRest(c, 1, start);
 }
@@ -376,6 +375,7 @@ void NoHostAck(DmcCaseContext& c) {
   SetSpeed(c, 1, 2000, 4000);
   const auto p0 = GetPositions(h);
   if (!p0) return;
+  const size_t mark = h.records().size();
   h.Call(dmc::MotorMove{1, At(*p0, 0) + 1500});
   for (int i = 0; i < 4; ++i) {
     h.Idle(150 * kMs);
@@ -383,6 +383,11 @@ void NoHostAck(DmcCaseContext& c) {
     Expect(c, "DMC-UNS-002", As<dmc::MotorStatusResponse>(r) != nullptr,
            "MOTOR_STATUS answered while updates go un-ACKed", Show(r));
   }
+  // Nor do its updates stall: the move lasts well over 600 ms, so a device
+  // reporting about every 0.10 s has sent several while none was ACKed.
+  const size_t updates = UpdatesSince(h, mark).size();
+  Expect(c, "DMC-UNS-002", updates >= 3, "position updates going on while none is ACKed",
+         std::to_string(updates) + " update(s) in 600 ms of motion");
   MoveAndRest(c, 1, At(*p0, 0));
   h.set_ack_unsolicited(true);
 }
@@ -497,8 +502,10 @@ void Noise(DmcCaseContext& c) {
   h.SendNoise(noise);
   const DeviceRecord* r = h.Call(dmc::HiRequest{});
   Expect(c, "DMC-ERR-007", As<dmc::HiResponse>(r) != nullptr, "HI answered after noise", Show(r));
-  // A header declaring Length 2000 and nothing after it.
-  wire::Bytes over = {'D', 'F', 0x99, 0x99, 0, 0, 0x30, 0, 0xd0, 0x07};
+  // A header declaring Length 65535, which no device buffer holds, and
+  // nothing after it (a Length within a larger buffer than the spec's 1048
+  // is rightly waited for: ERRATA 1.2 names a minimum).
+  wire::Bytes over = {'D', 'F', 0x99, 0x99, 0, 0, 0x30, 0, 0xff, 0xff};
   h.SendNoise(over);
   r = h.Call(dmc::MotorStatusRequest{});
   Expect(c, "DMC-ERR-008", As<dmc::MotorStatusResponse>(r) != nullptr,
@@ -509,7 +516,9 @@ void MaxFrame(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const wire::Bytes data(dmc::kMaxDataLength, 0x11);
   const DeviceRecord* r = h.Await(h.SendFrame(0x0077, data));
-  Expect(c, "DMC-ERR-012", AckCodeOf(r).has_value(), "an ACK to a 1048-byte frame", Show(r));
+  // ERR_UNSUPPORTED proves the frame was read whole and its checksum found
+  // good; ERR_CHECKSUM or silence means the buffer did not hold it.
+  ExpectCode(c, "DMC-ERR-012", r, AckCode::kErrUnsupported);
 }
 
 void Unadvertised(DmcCaseContext& c) {
@@ -545,12 +554,21 @@ void SoftLimits(DmcCaseContext& c) {
   ExpectOk(c, "DMC-CFG-005",
            h.Call(dmc::MotorSetLimits{1, dmc::kLimitEnabled, s - 1000, dmc::kLimitEnabled, s + 1000,
                                       0}));
-  ExpectCode(c, "DMC-LIM-001", h.Call(dmc::MotorMove{1, s + 2000}), AckCode::kErrSoftUp);
-  ExpectCode(c, "DMC-LIM-002", h.Call(dmc::MotorMove{1, s - 2000}), AckCode::kErrSoftLow);
+  const bool up =
+      ExpectCode(c, "DMC-LIM-001", h.Call(dmc::MotorMove{1, s + 2000}), AckCode::kErrSoftUp);
+  WaitRest(h, kRestTimeout);
+  const bool low =
+      ExpectCode(c, "DMC-LIM-002", h.Call(dmc::MotorMove{1, s - 2000}), AckCode::kErrSoftLow);
   h.Idle(200 * kMs);
+  WaitRest(h, kRestTimeout);
   auto p = GetPositions(h);
-  Expect(c, "DMC-LIM-003", p && At(*p, 0) == s, "motor 1 still at " + std::to_string(s),
-         p ? Vec(*p) : "no position");
+  // Judged when both moves were refused: a device that leaves soft limits to
+  // the host (LIM-001/002, SHOULD) has carried them out, rightly moving.
+  if (up && low) {
+    Expect(c, "DMC-LIM-003", p && At(*p, 0) == s, "motor 1 still at " + std::to_string(s),
+           p ? Vec(*p) : "no position");
+  }
+  if (p && At(*p, 0) != s) MoveAndRest(c, 1, s);
   const DeviceRecord* r = h.Call(dmc::MotorMove{1, s + 500});
   Expect(c, "DMC-LIM-004", MoveAccepted(r), "MOTOR_MOVE accepted", Show(r));
   WaitRest(h, kRestTimeout);
@@ -567,8 +585,7 @@ void SoftLimits(DmcCaseContext& c) {
          "reached " + std::to_string(highest));
   ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, s - 1000, 0, s + 1000, 0}));
   r = h.Call(dmc::MotorMove{1, s + 2000});
-  Expect(c, "DMC-LIM-005", MoveAccepted(r), "MOTOR_MOVE beyond a disabled limit accepted",
-         Show(r));
+  Expect(c, "DMC-LIM-005", MoveAccepted(r), "MOTOR_MOVE beyond a disabled limit accepted", Show(r));
   WaitRest(h, kRestTimeout);
   p = GetPositions(h);
   Expect(c, "DMC-LIM-005", p && At(*p, 0) == s + 2000, "motor 1 at " + std::to_string(s + 2000),

@@ -23,20 +23,22 @@ struct Uploaded {
   uint32_t end = 0;
 };
 
-// Uploads frames 0..20: motor 1 climbs 40 steps a frame and motor 2 falls 25
-// a frame over frames 0..10 (last set), then both hold.
+// Uploads frames 0..20 (fewer when the device holds fewer: HI UPLOAD FRAME
+// COUNT): motor 1 climbs 40 steps a frame and motor 2 falls 25 a frame over
+// frames 0..10 (last set), then both hold.
 std::optional<Uploaded> Upload(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const auto p0 = GetPositions(h);
   if (!p0) return std::nullopt;
   Uploaded u;
-  u.end = 20;
+  u.end = std::min<uint32_t>(20, std::max<uint32_t>(c.device.upload_frame_count, 2) - 1);
   const uint8_t motors = std::min<uint8_t>(c.device.motor_count, 2);
   ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveBegin{0, u.end}));
   for (uint8_t m = 1; m <= motors; ++m) {
     const int32_t step = m == 1 ? 40 : -25;
     std::vector<int32_t> section;
-    for (int k = 0; k <= 10; ++k) section.push_back(At(*p0, m - 1u) + step * k);
+    const int last = static_cast<int>(std::min<uint32_t>(10, u.end));
+    for (int k = 0; k <= last; ++k) section.push_back(At(*p0, m - 1u) + step * k);
     ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveAxis{m, 0, true, section}));
     std::vector<int32_t> path = section;
     while (path.size() <= u.end) path.push_back(section.back());
@@ -61,8 +63,8 @@ bool AtFrame(DmcCaseContext& c, const Uploaded& u, uint32_t frame, std::string_v
 void UploadPosition(DmcCaseContext& c) {
   const auto u = Upload(c);
   if (!u) return;
-  AtFrame(c, *u, 5, "DMC-RT-002");
-  AtFrame(c, *u, 15, "DMC-RT-003");
+  AtFrame(c, *u, std::min<uint32_t>(5, u->end), "DMC-RT-002");
+  AtFrame(c, *u, std::min<uint32_t>(15, u->end), "DMC-RT-003");
   ExpectRefused(c, "DMC-RT-010", c.host.Call(dmc::RtPositionFrame{u->end + 1}));
   AtFrame(c, *u, 0, "DMC-RT-002");
 }
@@ -82,7 +84,7 @@ void LiveRun(DmcCaseContext& c) {
   const auto u = Upload(c);
   if (!u) return;
   AtFrame(c, *u, 0, "DMC-RT-002");
-  const uint32_t end = 10;
+  const uint32_t end = std::min<uint32_t>(10, u->end);
   ExpectOk(c, "DMC-RT-009", h.Call(ShortRun(end)));
   WaitRest(h, kRestTimeout);
   const size_t mark = h.records().size();
@@ -165,12 +167,13 @@ void JogAll(DmcCaseContext& c) {
   const auto u = Upload(c);
   if (!u) return;
   AtFrame(c, *u, 0, "DMC-RT-002");
+  const uint32_t to = std::min<uint32_t>(5, u->end);
   const size_t mark = h.records().size();
-  ExpectOk(c, "DMC-RT-013", h.Call(dmc::RtJogAll{24000, 5}));
+  ExpectOk(c, "DMC-RT-013", h.Call(dmc::RtJogAll{24000, to}));
   WaitRest(h, kRestTimeout);
   h.Idle(200 * kMs);
   const std::vector<Update> ups = UpdatesSince(h, mark);
-  for (uint32_t k = 1; k <= 5; ++k) {
+  for (uint32_t k = 1; k <= to; ++k) {
     bool seen = false;
     for (const Update& up : ups) seen = seen || up.move_time / 1000 == k;
     Expect(c, "DMC-RT-013", seen, "a report with MOVE TIME " + std::to_string(k * 1000),
@@ -178,6 +181,12 @@ void JogAll(DmcCaseContext& c) {
   }
   const auto p = GetPositions(h);
   if (!p) return;
+  // "Jog all motors towards the destination frame": the rig ends on it.
+  std::vector<int32_t> want;
+  for (const auto& path : u->path) want.push_back(path[to]);
+  bool on = true;
+  for (size_t i = 0; i < want.size(); ++i) on = on && At(*p, i) == want[i];
+  Expect(c, "DMC-RT-013", on, "frame " + std::to_string(to) + " positions " + Vec(want), Vec(*p));
   MoveAndRest(c, 1, At(*p, 0) + 37);
   ExpectCode(c, "DMC-RT-014", h.Call(dmc::RtJogAll{24000, 0}), AckCode::kErrNotInPosition);
   MoveAndRest(c, 1, u->path[0][0]);
@@ -188,21 +197,37 @@ void Shoot(DmcCaseContext& c, bool second) {
   const std::string_view rule = second ? "DMC-GM-002" : "DMC-GM-001";
   const auto u = Upload(c);
   if (!u) return;
-  AtFrame(c, *u, 3, "DMC-RT-002");
-  const int32_t at = u->path[0][3];
+  const uint32_t frame = std::min<uint32_t>(3, u->end);
+  AtFrame(c, *u, frame, "DMC-RT-002");
+  const int32_t at = u->path[0][frame];
   const std::vector<dmc::BlurMotor> blur = {{1, at - 20, at + 20}};
   if (second) {
-    ExpectOk(c, rule, h.Call(dmc::RtShootFrame2{3, 200, 90, 270, blur}));
+    ExpectOk(c, rule, h.Call(dmc::RtShootFrame2{frame, 200, 90, 270, blur}));
   } else {
-    ExpectOk(c, rule, h.Call(dmc::RtShootFrame{3, dmc::kDirectionForward, 200, 500, blur}));
+    ExpectOk(c, rule, h.Call(dmc::RtShootFrame{frame, dmc::kDirectionForward, 200, 500, blur}));
   }
   WaitRest(h, kRestTimeout);
+  const auto before = GetPositions(h);
   const size_t mark = h.records().size();
-  ExpectOk(c, rule, Go(c));
+  const DeviceRecord* go = Go(c);
+  ExpectOk(c, rule, go);
   const int e = h.WaitFor(mark, 10'000 * kMs,
                           [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, rule, e >= 0, "RT_END after the exposure", "none within 10 s");
+  if (e >= 0 && go != nullptr) {
+    // The exposure is 200 ms: an RT_END sooner than that ended no exposure.
+    const TimeNs took = h.records()[static_cast<size_t>(e)].t_ns - go->t_ns;
+    Expect(c, rule, took >= 200 * kMs, "RT_END at least 200 ms (the exposure) after GO",
+           "RT_END " + std::to_string(took / kMs) + " ms after GO");
+  }
   WaitRest(h, kRestTimeout);
+  // The blurred motor sweeps its 40-step blur range while the shutter is open.
+  const auto after = GetPositions(h);
+  if (before && after) {
+    const int32_t moved = std::abs(At(*after, 0) - At(*before, 0));
+    Expect(c, rule, moved >= 20, "motor 1 moved through its blur range (40 steps)",
+           "motor 1 moved " + std::to_string(moved) + " step(s)");
+  }
 }
 
 void StopLoop(DmcCaseContext& c) { ExpectOk(c, "DMC-LOOP-001", c.host.Call(dmc::RtStopLoop{})); }

@@ -43,9 +43,12 @@ bool IsUnsolicitedKind(uint16_t type) {
   }
 }
 
+// The codes MSG_FLAG_ACK lists; 0x0019 is the reference firmware's own
+// (FACTS DMC v2), noted by DMC-ACK-012 instead.
 bool IsKnownCode(uint32_t code) {
-  return (code >= 0x0010 && code <= 0x0019) || (code >= 0x0020 && code <= 0x0023);
+  return (code >= 0x0010 && code <= 0x0018) || (code >= 0x0020 && code <= 0x0023);
 }
+constexpr uint32_t kAimPointFailure = 0x0019;
 
 bool IsMotionRequest(uint16_t type) {
   switch (static_cast<MsgType>(type)) {
@@ -260,10 +263,10 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
     }
     if (waiting >= 0) {
       Request& req = requests_[static_cast<size_t>(waiting)];
-      verdicts_.Fail("DMC-ACK-003",
-                     Ev(r, "the answer to " + dmc::TypeName(req.type) + " id=" +
-                               std::to_string(req.id) + " carrying that ID",
-                        dmc::TypeName(f.type) + " with id=" + std::to_string(f.id)));
+      verdicts_.Fail("DMC-ACK-003", Ev(r,
+                                       "the answer to " + dmc::TypeName(req.type) +
+                                           " id=" + std::to_string(req.id) + " carrying that ID",
+                                       dmc::TypeName(f.type) + " with id=" + std::to_string(f.id)));
       records_.back().request = waiting;
       ++req.answers;
       req.answer = static_cast<int>(rec_index);
@@ -316,8 +319,12 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
     verdicts_.Check("DMC-ACK-006", len != 4, [&] { return Ev(rec, "16-bit code", "32-bit code"); });
     const std::optional<uint32_t> code = AckCodeOf(&rec);
     if (!code) return;
-    verdicts_.Check("DMC-ACK-007", IsKnownCode(*code),
+    verdicts_.Check("DMC-ACK-012", *code != kAimPointFailure,
                     [&] { return Ev(rec, "a listed response code", base::Hex(*code, 4)); });
+    if (*code != kAimPointFailure) {
+      verdicts_.Check("DMC-ACK-007", IsKnownCode(*code),
+                      [&] { return Ev(rec, "a listed response code", base::Hex(*code, 4)); });
+    }
     if (HasSpecificResponse(req.type)) {
       verdicts_.Check("DMC-ACK-008", *code != ToWire(AckCode::kOk), [&] {
         return Ev(rec, "the specific " + dmc::TypeName(req.type) + " response", "ACK OK");
@@ -517,8 +524,8 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
     }
   }
   if (index < 0) return nullptr;
-  const TimeNs give_up =
-      requests_[static_cast<size_t>(index)].sent_ns + timeout_ns.value_or(options_.answer_timeout_ns);
+  const TimeNs give_up = requests_[static_cast<size_t>(index)].sent_ns +
+                         timeout_ns.value_or(options_.answer_timeout_ns);
   if (!link_.ReadUntil(give_up,
                        [&] { return requests_[static_cast<size_t>(index)].answer >= 0; })) {
     const Request& req = requests_[static_cast<size_t>(index)];
