@@ -73,7 +73,11 @@ mococheck_cli_sighup_and_sigterm_write_reports_and_exit_2)
     [ "$rc" = 2 ] || fail "SIG$sig: exit $rc, not 2"
     grep -q '^result: INTERRUPTED' out-$sig.txt || fail "SIG$sig: no INTERRUPTED verdict"
     grep -q '"interrupted_by_signal": [1-9]' r.json || fail "SIG$sig: JSON not marked"
+    # The case under way is named (null only if the signal fell between cases).
+    grep -q '"interrupted_case": ' r.json || fail "SIG$sig: JSON names no interrupted case"
     test -s r.xml || fail "SIG$sig: no JUnit report"
+    # Progress went to stderr as the cases started.
+    grep -q '^mococheck: \[1/[0-9]*\] connect/' err.txt || fail "SIG$sig: no progress on stderr"
   done
   ;;
 

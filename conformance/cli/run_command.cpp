@@ -2,6 +2,8 @@
 // streamed as cases end, and the JUnit, JSON and HTML reports (docs/files.md,
 // docs/exit-codes.md).
 #include <unistd.h>
+#include <chrono>
+#include <set>
 
 #include <csignal>
 #include <cstdio>
@@ -99,6 +101,19 @@ int Run(const RunArgs& a) {
   }
   options.rules = a.rules_glob;
   options.cases = a.cases_glob;
+  {
+    size_t selected = 0;
+    const std::vector<CaseInfo>& all = runner->cases();
+    for (size_t i = 0; i < all.size(); ++i) {
+      selected += CaseSelected(options, i, all[i].suite + "/" + all[i].name);
+    }
+    if (selected == 0) {
+      return Fail("--shard " + a.shard +
+                  (a.cases_glob.empty() ? "" : " with --cases " + a.cases_glob) + " selects no " +
+                  title + " case (" + std::to_string(all.size()) +
+                  " in all); use fewer shards or a wider --cases");
+    }
+  }
   options.host.deadline_ns = a.deadline_ms * sim::kNsPerMs;
   for (const std::string& d : a.deadlines) {
     const size_t eq = d.find('=');
@@ -172,6 +187,28 @@ int Run(const RunArgs& a) {
     for (; printed < so_far.cases.size(); ++printed) {
       if (!a.quiet) std::cout << ConsoleCase(so_far.cases[printed], a.verbose) << std::flush;
     }
+  };
+  // Progress on stderr as each case starts (the verdicts stream on stdout),
+  // so a slow or silent device shows where the run is.
+  const auto wall0 = std::chrono::steady_clock::now();
+  options.on_case_start = [&](const RunReport& so_far, const std::string& name, size_t index,
+                              size_t total) {
+    print_device(so_far);
+    if (a.quiet) return;
+    std::set<std::string> judged, failing;
+    for (const CaseResult& c : so_far.cases) {
+      for (const auto& [id, o] : c.outcomes) {
+        judged.insert(id);
+        if (o.status == Status::kFail) failing.insert(id);
+      }
+    }
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    char elapsed[32];
+    std::snprintf(elapsed, sizeof elapsed, "%.1f s", s);
+    std::cerr << "mococheck: [" << index << "/" << total << "] " << name << " (" << elapsed
+              << " elapsed; " << judged.size() << " rules judged so far, " << failing.size()
+              << " failing)" << std::endl;
   };
   RunReport report = runner->run(*target, options);
   options.on_progress(report);  // whatever the runner did not announce

@@ -139,7 +139,10 @@ std::string HtmlReport(const RunReport& report) {
       !report.target_error.empty()
           ? "ko\">TARGET ERROR: " + Esc(report.target_error) + " (no verdict on the device)"
       : report.interrupted_by != 0
-          ? "ko\">INTERRUPTED by signal " + std::to_string(report.interrupted_by) + " (no verdict)"
+          ? "ko\">INTERRUPTED by signal " + std::to_string(report.interrupted_by) +
+                (report.interrupted_case.empty() ? std::string()
+                                                 : " during " + Esc(report.interrupted_case)) +
+                " (no verdict)"
       : failed ? "ko\">FAIL: a MUST rule failed"
                : "ok\">PASS: every MUST rule held";
   s += "<p><span class=\"verdict " + verdict + "</span></p>\n";

@@ -131,7 +131,11 @@ std::string ConsoleSummary(const RunReport& report, bool verbose) {
   }
   if (report.interrupted_by != 0) {
     s += "interrupted by signal " + std::to_string(report.interrupted_by) + " after " +
-         std::to_string(report.cases.size()) + " case(s); the rest did not run\n";
+         std::to_string(report.cases.size()) + " case(s)" +
+         (report.interrupted_case.empty()
+              ? std::string()
+              : ", during " + report.interrupted_case + " (cut short: no verdict)") +
+         "; the rest did not run\n";
   }
   const char* verdict = !report.target_error.empty() ? "TARGET ERROR (no verdict on the device)"
                         : report.interrupted_by != 0 ? "INTERRUPTED (no verdict)"
@@ -197,6 +201,8 @@ nlohmann::json JsonReport(const RunReport& report) {
   j["must_failed"] = report.MustFailed();
   j["target_error"] = report.target_error.empty() ? json(nullptr) : json(report.target_error);
   j["interrupted_by_signal"] = report.interrupted_by;
+  j["interrupted_case"] =
+      report.interrupted_case.empty() ? json(nullptr) : json(report.interrupted_case);
   j["exit_code"] = ExitCode(report);
   j["wall_s"] = report.wall_s;
   return j;
@@ -242,7 +248,9 @@ std::string JunitReport(const RunReport& report) {
   const std::string no_verdict =
       !report.target_error.empty() ? "target error: " + report.target_error
       : report.interrupted_by != 0
-          ? "interrupted by signal " + std::to_string(report.interrupted_by)
+          ? "interrupted by signal " + std::to_string(report.interrupted_by) +
+                (report.interrupted_case.empty() ? std::string()
+                                                 : " during " + report.interrupted_case)
           : std::string();
   if (!no_verdict.empty()) {
     ++tests;

@@ -80,14 +80,20 @@ RunReport Run(Target& target, const RunOptions& options) {
 
   if (options.on_progress) options.on_progress(report);
   const std::vector<Case>& cases = Traits::Cases();
+  size_t total = 0, started = 0;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    total += CaseSelected(options, i, cases[i].suite + "/" + cases[i].name);
+  }
   for (size_t i = 0; i < cases.size(); ++i) {
     const Case& k = cases[i];
     if (const int sig = StopRequested(); sig != 0) {
       report.interrupted_by = sig;
       break;
     }
-    if (i % options.shard_count != options.shard_index) continue;
-    if (!options.cases.empty() && !GlobMatch(options.cases, k.suite + "/" + k.name)) continue;
+    if (!CaseSelected(options, i, k.suite + "/" + k.name)) continue;
+    ++started;
+    if (options.on_case_start)
+      options.on_case_start(report, k.suite + "/" + k.name, started, total);
     CaseResult result;
     result.suite = k.suite;
     result.name = k.name;
@@ -124,6 +130,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     report.cases.push_back(std::move(result));
     // A case cut short by a stop request is not a verdict on the device.
     if (const int sig = StopRequested(); sig != 0) {
+      report.interrupted_case = report.cases.back().suite + "/" + report.cases.back().name;
       report.cases.pop_back();
       report.interrupted_by = sig;
       break;

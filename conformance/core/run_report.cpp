@@ -67,4 +67,9 @@ void SummarizeRules(RunReport& report, const std::vector<Rule>& rules,
   }
 }
 
+bool CaseSelected(const RunOptions& options, size_t i, const std::string& name) {
+  if (options.shard_count == 0 || i % options.shard_count != options.shard_index) return false;
+  return options.cases.empty() || GlobMatch(options.cases, name);
+}
+
 }  // namespace moco::conformance

@@ -33,7 +33,16 @@ struct RunOptions {
   // case has run yet) and again after each case is appended to report.cases:
   // the console streams its verdicts from here. May be empty.
   std::function<void(const RunReport& report)> on_progress;
+  // Called as case `index` (1-based) of the `total` the run selected starts,
+  // with what ran so far: the console's progress line. May be empty.
+  std::function<void(const RunReport& report, const std::string& case_name, size_t index,
+                     size_t total)>
+      on_case_start;
 };
+
+// Whether case `i` of `count` named suite/name is selected by the shard and
+// the --cases globs of `options`.
+bool CaseSelected(const RunOptions& options, size_t i, const std::string& name);
 
 // Position reports per motor (1-based): (time, position) samples.
 using PositionSeries = std::map<int, std::vector<std::pair<TimeNs, int64_t>>>;
@@ -82,6 +91,9 @@ struct RunReport {
   // The signal (SIGINT, SIGTERM, SIGHUP) that stopped the run before every
   // case ran; 0 when it ran to the end.
   int interrupted_by = 0;
+  // The case (suite/name) the signal cut short: its outcomes are dropped, as
+  // a half-run case proves nothing; "" when none was under way.
+  std::string interrupted_case;
 
   bool MustFailed() const;
   // Counts of rules by status.

@@ -256,9 +256,15 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
     // case goes on at the device's pace instead of waiting out the answer
     // timeout of every request (a device that echoes IDs wrongly would
     // otherwise take minutes to judge, and fail every rule behind an answer).
+    // An ERR_CHECKSUM carries the ID and Type as received, which may be the
+    // corrupted bytes themselves ("The response should use the message Type
+    // and ID from the received message"): it answers no request but the
+    // corrupted one, so it is never taken by Type.
     const uint16_t plain = static_cast<uint16_t>(f.type & ~dmc::kFlagAck);
+    const std::optional<uint32_t> code = AckCodeOf(&r);
+    const bool checksum_error = code && *code == ToWire(AckCode::kErrChecksum);
     int waiting = -1;
-    for (size_t i = 0; i < requests_.size() && waiting < 0; ++i) {
+    for (size_t i = 0; i < requests_.size() && waiting < 0 && !checksum_error; ++i) {
       if (requests_[i].answers == 0 && requests_[i].type == plain) waiting = static_cast<int>(i);
     }
     if (waiting >= 0) {
