@@ -667,6 +667,13 @@ std::string RulesMarkdown() {
   s += "(exit 1); SHOULD failures are reported; NOTE marks a reading the spec leaves\n";
   s += "open and never fails. A rule whose capability the device does not advertise\n";
   s += "when it introduces itself is reported \"not applicable\".\n\n";
+  s += "How a level is chosen: MUST where the clause says must (or required), or where a\n";
+  s += "host cannot work otherwise; SHOULD where it says should, and for a strong\n";
+  s += "reading of the text; NOTE where the spec is silent and real devices differ\n";
+  s += "(FACTS.md). A rule is never stricter than the devices the spec allows: the\n";
+  s += "levels are checked against the reference firmware's behaviour (the DMC-16's\n";
+  s += "`fixtures/profiles/dmc-lite.json`), which fails only where it departs from a\n";
+  s += "must or a should.\n\n";
   s += std::to_string(RuleCount()) + " rules: " + std::to_string(must) + " MUST, " +
        std::to_string(should) + " SHOULD, " + std::to_string(note) + " NOTE.\n";
   for (Protocol p : kAllProtocols) {

@@ -282,7 +282,14 @@ TEST(BrokenDevice, EveryAckUnderAWrongIdFailsAck003AloneAndTheRunKeepsItsPace) {
   const RunReport good = RunBroken(PassThrough);
   const RunReport r = RunBroken(
       [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
-        if ((f.type & dmc::kFlagAck) != 0) raw = Reencode(f, f.id + 0x100, f.data);
+        // (ERR_CHECKSUM answers keep the ID as received: they are judged
+        // by DMC-CSUM-003, and a wrong ID there answers no request at all.)
+        const bool checksum_error =
+            f.data.size() >= 2 && f.data[0] == (ToWire(dmc::AckCode::kErrChecksum) & 0xff) &&
+            f.data[1] == 0;
+        if ((f.type & dmc::kFlagAck) != 0 && !checksum_error) {
+          raw = Reencode(f, f.id + 0x100, f.data);
+        }
         out.Write(raw);
       });
   ExpectCaught(r, "DMC-ACK-003");

@@ -110,7 +110,9 @@ void Settle(DmcHost& host, const dmc::HiResponse& device) {
   const TimeNs busy_until = host.Now() + 3000 * kNsPerMs;
   for (uint8_t m = 1; m <= motors; ++m) {
     for (;;) {
-      const DeviceRecord* r = host.Call(dmc::MotorConfigure{m, dmc::kMotorEnabled});
+      // Enabled, with the blur flag go-motion needs (a DMC-16's power-on flags).
+      const DeviceRecord* r =
+          host.Call(dmc::MotorConfigure{m, dmc::kMotorEnabled | dmc::kMotorBlurEnabled});
       const std::optional<uint32_t> code = AckCodeOf(r);
       const bool busy = code && (*code == dmc::ToWire(dmc::AckCode::kErrHardLow) ||
                                  *code == dmc::ToWire(dmc::AckCode::kErrMoving));
