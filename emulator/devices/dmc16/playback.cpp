@@ -369,13 +369,13 @@ uint32_t Playback::PassMoveTime() const {
     // Pre-roll: before the start frame, unless the profile reads it as the
     // start frame's (dmc-lite).
     if (p.live && !profile_.behaviour.preroll_move_time_is_start_frame) {
-      off = std::min<int64_t>(-1, static_cast<int64_t>(std::floor(FramesAt(p, t_s) * 1000)));
+      off = std::min<int64_t>(-1, std::llround(FramesAt(p, t_s) * 1000));
     }
   } else {
     const int64_t k = p.ticked;
     const int64_t lo = now == p.tick_ns ? 0 : 1;
-    const auto frac =
-        static_cast<int64_t>(std::floor((FramesAt(p, t_s) - static_cast<double>(k)) * 1000));
+    // Rounded to the nearest thousandth, but never onto a frame's own value.
+    const int64_t frac = std::llround((FramesAt(p, t_s) - static_cast<double>(k)) * 1000);
     off = k * 1000 + (k < n ? std::clamp<int64_t>(frac, lo, 999) : std::max(frac, lo));
     if (!p.live) off = std::min(off, n * 1000);  // JOG_ALL ends at rest on its frame
   }
