@@ -694,8 +694,34 @@ TEST(Dmc16PlaybackReports, UpdatesGoOnBetweenTheFramesOfASlowJogAll) {
 }
 
 TEST(Dmc16PlaybackReports, TheProfilesIntervalSetsTheCadenceInEveryPhase) {
-  // dmc-lite updates about every 50 ms (FACTS "DMC v2"; its profile's
-  // position_report_interval_ms), playback included.
+  // The spec's "about every 0.10 seconds" (the default 100 ms) and dmc-lite's
+  // 50 ms (FACTS "DMC v2") from the profile's position_report_interval_ms.
+  for (const uint32_t interval_ms : {100u, 50u}) {
+    Dmc16Profile p = SmallProfile();
+    p.position_report_interval_ms = interval_ms;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 1000, 1000)), kAckOk);
+    h.Settle();
+    const TimeNs t_go = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    const TimeNs interval = TimeNs{interval_ms} * kNsPerMs;
+    const auto ups = Updates(h, t_go + 1);
+    EXPECT_LE(LongestGap(ups, t_go), interval);
+    // The 1 s pre-roll: an update every interval after GO, up to frame 20's.
+    std::vector<TimeNs> preroll;
+    for (const auto& [t, r] : ups) {
+      if (t < t_go + kNsPerSecond) preroll.push_back(t - t_go);
+    }
+    ASSERT_EQ(preroll.size(), 1000u / interval_ms - 1);
+    for (size_t i = 0; i < preroll.size(); ++i) {
+      EXPECT_EQ(preroll[i], static_cast<TimeNs>(i + 1) * interval) << i;
+    }
+  }
+}
+
+TEST(Dmc16PlaybackReports, TheDmcLiteProfileUpdatesEvery50MsThroughARun) {
   const char* dir = std::getenv("MOCO_SOURCE_DIR");
   const std::string src = dir != nullptr ? dir : ".";
   Host h(LoadDmc16Profile(src + "/fixtures/profiles/dmc-lite.json"));
