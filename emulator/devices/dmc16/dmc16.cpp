@@ -27,10 +27,15 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
       decoder_(std::make_unique<dmc::FrameDecoder>()),
       playback_(scheduler, rig_, planners_, upload_, profile_, dmx_, gio_, camera_,
                 PlaybackHooks{
-                    .send_position_update = [this] { SendPositionUpdate(); },
+                    .send_position_update =
+                        [this] {
+                          SendPositionUpdate();
+                          // The cadence counts on from the update just sent.
+                          CancelTimer(report_timer_);
+                          EnsurePositionReports();
+                        },
                     .send_rt_end = [this] { SendUnsolicited(dmc::RtEnd{}); },
                     .ensure_position_reports = [this] { EnsurePositionReports(); },
-                    .stop_position_reports = [this] { CancelTimer(report_timer_); },
                 }) {
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     auto planner = std::make_unique<ScriptPlanner>();
@@ -339,10 +344,19 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
             playback_.OnUploadBegin();
             Ack(id, type, upload_.Begin(m.start_frame, m.end_frame).code);
           },
-          [&](const dmc::RtUploadMoveAxis& m) { Ack(id, type, upload_.Axis(m).code); },
-          [&](const dmc::RtUploadMoveDmx& m) { Ack(id, type, upload_.Dmx(m).code); },
-          [&](const dmc::RtUploadMoveTriggers& m) { Ack(id, type, upload_.Triggers(m).code); },
-          [&](const dmc::RtUploadMoveEnd&) { Ack(id, type, upload_.End().code); },
+          // ERR_MOVING: no upload message touches the move being played.
+          [&](const dmc::RtUploadMoveAxis& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Axis(m).code);
+          },
+          [&](const dmc::RtUploadMoveDmx& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Dmx(m).code);
+          },
+          [&](const dmc::RtUploadMoveTriggers& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Triggers(m).code);
+          },
+          [&](const dmc::RtUploadMoveEnd&) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.End().code);
+          },
           [&](const dmc::RtPositionFrame& m) { Ack(id, type, playback_.PositionFrame(m.frame)); },
           [&](const dmc::RtRunMove& m) { Ack(id, type, playback_.RunMove(m)); },
           [&](const dmc::RtShootFrame& m) {
@@ -476,7 +490,11 @@ void Dmc16::SendPositionUpdate() {
 }
 
 // "The device should send these out, about every 0.10 seconds, if any of the
-// motors are moving" — and once when they stop (OnMotionFinished).
+// motors are moving" — and once when they stop (OnMotionFinished). The
+// cadence (position_report_interval_ms) runs whatever moves the motors,
+// every phase of playback included: a live pass's per-frame reports come
+// besides it, each restarting its count, so updates are never further
+// apart than the interval.
 void Dmc16::EnsurePositionReports() {
   if (report_timer_ != sim::Scheduler::kNoTimer || !rig_.AnyMoving()) return;
   report_timer_ = scheduler_.After(TimeNs{profile_.position_report_interval_ms} * kNsPerMs,
@@ -486,8 +504,7 @@ void Dmc16::EnsurePositionReports() {
 void Dmc16::OnReportTimer() {
   report_timer_ = sim::Scheduler::kNoTimer;
   if (!rig_.AnyMoving()) return;
-  // During playback the per-frame reports take the place of the cadence.
-  if (!playback_.ReportsEachFrame()) SendPositionUpdate();
+  SendPositionUpdate();
   EnsurePositionReports();
 }
 
@@ -563,6 +580,9 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
 
 AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
+  // ERR_MOVING "while the rig is moving": a live run, a shot or a jog-all
+  // plays the rig as a whole, so no position is renamed under it.
+  if (playback_.Playing()) return AckCode::kErrMoving;
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
   if (code == AckCode::kOk) {
     playback_.ForgetFrame();
