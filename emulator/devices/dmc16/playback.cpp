@@ -54,6 +54,7 @@ AckCode AckForMoveStatus(sim::MoveStatus s) {
       return AckCode::kErrRange;
     case sim::MoveStatus::kDisabled:
     case sim::MoveStatus::kEStop:
+    case sim::MoveStatus::kCoupled:  // driven by the motor before it, not on its own
       return AckCode::kErrGeneral;
   }
   return AckCode::kErrGeneral;
