@@ -86,10 +86,11 @@ struct Dmc16Behaviour {
   bool jog_speed_checked = true;
 
   // --- motion ---
-  // A motor that is not enabled (MSG_MOTOR_CONFIGURE flag 0x01) refuses a
-  // move (spec reading); with this, it ACKs and does nothing: moves,
-  // uploads and POSITION_FRAME are ignored (dmc-lite, whose motors start
-  // disabled: set motion.motors_enabled false with it).
+  // A motor that is not enabled (MSG_MOTOR_CONFIGURE flag 0x01) refuses
+  // MOVE and JOG with ERR_GENERAL and sits out playback (spec reading); with
+  // this, it takes MOVE, JOG and a SHOOT_FRAME that lists it and stays where
+  // it is, as it does for uploads and POSITION_FRAME (dmc-lite, whose motors
+  // start disabled: set motion.motors_enabled false with it).
   bool disabled_motors_ignore_motion = false;
   // Soft limits refuse MOVE and JOG beyond them (spec reading); false: they
   // bound only RUN_MOVE pre/post-roll and the stop deceleration (dmc-lite).
@@ -103,7 +104,9 @@ struct Dmc16Behaviour {
   // STOP_ALL included (dmc-lite: ~100 velocity updates, about 2 s). 0: none.
   uint32_t stop_all_lockout_ms = 0;
   // A position read right after an upload's POSITION_FRAME lands can be one
-  // step short of the uploaded one (dmc-lite truncates its float position).
+  // step short of the uploaded one (dmc-lite truncates its float position):
+  // a motor that reached its frame position moving away from zero reads one
+  // step toward zero (199 for 200, -199 for -200) until its next motion.
   bool positions_truncate = false;
 
   // --- real-time ---
@@ -151,7 +154,8 @@ struct Dmc16Profile {
   double max_velocity_steps_per_s = 5000;
   double max_accel_steps_per_s2 = 10000;
   double hard_stop_multiple = 4;
-  // Motors start enabled (MSG_MOTOR_CONFIGURE flag 0x01) at power-on.
+  // Motors start enabled and blur-enabled (as after MSG_MOTOR_CONFIGURE
+  // FLAGS 0x03) at power-on; false: neither (as dmc-lite's).
   bool motors_enabled = true;
   std::vector<Dmc16LimitSet> limit_sets;
   // Departures from the spec's reading (all off by default).

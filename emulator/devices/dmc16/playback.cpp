@@ -60,6 +60,7 @@ AckCode AckForMoveStatus(sim::MoveStatus s) {
       return AckCode::kErrRange;
     case sim::MoveStatus::kDisabled:
     case sim::MoveStatus::kEStop:
+    case sim::MoveStatus::kCoupled:  // driven by the motor before it, not on its own
       return AckCode::kErrGeneral;
   }
   return AckCode::kErrGeneral;
@@ -155,7 +156,8 @@ bool Playback::OnRigAtRest() {
 std::vector<int> Playback::PlaybackMotors() const {
   std::vector<int> out;
   for (int m : upload_.Motors()) {
-    if (MotorValid(m) && rig_.motor(m).enabled()) out.push_back(m);
+    // A coupled motor follows the motor that drives it instead of its own data.
+    if (MotorValid(m) && rig_.motor(m).enabled() && rig_.leader(m) == 0) out.push_back(m);
   }
   return out;
 }
@@ -209,6 +211,8 @@ AckCode Playback::PositionFrame(uint32_t frame) {
   const std::vector<int> motors = PlaybackMotors();
   // Check every motor first so a refusal moves nothing.
   for (int m_id : motors) {
+    // Soft limits that do not bound moves (behaviour.soft_limits_bound_moves) let it pass them.
+    if (!profile_.behaviour.soft_limits_bound_moves) break;
     const sim::SoftLimits& s = rig_.motor(m_id).soft_limits();
     const int64_t p = upload_.Position(m_id, frame);
     if (s.upper_enabled && p > s.upper_steps) return AckCode::kErrSoftUp;
@@ -405,7 +409,8 @@ AckCode Playback::CheckPass(const Pass& p) const {
   const uint32_t n = Intervals(p.from_frame, p.to_frame);
   for (int m : PlaybackMotors()) {
     const sim::SoftLimits& s = rig_.motor(m).soft_limits();
-    for (uint32_t k = 0; k <= n; ++k) {
+    // behaviour.soft_limits_bound_moves false: only pre- and post-roll are bounded.
+    for (uint32_t k = 0; profile_.behaviour.soft_limits_bound_moves && k <= n; ++k) {
       const int32_t x = PassPosition(m, p, k);
       if (s.upper_enabled && x > s.upper_steps) return AckCode::kErrSoftUp;
       if (s.lower_enabled && x < s.lower_steps) return AckCode::kErrSoftLow;
@@ -497,14 +502,24 @@ AckCode Playback::ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, doub
   if (!upload_.Contains(frame) || exposure_ms == 0) return AckCode::kErrRange;
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
   std::vector<BlurAxis> axes;
+  std::vector<int> listed;
   const double exposure_s = exposure_ms / 1000.0;
   for (const dmc::BlurMotor& b : motors) {
     if (!MotorValid(b.motor)) return AckCode::kErrRange;
-    for (const BlurAxis& a : axes) {
-      if (a.motor == b.motor) return AckCode::kErrRange;  // a motor listed twice
+    if (std::find(listed.begin(), listed.end(), b.motor) != listed.end()) {
+      return AckCode::kErrRange;  // a motor listed twice
     }
+    listed.push_back(b.motor);
     const sim::StepperMotor& motor = rig_.motor(b.motor);
-    if (!motor.enabled()) return AckCode::kErrGeneral;
+    // Which motors blur: those listed whose blur flag is set
+    // (MSG_MOTOR_CONFIGURE 0x02 "blur enabled"); a listed motor without it
+    // is held as the unlisted ones are (docs/protocol-notes.md). A coupled
+    // motor blurs with the motor that drives it.
+    if (!motor.blur() || rig_.leader(b.motor) != 0) continue;
+    if (!motor.enabled()) {
+      if (profile_.behaviour.disabled_motors_ignore_motion) continue;
+      return AckCode::kErrGeneral;
+    }
     // POS A at angle 0, POS B at angle 360; backward runs B towards A.
     const double from = dir > 0 ? b.pos_a_steps : b.pos_b_steps;
     const double to = dir > 0 ? b.pos_b_steps : b.pos_a_steps;

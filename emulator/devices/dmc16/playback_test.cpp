@@ -77,6 +77,7 @@ class Bench final : public sim::RigObserver {
       mp.hard_stop_multiple = profile_.hard_stop_multiple;
       rig.motor(m).SetPlanner(std::move(planner));
       rig.motor(m).SetProfile(mp);
+      rig.motor(m).SetBlur(true);  // as the device's motors until MSG_MOTOR_CONFIGURE
     }
     rig.SetObserver(this);
   }
@@ -488,6 +489,27 @@ TEST(Playback, ShootFrameExposesWhileTheBlurredMotorCrossesTheShutterAngles) {
   EXPECT_EQ(b.Pos(1), 300 + 200);
   ASSERT_EQ(b.rt_ends.size(), 1u);
   EXPECT_EQ(b.playback.ModeName(), "idle");
+}
+
+// MSG_MOTOR_CONFIGURE "0x02 - blur enabled" decides which of the motors a
+// SHOOT_FRAME lists blur: one without the flag is held on the frame's
+// position through the exposure, as the motors not listed are.
+TEST(Playback, AListedMotorWithoutTheBlurFlagIsHeldOnTheFrame) {
+  Bench b;
+  b.UploadRamp(10, 60, 10);
+  b.rig.motor(1).SetBlur(false);
+  ASSERT_EQ(b.playback.ShootFrame(20, 1, 100, 90, 270, std::vector<dmc::BlurMotor>{{1, 0, 400}}),
+            kOk);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 100) << "frame 20's uploaded position, not the ramp start";
+  ASSERT_EQ(b.playback.Go(), kOk);
+  b.Settle();
+  EXPECT_EQ(b.camera.exposures(), 1u);
+  EXPECT_EQ(b.Pos(1), 100);
+  // Listed twice is still refused, blurred or not.
+  EXPECT_EQ(b.playback.ShootFrame(20, 1, 100, 90, 270,
+                                  std::vector<dmc::BlurMotor>{{1, 0, 400}, {1, 0, 400}}),
+            AckCode::kErrRange);
 }
 
 TEST(Playback, ResetForgetsTheFrameAndTheRun) {
