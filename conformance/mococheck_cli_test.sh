@@ -284,7 +284,7 @@ mococheck_cli_dfmoco_cases)
 # The golden sessions replay against fresh devices, and a short fuzz run per
 # protocol breaks no invariant.
 mococheck_replay_golden_sessions)
-  for s in dmc16-workflow dfmoco-uno-workflow stackshot3x-workflow; do
+  for s in dmc16-workflow dmc16-live-run dfmoco-uno-workflow stackshot3x-workflow; do
     expect_rc 0 "$m" replay "$src/fixtures/sessions/$s.jsonl"
     grep -q '^result: MATCH' out.txt || fail "$s does not replay byte for byte"
   done

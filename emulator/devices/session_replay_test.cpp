@@ -52,6 +52,10 @@ void Replay(const std::string& file, const std::string& model) {
 }
 
 TEST(SessionReplay, Dmc16Workflow) { Replay("dmc16-workflow.jsonl", "dmc16"); }
+// A live run at 2 fps: position updates every 100 ms in the pre-roll, between
+// the frames and in the post-roll (dmc-v2-protocol.txt MSG_MOTOR_GET_POSITION),
+// beside the report at each frame (MSG_RT_GO).
+TEST(SessionReplay, Dmc16LiveRunAtALowFrameRate) { Replay("dmc16-live-run.jsonl", "dmc16"); }
 TEST(SessionReplay, Stackshot3xWorkflow) { Replay("stackshot3x-workflow.jsonl", "stackshot3x"); }
 
 }  // namespace

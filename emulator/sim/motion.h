@@ -118,6 +118,8 @@ class Plan {
   TimeNs origin_ns() const { return origin_ns_; }
   int64_t origin_steps() const { return origin_steps_; }
   const std::vector<Segment>& segments() const { return segs_; }
+  // The step quantum the plan was built with (1 = analytic edge times).
+  TimeNs step_quantum_ns() const { return quantum_ns_; }
 
   // Time the motion ends (the last segment's end, rounded up to an integer
   // ns); origin_ns for an empty plan. Every edge has time <= EndNs().

@@ -1,6 +1,7 @@
-// The motors of one device with their limit sets and the e-stop input
-// (dmc-v2-protocol.txt MSG_MOTOR_STOP_ALL, MSG_MOTOR_SET_LIMITS,
-// MSG_MOTOR_HARD_STOP reason 0 "E-Stop", 1 upper limit, 2 lower limit).
+// The motors of one device with their limit sets, the e-stop input and motor
+// coupling (dmc-v2-protocol.txt MSG_MOTOR_STOP_ALL, MSG_MOTOR_SET_LIMITS,
+// MSG_MOTOR_HARD_STOP reason 0 "E-Stop", 1 upper limit, 2 lower limit;
+// capability 0x0100 "Couple motors").
 #ifndef MOCO_SIM_RIG_H_
 #define MOCO_SIM_RIG_H_
 
@@ -73,6 +74,28 @@ class Rig final : private MotorObserver {
   // bound to the set sees its corresponding end forced.
   void ForceInput(int set, SwitchInput input, bool active);
 
+  // --- coupling ---
+  // Couples `follower` to `leader`: every motion plan the leader takes from
+  // now on (a move, a jog, a script, a stop ramp), the follower takes too,
+  // step for step at the same times, mirrored when `reversed`; a halt of the
+  // leader halts it. The follower refuses motion of its own (kCoupled) and
+  // its Stop() is a no-op: stop its Root(). A limit switch tripping on any
+  // motor of a coupled group halts the whole group. Leaders may themselves
+  // follow (a chain). kBadArgument for unknown or equal motors or a cycle;
+  // kMoving while either motor moves (nothing changes then). Re-coupling a
+  // follower replaces its leader.
+  MoveStatus Couple(int follower, int leader, bool reversed);
+  // Lets `follower` go: it stays where it is and takes commands again.
+  // kMoving while it moves; kOk for a motor that did not follow.
+  MoveStatus Uncouple(int follower);
+  // The motor `motor_id` follows, or 0.
+  int leader(int motor_id) const { return leaders_[static_cast<size_t>(motor_id - 1)].motor; }
+  bool coupled_reversed(int motor_id) const {
+    return leaders_[static_cast<size_t>(motor_id - 1)].reversed;
+  }
+  // The head of `motor_id`'s chain of leaders (itself when it follows none).
+  int Root(int motor_id) const;
+
   // --- e-stop ---
   // Halts every motor at once and refuses motion (kEStop) until released.
   void EngageEStop();
@@ -88,14 +111,31 @@ class Rig final : private MotorObserver {
   // The input of the motor's set that guards `end`.
   static SwitchInput InputFor(HardLimitBinding b, LimitEnd end);
   void ApplyPlacement(int motor_id);
+  // Followers of `leader` take its current plan (a halt when it rests).
+  void Propagate(int leader);
+
+  struct Coupling {
+    int motor = 0;  // the leader, 0 for none
+    bool reversed = false;
+  };
+  struct Finished {
+    int motor_id;
+    TimeNs time_ns;
+    int64_t steps;
+  };
 
   Scheduler& scheduler_;
   RigObserver* observer_;
   std::vector<std::unique_ptr<StepperMotor>> motors_;
   std::vector<HardLimitBinding> bindings_;
   std::vector<LimitSetPlacement> placements_;
-  std::vector<uint8_t> forced_;  // per set: bit 0 low, bit 1 high
+  std::vector<uint8_t> forced_;    // per set: bit 0 low, bit 1 high
+  std::vector<Coupling> leaders_;  // per motor
   bool estop_ = false;
+  // While a limit trip halts a coupled group, the group's OnMotionFinished
+  // wait until the observer has heard of the trip.
+  bool defer_finished_ = false;
+  std::vector<Finished> deferred_;
 };
 
 }  // namespace moco::sim

@@ -157,5 +157,75 @@ TEST_F(RigTest, StopAllDeceleratesAndHardStopAllIsShorter) {
   EXPECT_NEAR(static_cast<double>(distance(true)), 500, 1);
 }
 
+// Capability 0x0100 "Couple motors": followers take every plan of their
+// leader (moves, stop ramps) step for step, mirrored when reversed.
+TEST_F(RigTest, CoupledMotorsFollowTheirLeaderThroughMovesAndStops) {
+  ASSERT_EQ(rig_.Couple(2, 1, false), MoveStatus::kOk);
+  ASSERT_EQ(rig_.Couple(3, 2, true), MoveStatus::kOk);  // a chain: 3 follows 2 follows 1
+  EXPECT_EQ(rig_.Root(3), 1);
+  EXPECT_EQ(rig_.leader(3), 2);
+  EXPECT_TRUE(rig_.coupled_reversed(3));
+  EXPECT_EQ(rig_.motor(2).MoveTo(5), MoveStatus::kCoupled);
+  ASSERT_EQ(rig_.motor(3).ResetPosition(1000), MoveStatus::kOk);
+  ASSERT_EQ(rig_.motor(1).MoveTo(100000), MoveStatus::kOk);
+  EXPECT_EQ(rig_.MovingMask(), 0b111u);
+  sched_.RunUntil(2'000'000'000);
+  EXPECT_EQ(rig_.motor(2).Position(), rig_.motor(1).Position());
+  EXPECT_EQ(rig_.motor(3).Position(), 1000 - rig_.motor(1).Position());
+  rig_.StopAll();
+  sched_.RunUntilIdle();
+  const int64_t p1 = rig_.motor(1).Position();
+  EXPECT_LT(p1, 100000);
+  EXPECT_EQ(rig_.motor(2).Position(), p1);
+  EXPECT_EQ(rig_.motor(3).Position(), 1000 - p1);
+  // The leader finished first; the last follower's rest is the last event.
+  ASSERT_EQ(events_.finished.size(), 3u);
+  EXPECT_EQ(events_.finished.front(), 1);
+  // Changing the coupling while moving is refused; a cycle never forms.
+  EXPECT_EQ(rig_.Couple(1, 3, false), MoveStatus::kBadArgument);
+  EXPECT_EQ(rig_.Couple(1, 1, false), MoveStatus::kBadArgument);
+  rig_.motor(1).MoveTo(0);
+  EXPECT_EQ(rig_.Uncouple(2), MoveStatus::kMoving);
+  sched_.RunUntilIdle();
+  ASSERT_EQ(rig_.Uncouple(2), MoveStatus::kOk);
+  EXPECT_EQ(rig_.Root(3), 2);
+  EXPECT_EQ(rig_.motor(2).MoveTo(10), MoveStatus::kOk);
+}
+
+TEST_F(RigTest, ALimitSwitchOnAFollowerHaltsTheWholeGroupBeforeTheTripIsHeard) {
+  struct Watch : RigObserver {
+    Rig* rig = nullptr;
+    uint32_t moving_at_trip = 0xffffffff;
+    std::vector<int> order;  // motor ids: trips as -id, finishes as +id
+    void OnMotionFinished(int motor_id, TimeNs, int64_t) override { order.push_back(motor_id); }
+    void OnLimitTripped(int motor_id, LimitEnd, int, SwitchInput, TimeNs, int64_t) override {
+      moving_at_trip = rig->MovingMask();
+      order.push_back(-motor_id);
+    }
+  } watch;
+  watch.rig = &rig_;
+  rig_.SetObserver(&watch);
+  ASSERT_TRUE(rig_.SetLimitPlacement(1, {-100, 300}));
+  ASSERT_EQ(rig_.BindLimits(2, {1, false}), MoveStatus::kOk);
+  ASSERT_EQ(rig_.Couple(2, 1, false), MoveStatus::kOk);
+  ASSERT_EQ(rig_.motor(1).MoveTo(5000), MoveStatus::kOk);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(watch.moving_at_trip, 0u) << "the leader halted with the follower";
+  EXPECT_EQ(rig_.motor(1).Position(), 300);
+  EXPECT_EQ(rig_.motor(2).Position(), 300);
+  EXPECT_EQ(watch.order, (std::vector<int>{-2, 1, 2}));
+  // Driving the leader on into the follower's tripped switch trips it at once.
+  watch.order.clear();
+  ASSERT_EQ(rig_.motor(1).MoveTo(400), MoveStatus::kOk);
+  EXPECT_FALSE(rig_.AnyMoving());
+  EXPECT_EQ(rig_.motor(1).Position(), 300);
+  ASSERT_FALSE(watch.order.empty());
+  EXPECT_EQ(watch.order.front(), -2);
+  // Away from the switch the group moves again.
+  ASSERT_EQ(rig_.motor(1).MoveTo(0), MoveStatus::kOk);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(rig_.motor(2).Position(), 0);
+}
+
 }  // namespace
 }  // namespace moco::sim

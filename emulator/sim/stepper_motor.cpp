@@ -15,6 +15,21 @@ constexpr size_t kEdgeBatch = 256;
 
 bool Positive(double v) { return std::isfinite(v) && v > 0; }
 
+// The velocities of a chunked run, mirrored: piece j moves at minus the
+// original's velocity at the mirrored position.
+class MirroredChunks final : public ChunkVelocities {
+ public:
+  explicit MirroredChunks(std::shared_ptr<const ChunkVelocities> inner)
+      : inner_(std::move(inner)) {}
+  double Velocity(int64_t j, double x_steps) const override {
+    return -inner_->Velocity(j, -x_steps);
+  }
+  size_t HeapBytes() const override { return inner_->HeapBytes(); }
+
+ private:
+  std::shared_ptr<const ChunkVelocities> inner_;
+};
+
 }  // namespace
 
 std::string_view MoveStatusName(MoveStatus s) {
@@ -37,6 +52,8 @@ std::string_view MoveStatusName(MoveStatus s) {
       return "e-stop";
     case MoveStatus::kBadArgument:
       return "bad-argument";
+    case MoveStatus::kCoupled:
+      return "coupled";
   }
   return "?";
 }
@@ -66,10 +83,13 @@ double StepperMotor::Velocity() const {
 }
 
 MoveStatus StepperMotor::CheckCanMove(int64_t target_steps) const {
+  if (following_) return MoveStatus::kCoupled;
   if (!enabled_) return MoveStatus::kDisabled;
   if (inhibited_) return MoveStatus::kEStop;
-  if (soft_.upper_enabled && target_steps > soft_.upper_steps) return MoveStatus::kSoftLimitUpper;
-  if (soft_.lower_enabled && target_steps < soft_.lower_steps) return MoveStatus::kSoftLimitLower;
+  if (soft_bounds_moves_) {
+    if (soft_.upper_enabled && target_steps > soft_.upper_steps) return MoveStatus::kSoftLimitUpper;
+    if (soft_.lower_enabled && target_steps < soft_.lower_steps) return MoveStatus::kSoftLimitLower;
+  }
   const int64_t p = Position();
   if (target_steps > p && SwitchTripped(LimitEnd::kUpper)) return MoveStatus::kHardLimitUpper;
   if (target_steps < p && SwitchTripped(LimitEnd::kLower)) return MoveStatus::kHardLimitLower;
@@ -89,14 +109,15 @@ MoveStatus StepperMotor::MoveTo(int64_t target_steps) {
 }
 
 MoveStatus StepperMotor::Jog(int64_t destination_steps, int speed) {
+  if (following_) return MoveStatus::kCoupled;
   if (speed < kJogSpeedMin || speed > kJogSpeedMax) return MoveStatus::kBadArgument;
   const int64_t p = Position();
   int64_t dest = destination_steps;
-  if (soft_.upper_enabled && dest > soft_.upper_steps) {
+  if (soft_bounds_moves_ && soft_.upper_enabled && dest > soft_.upper_steps) {
     if (p >= soft_.upper_steps) return MoveStatus::kSoftLimitUpper;
     dest = soft_.upper_steps;
   }
-  if (soft_.lower_enabled && dest < soft_.lower_steps) {
+  if (soft_bounds_moves_ && soft_.lower_enabled && dest < soft_.lower_steps) {
     if (p <= soft_.lower_steps) return MoveStatus::kSoftLimitLower;
     dest = soft_.lower_steps;
   }
@@ -116,19 +137,74 @@ MoveStatus StepperMotor::Jog(int64_t destination_steps, int speed) {
 }
 
 void StepperMotor::Stop() {
-  if (!moving_) return;
-  PlanRequest req;
-  req.kind = PlanRequest::Kind::kStop;
-  req.decel_steps_per_s2 = profile_.max_accel_steps_per_s2;
-  Replan(req);
+  if (!moving_ || following_) return;
+  StopWith(profile_.max_accel_steps_per_s2);
 }
 
 void StepperMotor::HardStop() {
-  if (!moving_) return;
+  if (!moving_ || following_) return;
+  StopWith(profile_.max_accel_steps_per_s2 * profile_.hard_stop_multiple);
+}
+
+void StepperMotor::StopWith(double decel_steps_per_s2) {
+  const KinematicState s = plan_.StateAt(scheduler_.Now());
+  const double x = static_cast<double>(plan_.origin_steps()) + s.x_steps;
+  const double v = s.v_steps_per_s;
+  // A stop never carries a motor past a soft limit it is still inside of:
+  // it brakes as hard as needed to come to rest on the limit.
+  std::optional<double> room;
+  const double reach = v * v / (2 * decel_steps_per_s2);
+  if (v > 0 && soft_.upper_enabled) {
+    const auto limit = static_cast<double>(soft_.upper_steps);
+    if (x <= limit && x + reach > limit) room = limit - x;
+  } else if (v < 0 && soft_.lower_enabled) {
+    const auto limit = static_cast<double>(soft_.lower_steps);
+    if (x >= limit && x - reach < limit) room = x - limit;
+  }
+  if (room) {
+    if (!(*room > 0)) {
+      EmergencyHalt();
+      return;
+    }
+    decel_steps_per_s2 = v * v / (2 * *room);
+  }
   PlanRequest req;
   req.kind = PlanRequest::Kind::kStop;
-  req.decel_steps_per_s2 = profile_.max_accel_steps_per_s2 * profile_.hard_stop_multiple;
+  req.decel_steps_per_s2 = decel_steps_per_s2;
   Replan(req);
+}
+
+void StepperMotor::Follow(const Plan& leader, int sign) {
+  if (leader.empty() || leader.origin_ns() != scheduler_.Now()) {
+    EmergencyHalt();
+    return;
+  }
+  if (!enabled_ || inhibited_) return;
+  std::vector<Segment> segments = leader.segments();
+  const double start_x = segments.front().x0_steps * (sign < 0 ? -1 : 1);
+  if (sign < 0) {
+    // Negation is exact in floating point, and the step thresholds sit
+    // symmetrically at +-1/2: the mirrored plan's edges fall at the very
+    // same nanoseconds as the leader's.
+    for (Segment& seg : segments) {
+      seg.x0_steps = -seg.x0_steps;
+      seg.v0_steps_per_s = -seg.v0_steps_per_s;
+      seg.a_steps_per_s2 = -seg.a_steps_per_s2;
+      if (seg.chunk_velocities) {
+        seg.chunk_velocities = std::make_shared<MirroredChunks>(seg.chunk_velocities);
+      }
+    }
+  }
+  const TimeNs now = scheduler_.Now();
+  CommitEdges(now);
+  const int64_t p = plan_.StepsAt(now);
+  InstallPlan(Plan::Build(now, p, start_x, segments, leader.step_quantum_ns()));
+  if (!moving_) return;
+  // Heading into a switch that is already tripped: it trips at once, as a
+  // motor placed past a switch does (SetSwitchPositions).
+  const int dir = CurrentDirection();
+  if (dir > 0 && SwitchTripped(LimitEnd::kUpper)) return OnSwitchTrip(LimitEnd::kUpper);
+  if (dir < 0 && SwitchTripped(LimitEnd::kLower)) return OnSwitchTrip(LimitEnd::kLower);
 }
 
 void StepperMotor::EmergencyHalt() {

@@ -32,6 +32,7 @@ enum class MoveStatus : uint8_t {
   kHardLimitUpper,  // upper switch tripped and the target is further up
   kEStop,           // e-stop engaged
   kBadArgument,     // jog speed outside 1..10000, non-positive speed limits
+  kCoupled,         // the motor follows another (Rig::Couple): it takes no motion of its own
 };
 std::string_view MoveStatusName(MoveStatus s);
 
@@ -127,11 +128,16 @@ class StepperMotor {
   // MSG_MOTOR_JOG: moves to `destination_steps` with velocity and
   // acceleration scaled by speed/10000 (10000 = the profile's maxima);
   // braking uses the full max acceleration. A destination beyond an enabled
-  // soft limit stops at the limit instead (refused if already there).
+  // soft limit stops at the limit instead (refused if already there), unless
+  // soft limits do not bound moves (SetSoftLimitsBoundMoves).
   MoveStatus Jog(int64_t destination_steps, int speed);
-  // Decelerates to rest at max acceleration. No-op at rest.
+  // Decelerates to rest at max acceleration. No-op at rest, and for a
+  // following motor (its leader's stop carries it). Soft limits bound the
+  // stop: a motor inside an enabled soft limit whose ramp would carry it past
+  // the limit brakes harder, to rest on the limit.
   void Stop();
-  // Decelerates at hard_stop_multiple x max acceleration. No-op at rest.
+  // Decelerates at hard_stop_multiple x max acceleration, bounded by the
+  // soft limits as Stop(). No-op at rest and for a following motor.
   void HardStop();
   // Halts at once on the current step (infinite deceleration).
   void EmergencyHalt();
@@ -150,6 +156,11 @@ class StepperMotor {
   bool blur() const { return blur_; }
   void SetSoftLimits(const SoftLimits& limits) { soft_ = limits; }
   const SoftLimits& soft_limits() const { return soft_; }
+  // Whether the soft limits refuse MoveTo targets beyond them and clamp Jog
+  // destinations (default). When false, moves and jogs beyond them complete;
+  // the limits still bound Stop() and HardStop().
+  void SetSoftLimitsBoundMoves(bool bound) { soft_bounds_moves_ = bound; }
+  bool soft_limits_bound_moves() const { return soft_bounds_moves_; }
   // Places the switches; a moving motor already past a switch in its
   // direction of travel trips at once.
   void SetSwitchPositions(const SwitchPositions& switches);
@@ -162,6 +173,20 @@ class StepperMotor {
   void SetInhibited(bool inhibited) { inhibited_ = inhibited; }
   bool inhibited() const { return inhibited_; }
 
+  // --- coupling (driven by Rig::Couple) ---
+  // A following motor refuses MoveTo and Jog (kCoupled) and ignores Stop and
+  // HardStop: it moves only by Follow(). EmergencyHalt, ResetPosition,
+  // switches and configuration work as for any motor.
+  void SetFollowing(bool following) { following_ = following; }
+  bool following() const { return following_; }
+  // Takes `leader`'s motion from now on: the same segments from this motor's
+  // own step, negated when `sign` < 0, so it makes the leader's step edges at
+  // the same times (mirrored). An empty leader plan halts the motor where it
+  // is. A disabled or inhibited motor does not follow. A plan heading into a
+  // tripped limit switch trips it at once (OnLimitTripped). REQUIRES: a
+  // non-empty `leader` starts now (origin_ns() == the scheduler's Now()).
+  void Follow(const Plan& leader, int sign);
+
   // --- observation ---
   // REQUIRES: sink outlives the registration. Edges committed from now on.
   void AddStepSink(StepSink* sink);
@@ -173,6 +198,8 @@ class StepperMotor {
 
  private:
   MoveStatus CheckCanMove(int64_t target_steps) const;
+  // Stop() and HardStop() at `decel_steps_per_s2`, bounded by the soft limits.
+  void StopWith(double decel_steps_per_s2);
   // Replaces the plan with the planner's answer to `req` from Now().
   void Replan(PlanRequest req);
   void InstallPlan(Plan plan);
@@ -196,6 +223,8 @@ class StepperMotor {
   bool enabled_ = true;
   bool blur_ = false;
   bool inhibited_ = false;
+  bool soft_bounds_moves_ = true;
+  bool following_ = false;
 
   Plan plan_;
   bool moving_ = false;

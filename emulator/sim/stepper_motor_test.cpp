@@ -349,6 +349,107 @@ TEST_F(MotorTest, SoftLimitsRefuseMovesBeyondAndStopJogsAtTheLimit) {
   EXPECT_EQ(motor_.MoveTo(-101), MoveStatus::kOk);
 }
 
+// dmc-v2-protocol.txt ERR_SOFT_UP / ERR_SOFT_LOW; FACTS "DMC v2": dmc-lite's
+// soft limits act only on RUN_MOVE pre/post-roll and the stop deceleration.
+TEST_F(MotorTest, SoftLimitsThatDoNotBoundMovesLetMovesAndJogsPassThem) {
+  motor_.SetSoftLimits({true, -100, true, 200});
+  motor_.SetSoftLimitsBoundMoves(false);
+  EXPECT_EQ(motor_.MoveTo(250), MoveStatus::kOk);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 250);
+  EXPECT_EQ(motor_.Jog(-300, 10000), MoveStatus::kOk);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), -300) << "the jog is not clamped at the lower limit";
+  motor_.SetSoftLimitsBoundMoves(true);
+  EXPECT_EQ(motor_.MoveTo(250), MoveStatus::kSoftLimitUpper);
+}
+
+// A stop never coasts past a soft limit the motor is still inside of: it
+// brakes harder, to rest on the limit (either setting of SetSoftLimitsBoundMoves).
+TEST_F(MotorTest, StopIsBoundedByTheSoftLimitItWouldPass) {
+  for (const bool bound : {true, false}) {
+    Scheduler s;
+    StepperMotor m(s, 1);
+    m.SetProfile(Profile(4000, 2000));
+    m.SetSoftLimitsBoundMoves(bound);
+    m.MoveTo(100000);
+    s.RunUntil(3'000'000'000);  // cruising at 4000 steps/s at 8000 steps
+    ASSERT_EQ(m.Position(), 8000);
+    // The ramp at 2000 steps/s^2 needs 4000 steps; the limit is 1000 ahead.
+    m.SetSoftLimits({false, 0, true, 9000});
+    m.Stop();
+    s.RunUntilIdle();
+    EXPECT_EQ(m.Position(), 9000) << "bound=" << bound;
+    // Outside the limit's reach the ordinary ramp runs.
+    m.SetSoftLimits({false, 0, true, 1'000'000});
+    m.MoveTo(100000);
+    s.RunUntil(s.Now() + 3'000'000'000);
+    const int64_t at = m.Position();
+    m.Stop();
+    s.RunUntilIdle();
+    EXPECT_NEAR(static_cast<double>(m.Position() - at), 4000, 1);
+  }
+}
+
+// Capability 0x0100 "Couple motors": a follower makes its leader's step
+// edges at the very same times, mirrored when reversed.
+TEST(MotorFollow, AFollowerMakesTheLeadersEdgesAtTheSameTimesMirroredWhenReversed) {
+  for (const int sign : {1, -1}) {
+    Scheduler s;
+    StepperMotor leader(s, 1);
+    StepperMotor follower(s, 2);
+    StepTrace lt(leader, 1 << 16);
+    StepTrace ft(follower, 1 << 16);
+    ASSERT_EQ(follower.ResetPosition(500), MoveStatus::kOk);
+    follower.SetFollowing(true);
+    EXPECT_EQ(follower.MoveTo(10), MoveStatus::kCoupled);
+    EXPECT_EQ(follower.Jog(10, 100), MoveStatus::kCoupled);
+    leader.SetProfile(Profile(3000, 7000));
+    ASSERT_EQ(leader.MoveTo(4321), MoveStatus::kOk);
+    follower.Follow(leader.CurrentPlan(), sign);
+    s.RunUntil(700'000'000);
+    // Retarget mid-move (reversing), then stop: each new plan is followed.
+    ASSERT_EQ(leader.MoveTo(-250), MoveStatus::kOk);
+    follower.Follow(leader.CurrentPlan(), sign);
+    s.RunUntil(1'500'000'000);
+    follower.Stop();  // a follower's own stop does nothing
+    leader.Stop();
+    follower.Follow(leader.CurrentPlan(), sign);
+    s.RunUntilIdle();
+    lt.Sync();
+    ft.Sync();
+    const auto le = lt.Edges();
+    const auto fe = ft.Edges();
+    ASSERT_EQ(le.size(), fe.size());
+    ASSERT_FALSE(le.empty());
+    for (size_t i = 0; i < le.size(); ++i) {
+      ASSERT_EQ(fe[i].time_ns, le[i].time_ns) << i;
+      ASSERT_EQ(fe[i].direction, sign * le[i].direction) << i;
+      ASSERT_EQ(fe[i].step, 500 + sign * le[i].step) << i;
+    }
+    EXPECT_FALSE(follower.IsMoving());
+  }
+}
+
+TEST(MotorFollow, AnEmptyLeaderPlanHaltsTheFollowerAndADisabledOneStays) {
+  Scheduler s;
+  StepperMotor leader(s, 1);
+  StepperMotor follower(s, 2);
+  follower.SetFollowing(true);
+  leader.MoveTo(100000);
+  follower.Follow(leader.CurrentPlan(), 1);
+  s.RunUntil(1'000'000'000);
+  EXPECT_TRUE(follower.IsMoving());
+  leader.EmergencyHalt();
+  follower.Follow(leader.CurrentPlan(), 1);
+  EXPECT_FALSE(follower.IsMoving());
+  EXPECT_EQ(follower.Position(), leader.Position());
+  follower.SetEnabled(false);
+  leader.MoveTo(0);
+  follower.Follow(leader.CurrentPlan(), 1);
+  EXPECT_FALSE(follower.IsMoving());
+}
+
 TEST_F(MotorTest, LimitSwitchTripsOnTheSwitchStepAndGuardsThatEnd) {
   motor_.SetProfile(Profile(2000, 4000));
   motor_.SetSwitchPositions({-50, 300});

@@ -36,7 +36,9 @@ int main(int argc, char** argv) {
       "100 ms, 40 steps at 0.1 s), status, RESET_POSITION, motor 17 (ERR_RANGE), a damaged "
       "frame (ERR_CHECKSUM), an unknown type (ERR_UNSUPPORTED), a 24-frame upload, RUN_MOVE "
       "at 24 fps with 500 ms pre/post-roll (pre-roll start 2400 - 480*0.5/2 = 2280), GO with "
-      "a report per frame, RT_END after the post-roll (2860 + 120 = 2980)";
+      "a report per frame and updates every 100 ms in the pre-roll (MOVE TIME 0: the frame "
+      "clock before frame 0) and the post-roll (MOVE TIME past frame 24, 36000 at rest), "
+      "RT_END after the post-roll (2860 + 120 = 2980)";
   session::SessionWriter writer(argv[1], h);
   sim::Scheduler scheduler;
   session_gen::DeviceRecorder sink(scheduler, writer);

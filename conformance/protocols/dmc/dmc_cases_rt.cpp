@@ -99,13 +99,30 @@ void LiveRun(DmcCaseContext& c) {
   const double interval_ns = 1e9 / 24.0;
   const TimeNs slack = c.target.VirtualClock() ? 0 : 30 * kMs;
   TimeNs prev_t = -1;  // none yet
+  // Whether an update has every motor within frame k's interval of the path.
+  auto on_frame = [&](const Update& up, uint32_t k) {
+    for (size_t m = 0; m < u->path.size(); ++m) {
+      const int32_t a = u->path[m][k], b = u->path[m][std::min(k + 1, u->end)];
+      const int32_t p = At(up.positions, m);
+      if (p < std::min(a, b) || p > std::max(a, b)) return false;
+    }
+    return true;
+  };
   for (uint32_t k = 0; k <= end; ++k) {
+    // The frame's report: the first update carrying frame k's MOVE TIME with
+    // the rig at that frame. The periodic updates ("about every 0.10
+    // seconds") go on beside the frame reports, and a device may give the
+    // pre-roll's and post-roll's updates the start or end frame's MOVE TIME
+    // (docs/protocol-notes.md "Live-move reports").
     const Update* first = nullptr;
     for (const Update& up : ups) {
-      if (up.move_time / 1000 == k) {
+      if (up.move_time / 1000 == k && on_frame(up, k)) {
         first = &up;
         break;
       }
+    }
+    for (size_t i = 0; first == nullptr && i < ups.size(); ++i) {
+      if (ups[i].move_time / 1000 == k) first = &ups[i];
     }
     if (!Expect(c, "DMC-RT-004", first != nullptr,
                 "a report with MOVE TIME " + std::to_string(k * 1000),

@@ -27,10 +27,15 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
       decoder_(std::make_unique<dmc::FrameDecoder>()),
       playback_(scheduler, rig_, planners_, upload_, profile_, dmx_, gio_, camera_,
                 PlaybackHooks{
-                    .send_position_update = [this] { SendPositionUpdate(); },
+                    .send_position_update =
+                        [this] {
+                          SendPositionUpdate();
+                          // The cadence counts on from the update just sent.
+                          CancelTimer(report_timer_);
+                          EnsurePositionReports();
+                        },
                     .send_rt_end = [this] { SendUnsolicited(dmc::RtEnd{}); },
                     .ensure_position_reports = [this] { EnsurePositionReports(); },
-                    .stop_position_reports = [this] { CancelTimer(report_timer_); },
                 }) {
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     auto planner = std::make_unique<ScriptPlanner>();
@@ -60,18 +65,26 @@ LineSettings Dmc16::Line() const {
 void Dmc16::ResetState() {
   CancelAllTimers();
   for (ScriptPlanner* p : planners_) p->Drop();
+  for (int m = 1; m <= rig_.motor_count(); ++m) rig_.motor(m).EmergencyHalt();
+  config_flags_.assign(static_cast<size_t>(rig_.motor_count()),
+                       profile_.motors_enabled ? dmc::kMotorEnabled | dmc::kMotorBlurEnabled : 0);
+  truncated_.assign(static_cast<size_t>(rig_.motor_count()), std::nullopt);
+  hard_stop_lock_ = false;
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     sim::StepperMotor& motor = rig_.motor(m);
-    motor.EmergencyHalt();
+    rig_.Uncouple(m);
     motor.ResetPosition(0);
     sim::MotionProfile mp;
     mp.max_velocity_steps_per_s = profile_.max_velocity_steps_per_s;
     mp.max_accel_steps_per_s2 = profile_.max_accel_steps_per_s2;
     mp.hard_stop_multiple = profile_.hard_stop_multiple;
     motor.SetProfile(mp);
+    // Until MSG_MOTOR_CONFIGURE, motors stand as if configured with
+    // `motors_enabled`: enabled and blur-enabled (0x03), or neither.
     motor.SetEnabled(profile_.motors_enabled);
-    motor.SetBlur(false);
+    motor.SetBlur(profile_.motors_enabled);
     motor.SetSoftLimits({});
+    motor.SetSoftLimitsBoundMoves(profile_.behaviour.soft_limits_bound_moves);
     rig_.BindLimits(m, {});
   }
   gio_.SetOutputs(0);
@@ -98,7 +111,9 @@ void Dmc16::PowerOn() {
   SendUnsolicited(profile_.Hi());
 }
 
-void Dmc16::OnMotionStarted(int /*motor_id*/, sim::TimeNs /*time_ns*/) {
+void Dmc16::OnMotionStarted(int motor_id, sim::TimeNs /*time_ns*/) {
+  // A new motion ends a truncated reading (behaviour.positions_truncate).
+  truncated_[static_cast<size_t>(motor_id - 1)].reset();
   // Whatever started it (a request, a playback frame, a shot, a jog), the
   // physical rig follows the motors again (it sleeps while nothing moves).
   if (physical_) physical_->Wake();
@@ -225,6 +240,10 @@ void Dmc16::OnFrame(const dmc::FrameRef& f) {
     return;
   }
   ++stats_.requests;
+  if (HardStopLockout(f.type)) {
+    Ack(f.id, f.type, AckCode::kErrHardLow);
+    return;
+  }
   if (!Advertised(f.type)) {
     Ack(f.id, f.type, AckCode::kErrUnsupported);
     return;
@@ -339,11 +358,20 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
             playback_.OnUploadBegin();
             Ack(id, type, upload_.Begin(m.start_frame, m.end_frame).code);
           },
-          [&](const dmc::RtUploadMoveAxis& m) { Ack(id, type, upload_.Axis(m).code); },
-          [&](const dmc::RtUploadMoveDmx& m) { Ack(id, type, upload_.Dmx(m).code); },
-          [&](const dmc::RtUploadMoveTriggers& m) { Ack(id, type, upload_.Triggers(m).code); },
-          [&](const dmc::RtUploadMoveEnd&) { Ack(id, type, upload_.End().code); },
-          [&](const dmc::RtPositionFrame& m) { Ack(id, type, playback_.PositionFrame(m.frame)); },
+          // ERR_MOVING: no upload message touches the move being played.
+          [&](const dmc::RtUploadMoveAxis& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Axis(m).code);
+          },
+          [&](const dmc::RtUploadMoveDmx& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Dmx(m).code);
+          },
+          [&](const dmc::RtUploadMoveTriggers& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Triggers(m).code);
+          },
+          [&](const dmc::RtUploadMoveEnd&) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.End().code);
+          },
+          [&](const dmc::RtPositionFrame& m) { Ack(id, type, OnPositionFrame(m.frame)); },
           [&](const dmc::RtRunMove& m) { Ack(id, type, playback_.RunMove(m)); },
           [&](const dmc::RtShootFrame& m) {
             // Blur percent of the frame's 360 degrees, centred on the frame
@@ -463,7 +491,7 @@ void Dmc16::SendPositions(uint32_t id) {
   r.positions_steps.reserve(static_cast<size_t>(rig_.motor_count()));
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     // The wire carries int32; positions past it saturate rather than wrap.
-    const int64_t p = rig_.motor(m).Position();
+    const int64_t p = ReportedPosition(m);
     r.positions_steps.push_back(static_cast<int32_t>(std::clamp<int64_t>(
         p, std::numeric_limits<int32_t>::min(), std::numeric_limits<int32_t>::max())));
   }
@@ -476,7 +504,11 @@ void Dmc16::SendPositionUpdate() {
 }
 
 // "The device should send these out, about every 0.10 seconds, if any of the
-// motors are moving" — and once when they stop (OnMotionFinished).
+// motors are moving" — and once when they stop (OnMotionFinished). The
+// cadence (position_report_interval_ms) runs whatever moves the motors,
+// every phase of playback included: a live pass's per-frame reports come
+// besides it, each restarting its count, so updates are never further
+// apart than the interval.
 void Dmc16::EnsurePositionReports() {
   if (report_timer_ != sim::Scheduler::kNoTimer || !rig_.AnyMoving()) return;
   report_timer_ = scheduler_.After(TimeNs{profile_.position_report_interval_ms} * kNsPerMs,
@@ -486,8 +518,7 @@ void Dmc16::EnsurePositionReports() {
 void Dmc16::OnReportTimer() {
   report_timer_ = sim::Scheduler::kNoTimer;
   if (!rig_.AnyMoving()) return;
-  // During playback the per-frame reports take the place of the cadence.
-  if (!playback_.ReportsEachFrame()) SendPositionUpdate();
+  SendPositionUpdate();
   EnsurePositionReports();
 }
 
@@ -518,7 +549,7 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
   } else if (playback_.Playing()) {
     code = AckCode::kErrMoving;
   } else {
-    code = AckForMoveStatus(rig_.motor(m.motor).MoveTo(m.position_steps));
+    code = MoveMotor(m.motor, m.position_steps);
   }
   if (code != AckCode::kOk) {
     Ack(id, type, code);
@@ -538,13 +569,19 @@ AckCode Dmc16::OnMotorStop(const dmc::MotorStop& m) {
     playback_.Abort(true);
     rig_.StopAll();
   } else {
-    rig_.motor(m.motor).Stop();
+    // A coupled motor stops with the motor that drives it.
+    rig_.motor(rig_.Root(m.motor)).Stop();
   }
   return AckCode::kOk;
 }
 
 AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
   const TimeNs now = scheduler_.Now();
+  // behaviour.stop_all_lockout_ms (FACTS "DMC v2": dmc-lite): a STOP_ALL
+  // without flags that stops moving motors sets the hard-stop state.
+  if (profile_.behaviour.stop_all_lockout_ms > 0 && rig_.AnyMoving() && m.flags.value_or(0) == 0) {
+    hard_stop_lock_ = true;
+  }
   const bool second = last_stop_all_ns_ >= 0 &&
                       now - last_stop_all_ns_ <= TimeNs{profile_.hard_stop_window_ms} * kNsPerMs;
   last_stop_all_ns_ = now;
@@ -563,8 +600,12 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
 
 AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
+  // ERR_MOVING "while the rig is moving": a live run, a shot or a jog-all
+  // plays the rig as a whole, so no position is renamed under it.
+  if (playback_.Playing()) return AckCode::kErrMoving;
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
   if (code == AckCode::kOk) {
+    truncated_[static_cast<size_t>(m.motor - 1)].reset();
     playback_.ForgetFrame();
     // The count is renamed, nothing moves: the physical joint stays put.
     if (physical_) physical_->Rebase();
@@ -578,6 +619,7 @@ AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   if (playback_.Playing()) {
     return AckCode::kErrMoving;
   }
+  if (IgnoresMotion(m.motor)) return AckCode::kOk;
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).Jog(m.destination_steps, m.speed));
   if (code == AckCode::kOk) {
     playback_.OnDirectMotion();
@@ -589,8 +631,23 @@ AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
 
 AckCode Dmc16::OnConfigure(const dmc::MotorConfigure& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
-  // FACTS: flag bits beyond 0x01/0x02 (virtual axis, live control, coupling)
-  // are accepted without error; they are kept in State().
+  // Couple motors (capability 0x0100; FACTS "DMC v2": dmc-lite's flags 0x10
+  // coupled, 0x20 coupled reversed). The request names no second motor, so
+  // a coupled motor follows the motor before it (docs/protocol-notes.md);
+  // motor 1 has none. Without the capability the bits are unknown flags.
+  const bool couple = profile_.Has(dmc::kCapCoupleMotors) &&
+                      (m.flags & (dmc::kMotorCoupled | dmc::kMotorCoupledReversed)) != 0;
+  const int leader = couple ? m.motor - 1 : 0;
+  const bool reversed = couple && (m.flags & dmc::kMotorCoupledReversed) != 0;
+  if (couple && leader < 1) return AckCode::kErrRange;
+  if (leader != rig_.leader(m.motor) || reversed != rig_.coupled_reversed(m.motor)) {
+    const sim::MoveStatus s =
+        leader != 0 ? rig_.Couple(m.motor, leader, reversed) : rig_.Uncouple(m.motor);
+    if (s != sim::MoveStatus::kOk) return AckForMoveStatus(s);
+  }
+  // FACTS: other bits (0x04 axis used in virtuals, 0x08 live control) are
+  // accepted without error; they are kept in State().
+  config_flags_[static_cast<size_t>(m.motor - 1)] = m.flags;
   rig_.motor(m.motor).SetEnabled((m.flags & dmc::kMotorEnabled) != 0);
   rig_.motor(m.motor).SetBlur((m.flags & dmc::kMotorBlurEnabled) != 0);
   return AckCode::kOk;
@@ -620,6 +677,66 @@ AckCode Dmc16::OnSetLimits(const dmc::MotorSetLimits& m) {
   soft.upper_steps = m.upper_limit_steps;
   rig_.motor(m.motor).SetSoftLimits(soft);
   return AckForMoveStatus(rig_.BindLimits(m.motor, binding));
+}
+
+// --- motion and the reference firmware's departures ---------------------------------------
+
+AckCode Dmc16::MoveMotor(int motor, int64_t target_steps) {
+  if (IgnoresMotion(motor)) return AckCode::kOk;
+  return AckForMoveStatus(rig_.motor(motor).MoveTo(target_steps));
+}
+
+AckCode Dmc16::OnPositionFrame(uint32_t frame) {
+  std::vector<int64_t> before;
+  for (int m = 1; m <= rig_.motor_count(); ++m) before.push_back(rig_.motor(m).Position());
+  const AckCode code = playback_.PositionFrame(frame);
+  if (code != AckCode::kOk || !profile_.behaviour.positions_truncate) return code;
+  // dmc-lite's position is a float that lands a hair short of the target in
+  // the direction of travel, and it reports it truncated toward zero: one
+  // step short when the motor moved away from zero to reach the frame
+  // (200 reads 199, -200 reads -199), exact when it moved toward zero.
+  for (int m : upload_.Motors()) {
+    if (!MotorValid(m)) continue;
+    const sim::StepperMotor& motor = rig_.motor(m);
+    if (!motor.IsMoving() || rig_.leader(m) != 0) continue;
+    const int64_t target = motor.Target();
+    const int64_t from = before[static_cast<size_t>(m - 1)];
+    if ((target > 0 && target > from) || (target < 0 && target < from)) {
+      truncated_[static_cast<size_t>(m - 1)] = target;
+    }
+  }
+  return code;
+}
+
+int64_t Dmc16::ReportedPosition(int motor) const {
+  const sim::StepperMotor& m = rig_.motor(motor);
+  const int64_t p = m.Position();
+  const std::optional<int64_t>& t = truncated_[static_cast<size_t>(motor - 1)];
+  if (t && !m.IsMoving() && p == *t) return p > 0 ? p - 1 : p + 1;
+  return p;
+}
+
+bool Dmc16::LockoutActive() const {
+  if (!hard_stop_lock_) return false;
+  if (rig_.AnyMoving()) return true;
+  // The motors have been still since the last of them came to rest (a plan
+  // at rest starts where its motor stopped).
+  TimeNs rest_ns = 0;
+  for (int m = 1; m <= rig_.motor_count(); ++m) {
+    rest_ns = std::max(rest_ns, rig_.motor(m).CurrentPlan().origin_ns());
+  }
+  return scheduler_.Now() - rest_ns < TimeNs{profile_.behaviour.stop_all_lockout_ms} * kNsPerMs;
+}
+
+bool Dmc16::HardStopLockout(uint16_t type) {
+  if (!hard_stop_lock_) return false;
+  if (!LockoutActive()) {
+    hard_stop_lock_ = false;
+    return false;
+  }
+  // Every request from MSG_MOTOR_MOVE (0x0031) up, MOTOR_GET_POSITION aside.
+  return type >= dmc::ToWire(MsgType::kMotorMove) &&
+         type != dmc::ToWire(MsgType::kMotorGetPosition);
 }
 
 // --- what the rig and the inputs report --------------------------------------------------
@@ -678,6 +795,10 @@ nlohmann::json Dmc16::State() const {
                       {"velocity_steps_per_s", motor.Velocity()},
                       {"enabled", motor.enabled()},
                       {"blur", motor.blur()},
+                      {"config_flags", config_flags_[static_cast<size_t>(m - 1)]},
+                      {"coupled_to", rig_.leader(m) != 0 ? nlohmann::json(rig_.leader(m))
+                                                         : nlohmann::json(nullptr)},
+                      {"coupled_reversed", rig_.coupled_reversed(m)},
                       {"max_velocity_steps_per_s", motor.profile().max_velocity_steps_per_s},
                       {"max_accel_steps_per_s2", motor.profile().max_accel_steps_per_s2},
                       {"soft_limits", limits},
@@ -714,6 +835,7 @@ nlohmann::json Dmc16::State() const {
       {"on_frame",
        playback_.on_frame() ? nlohmann::json(*playback_.on_frame()) : nlohmann::json(nullptr)},
       {"estop", rig_.estop_engaged()},
+      {"hard_stop_lockout", LockoutActive()},
       {"motors", motors},
       {"gio", {{"outputs", gio_.outputs()}, {"inputs", gio_.inputs()}}},
       {"camera",

@@ -102,9 +102,23 @@ class Dmc16 final : public Device, private sim::RigObserver {
   dmc::AckCode OnConfigure(const dmc::MotorConfigure& m);
   dmc::AckCode OnSetSpeed(const dmc::MotorSetSpeed& m);
   dmc::AckCode OnSetLimits(const dmc::MotorSetLimits& m);
+  dmc::AckCode OnPositionFrame(uint32_t frame);
 
   // --- motion helpers ---
   bool MotorValid(int motor) const { return motor >= 1 && motor <= profile_.motor_count; }
+  // behaviour.disabled_motors_ignore_motion: a motor not enabled takes a
+  // motion command and stays where it is. REQUIRES: MotorValid(motor).
+  bool IgnoresMotion(int motor) const {
+    return profile_.behaviour.disabled_motors_ignore_motion && !rig_.motor(motor).enabled();
+  }
+  // MSG_MOTOR_MOVE's motion (not answered here).
+  dmc::AckCode MoveMotor(int motor, int64_t target_steps);
+  // The position the device reports for `motor` (behaviour.positions_truncate).
+  int64_t ReportedPosition(int motor) const;
+  // behaviour.stop_all_lockout_ms: the hard-stop state after a STOP_ALL
+  // refuses a request of `type`.
+  bool HardStopLockout(uint16_t type);
+  bool LockoutActive() const;
   void EnsurePositionReports();
   void OnReportTimer();
   void CancelTimer(sim::Scheduler::TimerId& id);
@@ -145,6 +159,13 @@ class Dmc16 final : public Device, private sim::RigObserver {
   uint32_t reported_inputs_ = 0;
   sim::TimeNs last_stop_all_ns_ = -1;
   bool silent_stop_ = false;
+  // The hard-stop state of behaviour.stop_all_lockout_ms.
+  bool hard_stop_lock_ = false;
+  // Per motor (index motor-1): the MSG_MOTOR_CONFIGURE flags as last
+  // received; and the uploaded frame position a POSITION_FRAME brought the
+  // motor to that reads one step short (behaviour.positions_truncate).
+  std::vector<uint8_t> config_flags_;
+  std::vector<std::optional<int64_t>> truncated_;
 
   sim::Scheduler::TimerId report_timer_ = sim::Scheduler::kNoTimer;
   // The real-time playback of the upload (after the rig, I/O, upload and planners it uses).

@@ -156,6 +156,30 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
     p.motors_enabled = m.GetBool("motors_enabled", p.motors_enabled);
     m.Finish();
   }
+  {
+    ProfileReader b = r.Child("behaviour");
+    Dmc16Behaviour& v = p.behaviour;
+    v.receive_buffer_bytes = static_cast<uint32_t>(b.GetInt(
+        "receive_buffer_bytes", v.receive_buffer_bytes, dmc::kReceiveBufferSize, kMaxReceiveBuffer));
+    v.rescan_after_bad_frame = b.GetBool("rescan_after_bad_frame", v.rescan_after_bad_frame);
+    v.move_response = b.GetBool("move_response", v.move_response);
+    v.position_response = b.GetBool("position_response", v.position_response);
+    v.gio_in_request = b.GetBool("gio_in_request", v.gio_in_request);
+    v.host_acks_silent = b.GetBool("host_acks_silent", v.host_acks_silent);
+    v.jog_speed_checked = b.GetBool("jog_speed_checked", v.jog_speed_checked);
+    v.disabled_motors_ignore_motion =
+        b.GetBool("disabled_motors_ignore_motion", v.disabled_motors_ignore_motion);
+    v.soft_limits_bound_moves = b.GetBool("soft_limits_bound_moves", v.soft_limits_bound_moves);
+    v.arming_ms = static_cast<uint32_t>(b.GetInt("arming_ms", v.arming_ms, 0, 10'000));
+    v.stop_all_lockout_ms =
+        static_cast<uint32_t>(b.GetInt("stop_all_lockout_ms", v.stop_all_lockout_ms, 0, 60'000));
+    v.positions_truncate = b.GetBool("positions_truncate", v.positions_truncate);
+    v.preroll_move_time_is_start_frame =
+        b.GetBool("preroll_move_time_is_start_frame", v.preroll_move_time_is_start_frame);
+    v.rt_end_at_last_frame = b.GetBool("rt_end_at_last_frame", v.rt_end_at_last_frame);
+    v.rt_end_after_shot = b.GetBool("rt_end_after_shot", v.rt_end_after_shot);
+    b.Finish();
+  }
   const nlohmann::json& sets = r.GetRaw("limit_sets");
   if (!sets.is_null()) {
     if (!sets.is_array()) {
@@ -222,6 +246,22 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"hard_stop_multiple", p.hard_stop_multiple},
         {"motors_enabled", p.motors_enabled}}},
       {"limit_sets", sets},
+      {"behaviour",
+       {{"receive_buffer_bytes", p.behaviour.receive_buffer_bytes},
+        {"rescan_after_bad_frame", p.behaviour.rescan_after_bad_frame},
+        {"move_response", p.behaviour.move_response},
+        {"position_response", p.behaviour.position_response},
+        {"gio_in_request", p.behaviour.gio_in_request},
+        {"host_acks_silent", p.behaviour.host_acks_silent},
+        {"jog_speed_checked", p.behaviour.jog_speed_checked},
+        {"disabled_motors_ignore_motion", p.behaviour.disabled_motors_ignore_motion},
+        {"soft_limits_bound_moves", p.behaviour.soft_limits_bound_moves},
+        {"arming_ms", p.behaviour.arming_ms},
+        {"stop_all_lockout_ms", p.behaviour.stop_all_lockout_ms},
+        {"positions_truncate", p.behaviour.positions_truncate},
+        {"preroll_move_time_is_start_frame", p.behaviour.preroll_move_time_is_start_frame},
+        {"rt_end_at_last_frame", p.behaviour.rt_end_at_last_frame},
+        {"rt_end_after_shot", p.behaviour.rt_end_after_shot}}},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},
         {"capabilities", base::Hex(p.virtual_axes.capabilities, 4)},

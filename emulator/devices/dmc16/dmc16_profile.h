@@ -47,6 +47,79 @@ struct Dmc16PhysicalRig {
   std::array<int, physics::kJointCount> motors{1, 2, 3, 4, 5, 6};
 };
 
+// The largest receive buffer a profile may declare (behaviour.receive_buffer_bytes).
+inline constexpr uint32_t kMaxReceiveBuffer = 4096;
+
+// Where a device departs from the spec's reading (docs/devices/dmc16.md
+// "The reference firmware's behaviour"): every switch defaults to the spec's
+// DMC-16; fixtures/profiles/dmc-lite.json sets them as Dragonframe's
+// reference firmware (dmc-lite) behaves. Each is a documented host-visible
+// behaviour that hosts must tolerate, not a fault.
+struct Dmc16Behaviour {
+  // --- the line ---
+  // The receive buffer: the largest frame (header + DATA + checksum) taken
+  // whole. The spec's 1048 is a minimum; dmc-lite holds 2048, so a header
+  // declaring Length 2000 waits for its 2002 bytes instead of being oversize.
+  uint32_t receive_buffer_bytes = 1048;
+  // After a false "DF" fails its checksum the scan resumes just after its
+  // 'D', so a real frame inside it is still found (spec). false: the
+  // candidate's bytes are dropped (dmc-lite).
+  bool rescan_after_bad_frame = true;
+
+  // --- answers ---
+  // MSG_MOTOR_MOVE answered with its MSG_MOTOR_MOVE response (spec); false:
+  // an ACK OK (dmc-lite).
+  bool move_response = true;
+  // MSG_MOTOR_GET_POSITION answered with the positions under the request's ID
+  // (spec); false: the positions go out as an unsolicited-style message with
+  // ID 0, then an ACK OK carries the request's ID (dmc-lite).
+  bool position_response = true;
+  // MSG_GIO_IN sent as a request is answered with the inputs (spec); false:
+  // ERR_UNSUPPORTED (dmc-lite).
+  bool gio_in_request = true;
+  // A host's ACK of a device message is taken silently (ERRATA 1.9); false:
+  // answered ERR_UNSUPPORTED like any message the device does not take
+  // as a request (dmc-lite).
+  bool host_acks_silent = true;
+  // JOG SPEED outside 1..10000 refused with ERR_BAD_VALUE (spec); false:
+  // accepted, 0 and 10001 included (dmc-lite).
+  bool jog_speed_checked = true;
+
+  // --- motion ---
+  // A motor that is not enabled (MSG_MOTOR_CONFIGURE flag 0x01) refuses
+  // MOVE and JOG with ERR_GENERAL and sits out playback (spec reading); with
+  // this, it takes MOVE, JOG and a SHOOT_FRAME that lists it and stays where
+  // it is, as it does for uploads and POSITION_FRAME (dmc-lite, whose motors
+  // start disabled: set motion.motors_enabled false with it).
+  bool disabled_motors_ignore_motion = false;
+  // Soft limits refuse MOVE and JOG beyond them (spec reading); false: they
+  // bound only RUN_MOVE pre/post-roll and the stop deceleration (dmc-lite).
+  bool soft_limits_bound_moves = true;
+  // RT_GO this long after the motors came to rest answers
+  // ERR_NOT_IN_POSITION while the device arms (dmc-lite: 40-60 ms).
+  uint32_t arming_ms = 0;
+  // STOP_ALL (no flags) while moving sets a hard-stop state: every command
+  // from MSG_MOTOR_MOVE (0x0031) up except MOTOR_GET_POSITION is refused
+  // with ERR_HARD_LOW until this long after the motors are still, a second
+  // STOP_ALL included (dmc-lite: ~100 velocity updates, about 2 s). 0: none.
+  uint32_t stop_all_lockout_ms = 0;
+  // A position read right after an upload's POSITION_FRAME lands can be one
+  // step short of the uploaded one (dmc-lite truncates its float position):
+  // a motor that reached its frame position moving away from zero reads one
+  // step toward zero (199 for 200, -199 for -200) until its next motion.
+  bool positions_truncate = false;
+
+  // --- real-time ---
+  // MOVE TIME of position updates during pre-roll: the start frame's (0 for
+  // frame 0) when true (dmc-lite); otherwise as docs/protocol-notes.md says.
+  bool preroll_move_time_is_start_frame = false;
+  // RT_END when the post-roll has ended (spec); true: at the last frame, no
+  // wait for the post-roll (dmc-lite).
+  bool rt_end_at_last_frame = false;
+  // RT_END after SHOOT_FRAME / SHOOT_FRAME2 go-motion (spec); false: none (dmc-lite).
+  bool rt_end_after_shot = true;
+};
+
 struct Dmc16Profile {
   std::string name = "DMC-16";  // <= 32 bytes UTF-8 (HI NAME)
   uint8_t fw_major = 2;
@@ -81,9 +154,12 @@ struct Dmc16Profile {
   double max_velocity_steps_per_s = 5000;
   double max_accel_steps_per_s2 = 10000;
   double hard_stop_multiple = 4;
-  // Motors start enabled (MSG_MOTOR_CONFIGURE flag 0x01) at power-on.
+  // Motors start enabled and blur-enabled (as after MSG_MOTOR_CONFIGURE
+  // FLAGS 0x03) at power-on; false: neither (as dmc-lite's).
   bool motors_enabled = true;
   std::vector<Dmc16LimitSet> limit_sets;
+  // Departures from the spec's reading (all off by default).
+  Dmc16Behaviour behaviour;
 
   // The HI response this profile advertises.
   dmc::HiResponse Hi() const;

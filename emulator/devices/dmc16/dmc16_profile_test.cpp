@@ -77,6 +77,37 @@ TEST(Dmc16Profile, VirtualProfileAdvertisesAllFourModesAndTheAimPoint) {
   EXPECT_EQ(back.Hi(), p.Hi());
 }
 
+TEST(Dmc16Profile, BehaviourDefaultsAreTheSpecsReadingAndDmcLiteDepartsFromEach) {
+  const Dmc16Behaviour spec;
+  const Dmc16Profile lite = LoadDmc16Profile(SourceDir() + "/fixtures/profiles/dmc-lite.json");
+  const Dmc16Behaviour& b = lite.behaviour;
+  // FACTS "DMC v2": dmc-lite as measured on its public source.
+  EXPECT_EQ(lite.motor_count, 8);
+  EXPECT_EQ(lite.position_report_interval_ms, 50u);
+  EXPECT_FALSE(lite.motors_enabled);
+  EXPECT_EQ(spec.receive_buffer_bytes, 1048u);
+  EXPECT_EQ(b.receive_buffer_bytes, 2048u);
+  // Every switch of the reference firmware differs from the spec's default,
+  // so the profile shows each departure (none is left at the spec's value).
+  const nlohmann::json spec_j = Dmc16ProfileToJson(Dmc16Profile{})["behaviour"];
+  const nlohmann::json lite_j = Dmc16ProfileToJson(lite)["behaviour"];
+  ASSERT_EQ(spec_j.size(), lite_j.size());
+  for (const auto& [key, value] : spec_j.items()) {
+    EXPECT_NE(lite_j.at(key), value) << key;
+  }
+  const Dmc16Profile back = Dmc16ProfileFromJson(Dmc16ProfileToJson(lite), "x");
+  EXPECT_EQ(Dmc16ProfileToJson(back), Dmc16ProfileToJson(lite));
+}
+
+TEST(Dmc16Profile, BehaviourErrorsNameTheField) {
+  EXPECT_NE(ErrorOf({{"behaviour", {{"receive_buffer_bytes", 512}}}})
+                .find("\"behaviour.receive_buffer_bytes\" is 512, outside 1048..4096"),
+            std::string::npos)
+      << ErrorOf({{"behaviour", {{"receive_buffer_bytes", 512}}}});
+  EXPECT_NE(ErrorOf({{"behaviour", {{"move_reponse", false}}}}).find("\"behaviour.move_reponse\""),
+            std::string::npos);
+}
+
 TEST(Dmc16Profile, MissingFileNamesThePath) {
   try {
     LoadDmc16Profile("/nonexistent/dmc.json");

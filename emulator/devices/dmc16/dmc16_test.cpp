@@ -237,7 +237,8 @@ TEST(Dmc16Motor, InchingIsSlowerThanFullSpeedJog) {
 
 TEST(Dmc16Motor, DisabledMotorRefusesToMove) {
   Host h(SmallProfile());
-  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorBlurEnabled | 0x30}), kOk);
+  // Flag bits the device has no use for (0x04, 0x08, 0x40, 0x80) are accepted.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorBlurEnabled | 0xcc}), kOk);
   EXPECT_FALSE(h.device().rig_ref().motor(1).enabled());
   EXPECT_TRUE(h.device().rig_ref().motor(1).blur());
   EXPECT_EQ(h.Request(dmc::MotorMove{1, 10}), AckCode::kErrGeneral);
@@ -509,13 +510,18 @@ TEST(Dmc16Run, GoPlaysTheMoveReportingEveryFrameThenRtEnd) {
   std::vector<std::pair<sim::TimeNs, dmc::MotorPositionReport>> frames;
   sim::TimeNs rt_end = -1;
   for (const Out& o : after) {
+    // The frame reports: a whole frame's MOVE TIME within the run (the
+    // periodic updates between them carry fractions of a frame).
     if (const auto* r = std::get_if<dmc::MotorPositionReport>(&o.msg)) {
-      if (rt_end < 0) frames.emplace_back(o.t_ns, *r);
+      if (rt_end < 0 && r->move_time_x1000 % 1000 == 0 && r->move_time_x1000 >= 20000 &&
+          r->move_time_x1000 <= 150000) {
+        frames.emplace_back(o.t_ns, *r);
+      }
     }
     if (std::holds_alternative<dmc::RtEnd>(o.msg)) rt_end = o.t_ns;
   }
-  // Frames 20..150 inclusive, then the stop report before RT_END.
-  ASSERT_EQ(frames.size(), 131u + 1u);
+  // Frames 20..150 inclusive, each once.
+  ASSERT_EQ(frames.size(), 131u);
   for (uint32_t k = 0; k <= 130; ++k) {
     const auto& [t, r] = frames[k];
     EXPECT_EQ(r.move_time_x1000, (20 + k) * 1000) << k;
@@ -656,8 +662,8 @@ TEST(Dmc16Run, CameraStillsOpenAndCloseAtTheAnglesOfEveryFrame) {
   const sim::TimeNs t0 = h.now();
   h.Settle();
   std::vector<sim::CameraPort::Edge> edges = h.device().camera().Trace();
-  ASSERT_EQ(edges.size(), 8u);  // 4 frame intervals, open and close each
-  for (size_t k = 0; k < 4; ++k) {
+  ASSERT_EQ(edges.size(), 10u);  // frames 10..14, open and close each
+  for (size_t k = 0; k < 5; ++k) {
     EXPECT_EQ(edges[2 * k].time_ns,
               t0 + static_cast<sim::TimeNs>(k) * 100 * kNsPerMs + 25 * kNsPerMs);
     EXPECT_TRUE(edges[2 * k].level);
@@ -744,6 +750,322 @@ TEST(Dmc16JogAll, OnlyFromAFramePositionAndEndsOnTheDestination) {
   ASSERT_EQ(h.Request(dmc::RtJogAll{48000, 30}), kOk);
   h.Settle();
   EXPECT_EQ(h.Pos(1), 200);
+}
+
+// --- coupling and blur (MSG_MOTOR_CONFIGURE) -------------------------------------------------
+
+// MSG_MOTOR_GET_POSITION's answer to a request.
+std::vector<int32_t> Positions(Host& h) {
+  const uint32_t id = h.Send(dmc::MotorGetPositionRequest{});
+  const auto* r = std::get_if<dmc::MotorPositionReport>(&h.Reply(id).msg);
+  EXPECT_NE(r, nullptr) << "MOTOR_GET_POSITION answered with the positions";
+  return r != nullptr ? r->positions_steps : std::vector<int32_t>{};
+}
+
+// MSG_MOTOR_MOVE taken: its response (or, where a profile answers moves so,
+// an ACK OK). Returns the MOTOR STATUS byte, or 0 for the ACK.
+std::optional<uint8_t> MoveTaken(Host& h, uint8_t motor, int32_t position) {
+  const Out& o = h.Reply(h.Send(dmc::MotorMove{motor, position}));
+  if (const auto* r = std::get_if<dmc::MotorMoveResponse>(&o.msg)) return r->moving;
+  if (const auto* a = std::get_if<dmc::Ack>(&o.msg)) {
+    if (static_cast<AckCode>(a->code) == AckCode::kOk) return 0;
+  }
+  return std::nullopt;
+}
+
+constexpr uint8_t kOn = dmc::kMotorEnabled;
+constexpr uint8_t kCoupled = dmc::kMotorEnabled | dmc::kMotorCoupled;
+constexpr uint8_t kCoupledReversed = dmc::kMotorEnabled | dmc::kMotorCoupledReversed;
+
+// Capabilities 0x0100 "Couple motors"; FACTS "DMC v2": MOTOR_CONFIGURE flags
+// 0x10 coupled, 0x20 coupled reversed. A coupled motor follows the motor
+// before it (docs/protocol-notes.md), step for step, mirrored when reversed.
+TEST(Dmc16Couple, ACoupledMotorFollowsTheMotorBeforeItThroughMovesJogsAndStops) {
+  Host h(SmallProfile());
+  ASSERT_TRUE(h.device().profile().Has(dmc::kCapCoupleMotors));
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupled}), kOk);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{3, kCoupledReversed}), kOk);  // follows 2, so 1
+  EXPECT_EQ(h.Request(dmc::MotorConfigure{1, kCoupled}), AckCode::kErrRange)
+      << "motor 1 has no motor before it";
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{3, 500}), kOk);
+  EXPECT_EQ(MoveTaken(h, 1, 1000), 1);
+  const uint32_t st = h.Send(dmc::MotorStatusRequest{});
+  EXPECT_EQ(std::get<dmc::MotorStatusResponse>(h.Reply(st).msg).moving_bits, 0b0111u);
+  h.Settle();
+  EXPECT_EQ(Positions(h), (std::vector<int32_t>{1000, 1000, -500, 0}));
+  ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, -200}), kOk);
+  h.Settle();
+  EXPECT_EQ(Positions(h), (std::vector<int32_t>{-200, -200, 700, 0}));
+  // A coupled motor takes no motion of its own; stopping it stops its group.
+  EXPECT_EQ(h.Request(dmc::MotorMove{2, 5}), AckCode::kErrGeneral);
+  EXPECT_EQ(h.Request(dmc::MotorJog{3, 100, 5}), AckCode::kErrGeneral);
+  EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+  h.RunMs(1000);
+  EXPECT_EQ(h.Request(dmc::MotorConfigure{2, kOn}), AckCode::kErrMoving)
+      << "the coupling does not change under way";
+  ASSERT_EQ(h.Request(dmc::MotorStop{3}), kOk);
+  h.Settle();
+  const int64_t p1 = h.Pos(1);
+  EXPECT_EQ(p1, -200 + 1250 + 2500 + 1250) << "decelerated at the motor's acceleration";
+  EXPECT_EQ(h.Pos(2), p1);
+  EXPECT_EQ(h.Pos(3), 500 - p1);
+  // One report when the group has stopped, not one per motor.
+  const auto reports = h.All<dmc::MotorPositionReport>();
+  ASSERT_GE(reports.size(), 2u);
+  EXPECT_LT(reports[reports.size() - 2].first, reports.back().first);
+  // Uncoupled, motor 2 moves alone and motor 3 now follows it.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kOn}), kOk);
+  EXPECT_EQ(MoveTaken(h, 2, static_cast<int32_t>(p1 + 10)), 1);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), p1);
+  EXPECT_EQ(h.Pos(3), 500 - p1 - 10);
+  const nlohmann::json st3 = h.device().State()["motors"][2];
+  EXPECT_EQ(st3["coupled_to"], 2);
+  EXPECT_EQ(st3["coupled_reversed"], true);
+}
+
+TEST(Dmc16Couple, WithoutTheCapabilityTheCouplingFlagsAreAcceptedAndIgnored) {
+  Dmc16Profile p = SmallProfile();
+  p.capabilities &= ~dmc::kCapCoupleMotors;
+  Host h(p);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, kCoupled}), kOk);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupledReversed}), kOk);
+  EXPECT_EQ(MoveTaken(h, 2, 300), 1);
+  h.Settle();
+  EXPECT_EQ(Positions(h), (std::vector<int32_t>{0, 300, 0, 0}));
+}
+
+// MSG_RT_POSITION_FRAME, MSG_RT_RUN_MOVE, MSG_RT_GO: a coupled motor follows
+// the motor that drives it through playback instead of playing its own data.
+TEST(Dmc16Couple, ACoupledMotorFollowsPlaybackInsteadOfItsOwnData) {
+  Host h(SmallProfile());
+  UploadRamp(h, 100, 10);  // motor 1 on a ramp, motor 2 holding 50
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupledReversed}), kOk);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{60}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 500);
+  EXPECT_EQ(h.Pos(2), -500);
+  ASSERT_EQ(h.Request(dmc::RtJogAll{24000, 30}), kOk) << "on a frame by the motors that play";
+  h.Settle();
+  EXPECT_EQ(h.Pos(2), -200);
+  ASSERT_EQ(h.Request(RunMove(20, 80, 24000, 500, 500)), kOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  for (int i = 0; i < 40; ++i) {
+    h.RunMs(100);
+    ASSERT_EQ(h.Pos(2), -h.Pos(1)) << i;
+  }
+  h.Settle();
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+  EXPECT_EQ(h.Pos(2), -h.Pos(1));
+}
+
+// MSG_MOTOR_CONFIGURE "0x02 - blur enabled"; MSG_RT_SHOOT_FRAME2 "Each motor
+// provided will be part of the blur": the motors that blur are those listed
+// with the blur flag; one listed without it is held on the frame's position
+// (docs/protocol-notes.md). Until configured, motors are blur-enabled.
+TEST(Dmc16Shoot, OnlyListedMotorsWithTheBlurFlagBlur) {
+  auto shoot = [](Host& h) {
+    dmc::RtShootFrame2 s;
+    s.frame = 15;
+    s.exposure_ms = 500;
+    s.open_angle_deg = 90;
+    s.close_angle_deg = 270;
+    s.motors = {{1, 1000, 1400}};
+    return h.Request(s);
+  };
+  Host h(SmallProfile());
+  UploadRamp(h, 30, 10);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, kOn}), kOk);
+  ASSERT_EQ(shoot(h), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 50) << "frame 15's uploaded position";
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.device().camera().exposures(), 1u);
+  EXPECT_EQ(h.Pos(1), 50) << "held through the exposure";
+  // With the flag it blurs; a motor coupled to it blurs with it.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, kOn | dmc::kMotorBlurEnabled}), kOk);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupled | dmc::kMotorBlurEnabled}), kOk);
+  ASSERT_EQ(shoot(h), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 1092);
+  EXPECT_EQ(h.Pos(2), 1092) << "followed motor 1 from frame 15, where both stood on 50";
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 1308);
+  EXPECT_EQ(h.Pos(2), h.Pos(1));
+}
+
+// --- the reference firmware's motion (Dmc16Behaviour; FACTS "DMC v2") ---------------------
+
+// dmc-v2-protocol.txt MSG_MOTOR_CONFIGURE "0x01 - motor enabled". The spec
+// reading: a disabled motor refuses MOVE and JOG (ERR_GENERAL) and sits out
+// playback. dmc-lite (motors start disabled): it takes them and stays.
+TEST(Dmc16Behaviour, DisabledMotorsIgnoreMotion) {
+  for (const bool ignore : {false, true}) {
+    SCOPED_TRACE(ignore ? "disabled_motors_ignore_motion" : "spec");
+    Dmc16Profile p = SmallProfile();
+    p.motors_enabled = false;
+    p.behaviour.disabled_motors_ignore_motion = ignore;
+    Host h(p);
+    const std::optional<AckCode> refused =
+        ignore ? kOk : std::optional<AckCode>(AckCode::kErrGeneral);
+    if (ignore) {
+      EXPECT_EQ(MoveTaken(h, 1, 1000), 0);
+    } else {
+      EXPECT_EQ(h.Request(dmc::MotorMove{1, 1000}), AckCode::kErrGeneral);
+    }
+    EXPECT_EQ(h.Request(dmc::MotorJog{1, 10000, 1000}), refused);
+    // Listed for a blur with its blur flag set but not enabled.
+    ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorBlurEnabled}), kOk);
+    dmc::RtShootFrame2 shot{15, 100, 90, 270, {{1, 0, 100}}};
+    UploadRamp(h, 30, 10);
+    EXPECT_EQ(h.Request(shot), refused);
+    // Uploads are taken; playback and POSITION_FRAME move no disabled motor.
+    ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kOn}), kOk);
+    ASSERT_EQ(h.Request(dmc::RtPositionFrame{30}), kOk);
+    ASSERT_EQ(h.Request(RunMove(12, 38, 24000, 200, 200)), kOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+    EXPECT_EQ(h.Pos(1), 0);
+    EXPECT_EQ(h.Pos(2), 50) << "the enabled motor played";
+    // Enabled, it moves.
+    ASSERT_EQ(h.Request(dmc::MotorConfigure{1, kOn}), kOk);
+    EXPECT_EQ(MoveTaken(h, 1, 1000), 1);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 1000);
+  }
+}
+
+// dmc-v2-protocol.txt ERR_SOFT_UP / ERR_SOFT_LOW, ERR_PREROLL: the spec
+// reading refuses MOVE beyond a soft limit and stops JOG at it. dmc-lite:
+// MOVE, JOG and POSITION_FRAME beyond complete; the limits still bound
+// RUN_MOVE's pre/post-roll and the stop deceleration.
+TEST(Dmc16Behaviour, SoftLimitsBoundMoves) {
+  for (const bool bound : {true, false}) {
+    SCOPED_TRACE(bound ? "spec" : "soft_limits_bound_moves false");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.soft_limits_bound_moves = bound;
+    Host h(p);
+    ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, -50, 1, 80, 0}), kOk);
+    if (bound) {
+      EXPECT_EQ(h.Request(dmc::MotorMove{1, 81}), AckCode::kErrSoftUp);
+    } else {
+      EXPECT_EQ(MoveTaken(h, 1, 81), 1);
+    }
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), bound ? 0 : 81);
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, -500}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), bound ? -50 : -500);
+    // POSITION_FRAME to frame 30 (200 steps, past the upper limit).
+    UploadRamp(h, 30, 10);
+    EXPECT_EQ(h.Request(dmc::RtPositionFrame{30}), bound ? AckCode::kErrSoftUp : AckCode::kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), bound ? -50 : 200);
+    // Either way the pre-roll of a run is bounded.
+    ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, -50, 1, 1000, 0}), kOk);
+    EXPECT_EQ(h.Request(RunMove(10, 30, 24000, 2000, 0)), AckCode::kErrPreroll);
+  }
+}
+
+TEST(Dmc16Behaviour, SoftLimitsBoundTheStopDecelerationEvenWhenNotMoves) {
+  Dmc16Profile p = SmallProfile();
+  p.behaviour.soft_limits_bound_moves = false;
+  Host h(p);
+  ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 0, 0, 1, 4500, 0}), kOk);
+  EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+  h.RunMs(1000);
+  ASSERT_EQ(h.Pos(1), 3750);  // 1250 of ramp + 2500 of cruise at 5000 steps/s
+  // The ordinary ramp (1250 steps) would end at 5000, past the limit.
+  ASSERT_EQ(h.Request(dmc::MotorStop{1}), kOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 4500);
+}
+
+// dmc-v2-protocol.txt MSG_MOTOR_STOP_ALL. The spec reading: STOP_ALL
+// decelerates and the device takes commands at once. dmc-lite: STOP_ALL
+// without flags while moving sets a hard-stop state in which every request
+// from MOTOR_MOVE (0x0031) up but MOTOR_GET_POSITION is refused with
+// ERR_HARD_LOW, until the motors have been still for stop_all_lockout_ms.
+TEST(Dmc16Behaviour, StopAllLockout) {
+  for (const uint32_t lockout_ms : {0u, 2000u}) {
+    SCOPED_TRACE("stop_all_lockout_ms " + std::to_string(lockout_ms));
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.stop_all_lockout_ms = lockout_ms;
+    Host h(p);
+    const std::optional<AckCode> locked =
+        lockout_ms != 0 ? std::optional<AckCode>(AckCode::kErrHardLow) : kOk;
+    // At rest, or with the silent flag, STOP_ALL locks nothing.
+    ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+    h.RunMs(1000);
+    ASSERT_EQ(h.Request(dmc::MotorStopAll{dmc::kStopAllSilent}), kOk);
+    EXPECT_EQ(h.Request(dmc::MotorSetSpeed{1, 5000, 10000}), kOk);
+    h.RunMs(2000);
+    EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+    h.RunMs(1000);
+    ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    const sim::TimeNs rest_ns = h.device().rig_ref().motor(1).CurrentPlan().EndNs();
+    EXPECT_EQ(rest_ns - h.now(), 500 * kNsPerMs);
+    // A second STOP_ALL: refused in the hard-stop state (no hard stop then).
+    EXPECT_EQ(h.Request(dmc::MotorStopAll{}), locked);
+    EXPECT_EQ(h.device().rig_ref().motor(1).CurrentPlan().EndNs() - h.now(),
+              (lockout_ms != 0 ? 500 : 125) * kNsPerMs);
+    EXPECT_EQ(h.Request(dmc::MotorResetPosition{2, 5}), locked);
+    EXPECT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 10}), locked);
+    EXPECT_EQ(Positions(h).size(), 4u) << "MOTOR_GET_POSITION is always answered";
+    const uint32_t st = h.Send(dmc::MotorStatusRequest{});
+    EXPECT_NE(std::get_if<dmc::MotorStatusResponse>(&h.Reply(st).msg), nullptr);
+    h.Settle();
+    h.scheduler().RunUntil(h.device().rig_ref().motor(1).CurrentPlan().origin_ns() +
+                           1999 * kNsPerMs);
+    if (lockout_ms != 0) {
+      EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "1999 ms after the motors stopped";
+    } else {
+      EXPECT_EQ(MoveTaken(h, 1, 0), 1);
+    }
+    h.RunMs(1);
+    EXPECT_EQ(MoveTaken(h, 1, 0), 1);
+  }
+}
+
+// FACTS "DMC v2": dmc-lite reads a position right after POSITION_FRAME one
+// step short (199 for 200). Model: reaching an uploaded frame position by
+// POSITION_FRAME while moving away from zero reads one step toward zero,
+// until the motor's next motion; moving toward zero reads exact. The spec
+// reading (and the step count itself) is always exact.
+TEST(Dmc16Behaviour, PositionsTruncate) {
+  for (const bool truncate : {false, true}) {
+    SCOPED_TRACE(truncate ? "positions_truncate" : "spec");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.positions_truncate = truncate;
+    Host h(p);
+    ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 2}), kOk);
+    ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, {200, -200, 300}}), kOk);
+    ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kOk);
+    const int32_t off = truncate ? 1 : 0;
+    auto frame = [&](uint32_t f) {
+      EXPECT_EQ(h.Request(dmc::RtPositionFrame{f}), kOk);
+      h.Settle();
+      return Positions(h).at(0);
+    };
+    EXPECT_EQ(frame(0), 200 - off);
+    EXPECT_EQ(h.All<dmc::MotorPositionReport>().back().second.positions_steps[0], 200 - off);
+    EXPECT_EQ(h.Pos(1), 200) << "the motor stands on the frame";
+    EXPECT_EQ(h.Request(dmc::RtJogAll{24000, 0}), kOk) << "and is on frame 0";
+    EXPECT_EQ(frame(1), -200 + off);
+    EXPECT_EQ(frame(2), 300 - off);
+    EXPECT_EQ(frame(0), 200) << "moved toward zero";
+    EXPECT_EQ(frame(2), 300 - off);
+    EXPECT_EQ(MoveTaken(h, 1, 301), 1);
+    h.Settle();
+    EXPECT_EQ(Positions(h).at(0), 301) << "a plain move reads exact";
+    EXPECT_EQ(frame(2), 300) << "toward zero again";
+  }
 }
 
 // --- laws -------------------------------------------------------------------------------------

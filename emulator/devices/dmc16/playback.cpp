@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace moco::devices {
@@ -34,6 +35,11 @@ TimeNs CeilNs(double seconds) { return static_cast<TimeNs>(std::ceil(seconds * k
 
 uint32_t Intervals(uint32_t a, uint32_t b) { return a > b ? a - b : b - a; }
 
+// MOVE TIME is a DWORD: before frame 0 it stays 0.
+uint32_t ClampMoveTime(int64_t x1000) {
+  return static_cast<uint32_t>(std::clamp<int64_t>(x1000, 0, int64_t{UINT32_MAX}));
+}
+
 }  // namespace
 
 AckCode AckForMoveStatus(sim::MoveStatus s) {
@@ -54,6 +60,7 @@ AckCode AckForMoveStatus(sim::MoveStatus s) {
       return AckCode::kErrRange;
     case sim::MoveStatus::kDisabled:
     case sim::MoveStatus::kEStop:
+    case sim::MoveStatus::kCoupled:  // driven by the motor before it, not on its own
       return AckCode::kErrGeneral;
   }
   return AckCode::kErrGeneral;
@@ -87,12 +94,19 @@ void Playback::Reset() {
   on_frame_.reset();
   move_time_x1000_ = 0;
   reposition_pending_ = false;
+  rt_end_sent_ = false;
+  video_recording_ = false;
+  video_free_ns_ = 0;
+  armed_ns_ = 0;
+  rest_ns_ = 0;
+  end_update_ns_ = -1;
 }
 
 void Playback::Halt() {
   CancelTimers();
   mode_ = Mode::kIdle;
   run_.reset();
+  video_recording_ = false;
 }
 
 void Playback::CancelTimer(sim::Scheduler::TimerId& id) {
@@ -126,13 +140,15 @@ void Playback::Disarm() {
 }
 
 bool Playback::OnRigAtRest() {
+  rest_ns_ = scheduler_.Now();
   if (reposition_pending_) {
     // A loop or ping-pong pass repositioned; it plays on by itself.
     reposition_pending_ = false;
     StartPass(pass_);
     return true;
   }
-  return Playing();
+  // The update that ended a pass or shot this instant is the one at rest.
+  return Playing() || end_update_ns_ == scheduler_.Now();
 }
 
 // --- real-time requests ---------------------------------------------------------------------
@@ -140,7 +156,8 @@ bool Playback::OnRigAtRest() {
 std::vector<int> Playback::PlaybackMotors() const {
   std::vector<int> out;
   for (int m : upload_.Motors()) {
-    if (MotorValid(m) && rig_.motor(m).enabled()) out.push_back(m);
+    // A coupled motor follows the motor that drives it instead of its own data.
+    if (MotorValid(m) && rig_.motor(m).enabled() && rig_.leader(m) == 0) out.push_back(m);
   }
   return out;
 }
@@ -194,6 +211,8 @@ AckCode Playback::PositionFrame(uint32_t frame) {
   const std::vector<int> motors = PlaybackMotors();
   // Check every motor first so a refusal moves nothing.
   for (int m_id : motors) {
+    // Soft limits that do not bound moves (behaviour.soft_limits_bound_moves) let it pass them.
+    if (!profile_.behaviour.soft_limits_bound_moves) break;
     const sim::SoftLimits& s = rig_.motor(m_id).soft_limits();
     const int64_t p = upload_.Position(m_id, frame);
     if (s.upper_enabled && p > s.upper_steps) return AckCode::kErrSoftUp;
@@ -240,6 +259,133 @@ double Playback::PassVelocity(int motor, const Pass& p, uint32_t k) const {
   return (static_cast<double>(PassPosition(motor, p, k + 1)) - PassPosition(motor, p, k)) * p.fps;
 }
 
+// The frame clock. A live pass (no ramps) runs at FPS throughout, so the
+// clock extends before the start frame (pre-roll) and after the end frame
+// (post-roll). JOG_ALL's clock is a trapezoid from rest to rest over the
+// pass's n frame intervals: accelerate for ramp_s, run at fps for cruise_s,
+// brake for ramp_s.
+double Playback::FramesAt(const Pass& p, double t_s) {
+  if (p.accel_fps2 <= 0) return p.fps * t_s;
+  const double n = Intervals(p.from_frame, p.to_frame);
+  const double a = p.accel_fps2;
+  const double ta = p.ramp_s;
+  const double total_s = 2 * ta + p.cruise_s;
+  if (t_s <= 0) return 0;
+  if (t_s < ta) return 0.5 * a * t_s * t_s;
+  if (t_s < ta + p.cruise_s) return 0.5 * a * ta * ta + p.fps * (t_s - ta);
+  if (t_s < total_s) return n - 0.5 * a * (total_s - t_s) * (total_s - t_s);
+  return n;
+}
+
+double Playback::TimeOfFrames(const Pass& p, double s) {
+  if (p.accel_fps2 <= 0) return s / p.fps;
+  const double n = Intervals(p.from_frame, p.to_frame);
+  const double a = p.accel_fps2;
+  const double ta = p.ramp_s;
+  const double total_s = 2 * ta + p.cruise_s;
+  const double ramp_frames = 0.5 * a * ta * ta;
+  if (s <= 0) return 0;
+  if (s < ramp_frames) return std::sqrt(2 * s / a);
+  if (s < n - ramp_frames) return ta + (s - ramp_frames) / p.fps;
+  if (s < n) return total_s - std::sqrt(2 * (n - s) / a);
+  return total_s;
+}
+
+double Playback::RateAt(const Pass& p, double t_s) {
+  if (p.accel_fps2 <= 0) return p.fps;
+  const double ta = p.ramp_s;
+  const double total_s = 2 * ta + p.cruise_s;
+  if (t_s <= 0 || t_s >= total_s) return 0;
+  if (t_s < ta) return p.accel_fps2 * t_s;
+  if (t_s < ta + p.cruise_s) return p.fps;
+  return p.accel_fps2 * (total_s - t_s);
+}
+
+double Playback::AccelAt(const Pass& p, double t_s) {
+  if (p.accel_fps2 <= 0) return 0;
+  const double ta = p.ramp_s;
+  const double total_s = 2 * ta + p.cruise_s;
+  if (t_s <= 0 || t_s >= total_s) return 0;
+  if (t_s < ta) return p.accel_fps2;
+  if (t_s < ta + p.cruise_s) return 0;
+  return -p.accel_fps2;
+}
+
+// MSG_RT_JOG_ALL "Jog all motors towards the destination frame": a jog, like
+// MSG_MOTOR_JOG's, moves within each motor's max velocity and acceleration
+// (MSG_MOTOR_SET_SPEED). The motors follow the uploaded path together, so
+// the frame clock is what is limited: its rate to what the motor with the
+// steepest frame interval can follow at its max velocity (a faster FPS is
+// lowered, not refused), its ramps to what every motor can follow at its max
+// acceleration. The path's own bends at the frames are the upload's.
+void Playback::FitJogRamps(Pass& p) const {
+  const uint32_t n = Intervals(p.from_frame, p.to_frame);
+  double max_fps = p.fps;
+  double accel = std::numeric_limits<double>::infinity();
+  for (int m : PlaybackMotors()) {
+    double steepest = 0;  // steps per frame
+    for (uint32_t k = 0; k < n; ++k) {
+      steepest = std::max(steepest, std::fabs(static_cast<double>(PassPosition(m, p, k + 1)) -
+                                              PassPosition(m, p, k)));
+    }
+    if (steepest == 0) continue;
+    const sim::MotionProfile& mp = rig_.motor(m).profile();
+    max_fps = std::min(max_fps, mp.max_velocity_steps_per_s / steepest);
+    accel = std::min(accel, mp.max_accel_steps_per_s2 / steepest);
+  }
+  p.fps = max_fps;
+  if (!std::isfinite(accel) || n == 0) {
+    p.accel_fps2 = 0;  // nothing moves: no ramps to make
+    return;
+  }
+  p.accel_fps2 = accel;
+  const double ramp_frames = p.fps * p.fps / (2 * accel);
+  if (2 * ramp_frames >= n) {
+    // Too short to reach the rate: accelerate half-way, brake the rest.
+    p.fps = std::sqrt(accel * n);
+    p.ramp_s = p.fps / accel;
+    p.cruise_s = 0;
+  } else {
+    p.ramp_s = p.fps / accel;
+    p.cruise_s = (n - 2 * ramp_frames) / p.fps;
+  }
+}
+
+uint32_t Playback::MoveTimeX1000() const {
+  if ((mode_ == Mode::kPass && !reposition_pending_) || mode_ == Mode::kJogAll) {
+    return PassMoveTime();
+  }
+  return move_time_x1000_;
+}
+
+// MOVE TIME of a running pass (docs/protocol-notes.md "MOVE TIME"), in
+// thousandths of a frame from its from_frame along its direction: exactly
+// k x 1000 when frame k is reached (its report), strictly between two frames'
+// values in between (the cadence's updates), the clock run on before the
+// start frame (pre-roll) and after the end frame (post-roll).
+uint32_t Playback::PassMoveTime() const {
+  const Pass& p = pass_;
+  const int64_t n = Intervals(p.from_frame, p.to_frame);
+  const TimeNs now = scheduler_.Now();
+  const double t_s = static_cast<double>(now - p.t_first_frame_ns) / kNsPerSecondF;
+  int64_t off = 0;
+  if (p.ticked < 0) {
+    // Pre-roll: before the start frame, unless the profile reads it as the
+    // start frame's (dmc-lite).
+    if (p.live && !profile_.behaviour.preroll_move_time_is_start_frame) {
+      off = std::min<int64_t>(-1, std::llround(FramesAt(p, t_s) * 1000));
+    }
+  } else {
+    const int64_t k = p.ticked;
+    const int64_t lo = now == p.tick_ns ? 0 : 1;
+    // Rounded to the nearest thousandth, but never onto a frame's own value.
+    const int64_t frac = std::llround((FramesAt(p, t_s) - static_cast<double>(k)) * 1000);
+    off = k * 1000 + (k < n ? std::clamp<int64_t>(frac, lo, 999) : std::max(frac, lo));
+    if (!p.live) off = std::min(off, n * 1000);  // JOG_ALL ends at rest on its frame
+  }
+  return ClampMoveTime(int64_t{p.from_frame} * 1000 + p.dir * off);
+}
+
 // Pre-roll (MSG_RT_RUN_MOVE): the rig starts at rest and accelerates uniformly
 // over PRE-ROLL TIME to the speed of the first frame interval, reaching the
 // start frame at full speed; it covers v*T/2, rounded down to whole steps so
@@ -263,7 +409,8 @@ AckCode Playback::CheckPass(const Pass& p) const {
   const uint32_t n = Intervals(p.from_frame, p.to_frame);
   for (int m : PlaybackMotors()) {
     const sim::SoftLimits& s = rig_.motor(m).soft_limits();
-    for (uint32_t k = 0; k <= n; ++k) {
+    // behaviour.soft_limits_bound_moves false: only pre- and post-roll are bounded.
+    for (uint32_t k = 0; profile_.behaviour.soft_limits_bound_moves && k <= n; ++k) {
       const int32_t x = PassPosition(m, p, k);
       if (s.upper_enabled && x > s.upper_steps) return AckCode::kErrSoftUp;
       if (s.lower_enabled && x < s.lower_steps) return AckCode::kErrSoftLow;
@@ -332,6 +479,16 @@ AckCode Playback::RunMove(const dmc::RtRunMove& m) {
   passes_done_ = 0;
   mode_ = Mode::kArmedRun;
   on_frame_.reset();
+  armed_ns_ = scheduler_.Now();
+  // While the rig goes to its pre-roll, MOVE TIME is where the pass's frame
+  // clock will begin at GO: PRE-ROLL TIME before the start frame (or the
+  // start frame itself, as dmc-lite reports it).
+  const int64_t lead_x1000 =
+      profile_.behaviour.preroll_move_time_is_start_frame
+          ? 0
+          : static_cast<int64_t>(std::ceil(pre_s * fps * dmc::kMoveTimeScale));
+  move_time_x1000_ =
+      ClampMoveTime(int64_t{m.start_frame} * dmc::kMoveTimeScale - forward.dir * lead_x1000);
   hooks_.ensure_position_reports();
   return AckCode::kOk;
 }
@@ -345,14 +502,24 @@ AckCode Playback::ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, doub
   if (!upload_.Contains(frame) || exposure_ms == 0) return AckCode::kErrRange;
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
   std::vector<BlurAxis> axes;
+  std::vector<int> listed;
   const double exposure_s = exposure_ms / 1000.0;
   for (const dmc::BlurMotor& b : motors) {
     if (!MotorValid(b.motor)) return AckCode::kErrRange;
-    for (const BlurAxis& a : axes) {
-      if (a.motor == b.motor) return AckCode::kErrRange;  // a motor listed twice
+    if (std::find(listed.begin(), listed.end(), b.motor) != listed.end()) {
+      return AckCode::kErrRange;  // a motor listed twice
     }
+    listed.push_back(b.motor);
     const sim::StepperMotor& motor = rig_.motor(b.motor);
-    if (!motor.enabled()) return AckCode::kErrGeneral;
+    // Which motors blur: those listed whose blur flag is set
+    // (MSG_MOTOR_CONFIGURE 0x02 "blur enabled"); a listed motor without it
+    // is held as the unlisted ones are (docs/protocol-notes.md). A coupled
+    // motor blurs with the motor that drives it.
+    if (!motor.blur() || rig_.leader(b.motor) != 0) continue;
+    if (!motor.enabled()) {
+      if (profile_.behaviour.disabled_motors_ignore_motion) continue;
+      return AckCode::kErrGeneral;
+    }
     // POS A at angle 0, POS B at angle 360; backward runs B towards A.
     const double from = dir > 0 ? b.pos_a_steps : b.pos_b_steps;
     const double to = dir > 0 ? b.pos_b_steps : b.pos_a_steps;
@@ -407,6 +574,7 @@ AckCode Playback::ShootFrame(uint32_t frame, int dir, uint32_t exposure_ms, doub
   run_.reset();
   mode_ = Mode::kArmedShoot;
   on_frame_.reset();
+  armed_ns_ = scheduler_.Now();
   move_time_x1000_ =
       static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
   hooks_.ensure_position_reports();
@@ -420,6 +588,14 @@ AckCode Playback::Go() {
   // "When the device has stopped moving, a MSG_RT_GO command will perform the run".
   if (rig_.AnyMoving()) return AckCode::kErrMoving;
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  // A device that arms after the rig came to rest (dmc-lite, profile
+  // behaviour.arming_ms) is not in position until it has.
+  if (profile_.behaviour.arming_ms > 0 &&
+      scheduler_.Now() <
+          std::max(armed_ns_, rest_ns_) + TimeNs{profile_.behaviour.arming_ms} * kNsPerMs) {
+    return AckCode::kErrNotInPosition;
+  }
+  rt_end_sent_ = false;
   if (mode_ == Mode::kArmedRun) {
     for (int m : run_->motors) {
       if (rig_.motor(m).Position() != PrerollStart(m, pass_)) return AckCode::kErrNotInPosition;
@@ -455,6 +631,7 @@ AckCode Playback::JogAll(const dmc::RtJogAll& m) {
   Pass p =
       MakePass(*from, m.destination_frame, m.fps_x1000 / static_cast<double>(dmc::kFpsScale), 0, 0);
   if (AckCode c = CheckPass(p); c != AckCode::kOk) return c;
+  FitJogRamps(p);
   run_.reset();
   mode_ = Mode::kIdle;
   StartPass(p);
@@ -474,13 +651,32 @@ void Playback::Script(int motor, std::vector<sim::Segment> segments, int64_t tar
 void Playback::AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
                           std::vector<sim::Segment>& out) const {
   const double now_s = static_cast<double>(scheduler_.Now() - p.t_first_frame_ns) / kNsPerSecondF;
+  // Where a jog's clock changes from ramp to cruise to brake, within an interval.
+  const double ramp_end_s = p.ramp_s;
+  const double brake_s = p.ramp_s + p.cruise_s;
+  constexpr double kMinPieceS = 1e-9;
   for (uint32_t k = k0; k < k1; ++k) {
-    const double v = PassVelocity(motor, p, k);
-    const double end_s = (k + 1) / p.fps;
+    const double dx =
+        static_cast<double>(PassPosition(motor, p, k + 1)) - PassPosition(motor, p, k);
+    const double end_s = TimeOfFrames(p, k + 1.0);
     // The first interval of a window starts now (at or a few ns after the
     // frame time): it ends on the ideal frame time so windows never drift.
-    const double start_s = k == k0 ? std::max(now_s, k / p.fps) : k / p.fps;
-    if (end_s > start_s) out.push_back(Seg(end_s - start_s, v, 0));
+    const double frame_s = TimeOfFrames(p, static_cast<double>(k));
+    double t = k == k0 ? std::max(now_s, frame_s) : frame_s;
+    while (end_s > t) {
+      double next = end_s;
+      if (p.accel_fps2 > 0) {
+        for (const double cut : {ramp_end_s, brake_s}) {
+          if (cut > t + kMinPieceS && cut < next - kMinPieceS) {
+            next = cut;
+            break;
+          }
+        }
+      }
+      // The motor's speed is the clock's rate times the interval's steps.
+      out.push_back(Seg(next - t, RateAt(p, t) * dx, AccelAt(p, 0.5 * (t + next)) * dx));
+      t = next;
+    }
   }
 }
 
@@ -488,14 +684,17 @@ void Playback::StartPass(const Pass& p) {
   pass_ = p;
   pass_.t_first_frame_ns = scheduler_.Now() + CeilNs(p.preroll_s);
   pass_.frames_done = 0;
+  pass_.ticked = -1;
   const uint16_t flags = run_ ? run_->request.flags.value_or(0) : 0;
   pass_.live = run_.has_value();
   pass_.video = pass_.live && (flags & dmc::kPlayCameraVideo) != 0;
   pass_.stills = pass_.live && (flags & dmc::kPlayCameraStills) != 0;
   mode_ = run_ ? Mode::kPass : Mode::kJogAll;
-  hooks_.stop_position_reports();
   PlanWindow(0);
   frame_timer_ = scheduler_.At(pass_.t_first_frame_ns, [this] { OnFrameTick(); });
+  // "about every 0.10 seconds, if any of the motors are moving" holds in
+  // the pre-roll, between frames and in the post-roll too.
+  hooks_.ensure_position_reports();
 }
 
 // Plans frame intervals [k0, k0 + kWindowFrames) of every playback motor, with
@@ -509,8 +708,8 @@ void Playback::PlanWindow(uint32_t k0) {
     std::vector<sim::Segment> segs;
     if (k0 == 0) {
       // Idle, then accelerate uniformly to the first interval's speed so as
-      // to pass the start frame at t_first_frame_ns.
-      const double v = n == 0 ? 0 : PassVelocity(m, pass_, 0);
+      // to pass the start frame at t_first_frame_ns (a jog starts from rest).
+      const double v = n == 0 || pass_.accel_fps2 > 0 ? 0 : PassVelocity(m, pass_, 0);
       const double d =
           std::fabs(static_cast<double>(PassPosition(m, pass_, 0) - rig_.motor(m).Position()));
       const double accel_s = (v != 0 && d > 0) ? 2 * d / std::fabs(v) : 0;
@@ -520,7 +719,13 @@ void Playback::PlanWindow(uint32_t k0) {
       if (accel_s > 0) segs.push_back(Seg(accel_s, 0, v / accel_s));
     }
     AppendPath(m, pass_, k0, k1, segs);
-    const double v_end = n == 0 ? 0 : PassVelocity(m, pass_, k1 - 1);
+    double v_end = 0;  // at frame k1
+    if (n != 0 && pass_.accel_fps2 > 0) {
+      v_end = (static_cast<double>(PassPosition(m, pass_, k1)) - PassPosition(m, pass_, k1 - 1)) *
+              RateAt(pass_, TimeOfFrames(pass_, static_cast<double>(k1)));
+    } else if (n != 0) {
+      v_end = PassVelocity(m, pass_, k1 - 1);
+    }
     int64_t target = PassPosition(m, pass_, k1);
     if (k1 == n) {
       target = PostrollEnd(m, pass_);
@@ -542,14 +747,25 @@ void Playback::PlanWindow(uint32_t k0) {
     Script(m, std::move(segs), target);
   }
   if (k1 == n) {
-    // The pass ends when the post-roll has run its course on every motor.
-    TimeNs end = pass_.t_first_frame_ns + CeilNs(n / pass_.fps);
+    // The pass ends when the post-roll has run its course on every motor
+    // and the end frame's still exposure has closed.
+    TimeNs end = pass_.t_first_frame_ns + CeilNs(TimeOfFrames(pass_, static_cast<double>(n)));
     for (int m : (run_ ? run_->motors : PlaybackMotors())) {
       end = std::max(end, rig_.motor(m).CurrentPlan().EndNs());
+    }
+    if (pass_.stills) {
+      const double close = run_->request.camera_close_angle_deg.value_or(360) / 360.0;
+      end = std::max(end, pass_.t_first_frame_ns + CeilNs((n + close) / pass_.fps));
     }
     CancelTimer(phase_timer_);
     phase_timer_ = scheduler_.At(end, [this] {
       phase_timer_ = sim::Scheduler::kNoTimer;
+      // The end frame is reached by now (its tick may share this instant):
+      // its report and outputs come before the pass ends.
+      if (pass_.ticked < int64_t{Intervals(pass_.from_frame, pass_.to_frame)}) {
+        CancelTimer(frame_timer_);
+        OnFrameTick();
+      }
       EndPass();
     });
   }
@@ -561,8 +777,9 @@ void Playback::OnFrameTick() {
   const uint32_t k = pass_.frames_done;
   const auto frame =
       static_cast<uint32_t>(int64_t{pass_.from_frame} + int64_t{pass_.dir} * int64_t{k});
-  move_time_x1000_ =
-      static_cast<uint32_t>(std::min<uint64_t>(uint64_t{frame} * dmc::kMoveTimeScale, UINT32_MAX));
+  // The frame is reached: MOVE TIME is frame x 1000 now (PassMoveTime).
+  pass_.ticked = k;
+  pass_.tick_ns = scheduler_.Now();
   if (pass_.live) {
     const dmc::RtRunMove& req = run_->request;
     if (req.sync_dmx == 1) ApplyFrameOutputs(frame);
@@ -580,9 +797,14 @@ void Playback::OnFrameTick() {
                    if (channel != 0) dmx_.Set(channel, before);
                  });
     }
-    if (pass_.video && k == 0) camera_.Set(sim::CameraPort::kShutter, true);
-    if (pass_.video && k == n) camera_.Set(sim::CameraPort::kShutter, false);
-    if (pass_.stills && k < n) {
+    // FLAGS 0x10 "camera trigger at start/stop of move (video)": one press
+    // of the shutter line when the pass reaches its start frame (recording
+    // starts) and one at its end frame (recording stops).
+    if (pass_.video && (k == 0 || k == n)) VideoTrigger(scheduler_.Now(), k == 0);
+    // FLAGS 0x20 "camera trigger for every frame (stills)": every frame of
+    // the pass, end frame included, is exposed from OPEN ANGLE to CLOSE
+    // ANGLE of its 360 degrees, which run from the frame to the next one.
+    if (pass_.stills) {
       const double open = req.camera_open_angle_deg.value_or(0) / 360.0;
       const double close = req.camera_close_angle_deg.value_or(360) / 360.0;
       const TimeNs t0 = pass_.t_first_frame_ns;
@@ -594,6 +816,15 @@ void Playback::OnFrameTick() {
   }
   // "it must send a MSG_MOTOR_GET_POSITION each time it reaches a new frame".
   hooks_.send_position_update();
+  if (k == n && pass_.live && profile_.behaviour.rt_end_at_last_frame && !rt_end_sent_) {
+    // dmc-lite: RT_END as the last frame of the run is reached, without
+    // waiting for the post-roll.
+    const uint16_t flags = run_->request.flags.value_or(0);
+    if (stop_loop_ || (flags & (dmc::kPlayPingPong | dmc::kPlayLoop)) == 0) {
+      rt_end_sent_ = true;
+      hooks_.send_rt_end();
+    }
+  }
   if (k > 0 && k < n && k % kWindowFrames == 0) PlanWindow(k);
   // Forget I/O timers that already ran so the list stays short on long moves.
   const TimeNs now = scheduler_.Now();
@@ -602,7 +833,7 @@ void Playback::OnFrameTick() {
                    io_timers_.end());
   if (k < n) {
     ++pass_.frames_done;
-    frame_timer_ = scheduler_.At(pass_.t_first_frame_ns + CeilNs((k + 1) / pass_.fps),
+    frame_timer_ = scheduler_.At(pass_.t_first_frame_ns + CeilNs(TimeOfFrames(pass_, k + 1.0)),
                                  [this] { OnFrameTick(); });
   }
 }
@@ -611,16 +842,39 @@ void Playback::AddIoTimer(TimeNs at_ns, sim::Callback cb) {
   io_timers_.push_back(IoTimer{scheduler_.At(at_ns, std::move(cb)), at_ns});
 }
 
+void Playback::VideoTrigger(TimeNs due_ns, bool start) {
+  // Presses never merge: one that falls within the previous press or the
+  // release after it waits, so a camera that toggles recording on each press
+  // sees every start and stop.
+  const TimeNs at = std::max(due_ns, video_free_ns_);
+  video_free_ns_ = at + 2 * kVideoTriggerPressNs;
+  auto press = [this, start] {
+    camera_.Set(sim::CameraPort::kShutter, true);
+    video_recording_ = start;
+  };
+  if (at <= scheduler_.Now()) {
+    press();
+  } else {
+    AddIoTimer(at, std::move(press));
+  }
+  AddIoTimer(at + kVideoTriggerPressNs, [this] { camera_.Set(sim::CameraPort::kShutter, false); });
+}
+
 void Playback::EndPass() {
   ++passes_done_;
   if (mode_ == Mode::kJogAll) {
     // JOG_ALL ends on its destination frame, which is a frame position again.
     on_frame_ = pass_.to_frame;
+    move_time_x1000_ = ClampMoveTime(int64_t{pass_.to_frame} * dmc::kMoveTimeScale);
     mode_ = Mode::kIdle;
-    hooks_.send_position_update();
+    // The destination's frame report, sent this instant, is the one at rest.
+    if (pass_.tick_ns != scheduler_.Now()) hooks_.send_position_update();
+    end_update_ns_ = scheduler_.Now();
     hooks_.ensure_position_reports();
     return;
   }
+  // Between passes MOVE TIME holds where this one's post-roll ended.
+  move_time_x1000_ = PassMoveTime();
   StartNextPassOrEnd();
 }
 
@@ -701,20 +955,35 @@ void Playback::StartShoot() {
     phase_timer_ = sim::Scheduler::kNoTimer;
     FinishRun(true);
   });
+  // The blurred motors move: the periodic updates run through the shot.
+  hooks_.ensure_position_reports();
 }
 
 // The run or shot is over: back to idle, RT_END to the host ("After a
 // MSG_RT_RUN_MOVE or MSG_RT_SHOOT_FRAME has finished shooting, the device
 // sends MSG_RT_END").
-void Playback::FinishRun(bool send_end) {
+void Playback::FinishRun(bool send_end, bool stopped) {
+  // The last update carries the MOVE TIME reached (after a post-roll, the
+  // frame clock run on past the end frame; a shot, its frame).
+  const bool was_pass = (mode_ == Mode::kPass && !reposition_pending_) || mode_ == Mode::kJogAll;
+  if (was_pass) move_time_x1000_ = PassMoveTime();
+  // dmc-lite sends no RT_END after a go-motion shot (behaviour.rt_end_after_shot).
+  const bool end_message = send_end && !rt_end_sent_ &&
+                           (mode_ != Mode::kShooting || profile_.behaviour.rt_end_after_shot);
   CancelTimer(frame_timer_);
   CancelTimer(phase_timer_);
   reposition_pending_ = false;
+  rt_end_sent_ = false;
   mode_ = Mode::kIdle;
   run_.reset();
   blur_.clear();
-  hooks_.send_position_update();
-  if (send_end) hooks_.send_rt_end();
+  // The update at the end, unless the end frame's report (a run without
+  // post-roll) went out this instant with the same MOVE TIME.
+  if (stopped || !(was_pass && pass_.ticked >= 0 && pass_.tick_ns == scheduler_.Now())) {
+    hooks_.send_position_update();
+  }
+  end_update_ns_ = scheduler_.Now();
+  if (end_message) hooks_.send_rt_end();
   hooks_.ensure_position_reports();
 }
 
@@ -733,9 +1002,11 @@ void Playback::Abort(bool send_end) {
   io_timers_.clear();
   for (ScriptPlanner* p : planners_) p->Drop();
   camera_.Set(sim::CameraPort::kShutter, false);
+  // A video recording that was started is stopped: the move has stopped.
+  if (video_recording_) VideoTrigger(scheduler_.Now(), false);
   rig_.StopAll();
   on_frame_.reset();
-  FinishRun(send_end && live);
+  FinishRun(send_end && live, /*stopped=*/true);
 }
 
 std::string_view Playback::ModeName() const {

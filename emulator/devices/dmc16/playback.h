@@ -40,16 +40,19 @@ dmc::AckCode AckForMoveStatus(sim::MoveStatus s);
 // What playback tells the device to send; every hook must be set.
 struct PlaybackHooks {
   // An unsolicited MSG_MOTOR_GET_POSITION now ("each time it reaches a new
-  // frame", and when a run ends).
+  // frame", and when a run ends); the periodic cadence counts on from it.
   std::function<void()> send_position_update;
   // An unsolicited MSG_RT_END (a live run or a shot has finished).
   std::function<void()> send_rt_end;
   // The device's periodic position reports while anything moves ("about
-  // every 0.10 seconds").
+  // every 0.10 seconds"): they run through every phase of playback, beside
+  // the per-frame reports.
   std::function<void()> ensure_position_reports;
-  // Stops the periodic reports: a pass reports at each frame instead.
-  std::function<void()> stop_position_reports;
 };
+
+// A video camera trigger (MSG_RT_RUN_MOVE FLAGS 0x10) is a press of the
+// shutter line this long; two presses are at least this far apart.
+inline constexpr sim::TimeNs kVideoTriggerPressNs = 100 * sim::kNsPerMs;
 
 class Playback {
  public:
@@ -108,13 +111,16 @@ class Playback {
   bool Playing() const {
     return mode_ == Mode::kPass || mode_ == Mode::kShooting || mode_ == Mode::kJogAll;
   }
-  // A pass (run or jog-all) reports positions at each frame instead of the cadence.
+  // A pass (run or jog-all) reports positions at each frame (besides the cadence).
   bool ReportsEachFrame() const { return mode_ == Mode::kPass || mode_ == Mode::kJogAll; }
   Mode mode() const { return mode_; }
   // "idle", "armed-run", "armed-shoot", "running", "shooting", "jogging-all".
   std::string_view ModeName() const;
-  // MOVE TIME the device reports now (thousandths of a frame).
-  uint32_t MoveTimeX1000() const { return move_time_x1000_; }
+  // MOVE TIME the device reports now (thousandths of a frame;
+  // docs/protocol-notes.md "MOVE TIME"): exactly frame x 1000 at each frame
+  // of a pass, strictly between two frames' values in between, the pass's
+  // frame clock run on before the start frame and after the end frame.
+  uint32_t MoveTimeX1000() const;
   // The frame the rig was last sent to, if it is still there by playback's account.
   std::optional<uint32_t> on_frame() const { return on_frame_; }
   // Passes completed since the run started (loop and ping-pong count each).
@@ -135,12 +141,21 @@ class Playback {
   struct Pass {
     uint32_t from_frame = 0;
     uint32_t to_frame = 0;
-    int dir = 1;  // +1 forward through the frames, -1 backward
-    double fps = 0;
+    int dir = 1;     // +1 forward through the frames, -1 backward
+    double fps = 0;  // the frame rate between the ramps
     double preroll_s = 0;
     double postroll_s = 0;
+    // JOG_ALL's frame clock ramps from rest to `fps` and back to rest at
+    // `accel_fps2` frames/s^2 (0: a live pass, which runs at `fps` from the
+    // start frame to the end frame). With ramps, the clock accelerates for
+    // `ramp_s`, runs at `fps` for `cruise_s`, then brakes for `ramp_s`.
+    double accel_fps2 = 0;
+    double ramp_s = 0;
+    double cruise_s = 0;
     sim::TimeNs t_first_frame_ns = 0;  // when the rig passes from_frame
     uint32_t frames_done = 0;          // frame intervals completed
+    int64_t ticked = -1;               // index of the last frame reached, -1 before the first
+    sim::TimeNs tick_ns = 0;           // when it was reached
     bool video = false;
     bool stills = false;
     bool live = false;  // a RUN_MOVE pass (camera, DMX, triggers, bloop); false for JOG_ALL
@@ -164,7 +179,22 @@ class Playback {
   void AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,
                   std::vector<sim::Segment>& out) const;
   int32_t PassPosition(int motor, const Pass& p, uint32_t k) const;
-  double PassVelocity(int motor, const Pass& p, uint32_t k) const;  // interval k, steps/s
+  double PassVelocity(int motor, const Pass& p, uint32_t k) const;  // interval k at fps, steps/s
+  // The pass's frame clock: frames from from_frame `t_s` after it (negative
+  // before), the time it reaches frame index `s`, and its rate (frames/s).
+  static double FramesAt(const Pass& p, double t_s);
+  static double TimeOfFrames(const Pass& p, double s);
+  static double RateAt(const Pass& p, double t_s);
+  static double AccelAt(const Pass& p, double t_s);  // frames/s^2
+  // JOG_ALL: the ramps of a pass from rest to rest, each motor within its max
+  // velocity (the clock's rate is lowered) and its max acceleration.
+  void FitJogRamps(Pass& p) const;
+  // MOVE TIME of the pass now (MoveTimeX1000 while a pass runs).
+  uint32_t PassMoveTime() const;
+  // A press of the shutter line for a video trigger (`start`: recording
+  // starts, else stops), at `due_ns` or as soon as the previous press and
+  // its release have ended.
+  void VideoTrigger(sim::TimeNs due_ns, bool start);
   // Pre-roll: rest position before the pass and the time to reach speed.
   int64_t PrerollStart(int motor, const Pass& p) const;
   int64_t PostrollEnd(int motor, const Pass& p) const;
@@ -176,7 +206,8 @@ class Playback {
   void EndPass();
   void StartNextPassOrEnd();
   void StartShoot();
-  void FinishRun(bool send_end);
+  // `stopped`: ended early (Abort), the update goes out whatever was sent this instant.
+  void FinishRun(bool send_end, bool stopped = false);
   void ApplyFrameOutputs(uint32_t frame);
   void CancelTimer(sim::Scheduler::TimerId& id);
   void AddIoTimer(sim::TimeNs at_ns, sim::Callback cb);
@@ -202,7 +233,13 @@ class Playback {
   bool reposition_pending_ = false;  // a loop pass waits for the rig to reach its pre-roll
   uint32_t passes_done_ = 0;
   std::optional<uint32_t> on_frame_;  // last frame the rig was sent to
-  uint32_t move_time_x1000_ = 0;
+  uint32_t move_time_x1000_ = 0;      // MOVE TIME outside a running pass
+  bool rt_end_sent_ = false;          // this run's RT_END went out at its last frame
+  bool video_recording_ = false;      // a video start trigger awaits its stop trigger
+  sim::TimeNs video_free_ns_ = 0;     // the next video press may begin from here
+  sim::TimeNs armed_ns_ = 0;          // when the run or shot was last armed
+  sim::TimeNs rest_ns_ = 0;           // when every motor last came to rest
+  sim::TimeNs end_update_ns_ = -1;    // when the last pass or shot ended, with its update
 
   sim::Scheduler::TimerId frame_timer_ = sim::Scheduler::kNoTimer;
   sim::Scheduler::TimerId phase_timer_ = sim::Scheduler::kNoTimer;

@@ -8,11 +8,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "devices/dmc16/dmc16_test_support.h"
 #include "sim/scheduler.h"
 
 namespace moco::devices {
@@ -63,7 +67,6 @@ class Bench final : public sim::RigObserver {
                          },
                      .send_rt_end = [this] { rt_ends.push_back(scheduler.Now()); },
                      .ensure_position_reports = [this] { ++cadence_starts; },
-                     .stop_position_reports = [this] { ++cadence_stops; },
                  }) {
     for (int m = 1; m <= rig.motor_count(); ++m) {
       auto planner = std::make_unique<ScriptPlanner>();
@@ -74,6 +77,7 @@ class Bench final : public sim::RigObserver {
       mp.hard_stop_multiple = profile_.hard_stop_multiple;
       rig.motor(m).SetPlanner(std::move(planner));
       rig.motor(m).SetProfile(mp);
+      rig.motor(m).SetBlur(true);  // as the device's motors until MSG_MOTOR_CONFIGURE
     }
     rig.SetObserver(this);
   }
@@ -118,7 +122,6 @@ class Bench final : public sim::RigObserver {
   std::vector<Report> reports;
   std::vector<TimeNs> rt_ends;
   int cadence_starts = 0;
-  int cadence_stops = 0;
 };
 
 dmc::RtRunMove RunMove(uint32_t start, uint32_t end, uint32_t fps_x1000, uint32_t pre_ms,
@@ -171,14 +174,16 @@ TEST(Playback, RunMoveArmsOnThePrerollStartAndGoPlaysEveryFrameThenRtEnd) {
   EXPECT_EQ(b.Pos(2), 50);
   EXPECT_TRUE(b.reports.empty());
   const TimeNs t_go = b.scheduler.Now();
+  const int cadence_before_go = b.cadence_starts;
   ASSERT_EQ(b.playback.Go(), kOk);
   EXPECT_EQ(b.playback.ModeName(), "running");
   EXPECT_TRUE(b.playback.Playing());
-  EXPECT_EQ(b.cadence_stops, 1) << "per-frame reports replace the cadence";
+  EXPECT_GT(b.cadence_starts, cadence_before_go) << "the cadence runs beside the frame reports";
   b.Settle();
   // "it must send a MSG_MOTOR_GET_POSITION each time it reaches a new frame",
-  // then one more when the run has stopped.
-  ASSERT_EQ(b.MoveTimes(), Concat(Frames(20, 60), {60000}));
+  // then one more when the run has stopped, its MOVE TIME the frame clock
+  // run on through the post-roll: 0.5 s at 24 fps past frame 60.
+  ASSERT_EQ(b.MoveTimes(), Concat(Frames(20, 60), {72000}));
   for (uint32_t k = 0; k <= 40; ++k) {
     const Report& r = b.reports[k];
     const TimeNs ideal = t_go + kNsPerSecond + (k * kNsPerSecond + 23) / 24;
@@ -194,7 +199,7 @@ TEST(Playback, RunMoveArmsOnThePrerollStartAndGoPlaysEveryFrameThenRtEnd) {
               static_cast<double>(b.reports[40].t_ns + 500 * kNsPerMs), 2);
   EXPECT_EQ(b.reports.back().t_ns, b.rt_ends[0]);
   EXPECT_EQ(b.playback.ModeName(), "idle");
-  EXPECT_EQ(b.playback.MoveTimeX1000(), 60000u);
+  EXPECT_EQ(b.playback.MoveTimeX1000(), 72000u);
   EXPECT_EQ(b.playback.passes_done(), 1u);
   EXPECT_EQ(b.playback.Go(), AckCode::kErrGeneral) << "nothing armed any more";
 }
@@ -232,7 +237,7 @@ TEST(Playback, LoopPlaysAgainFromThePrerollUntilStopLoopEndsItAtTheNextEndPoint)
   EXPECT_EQ(b.playback.StopLoop(), kOk);
   b.Settle();
   EXPECT_EQ(b.playback.passes_done(), 3u);
-  EXPECT_EQ(b.MoveTimes(first_pass), Concat(Concat(Frames(20, 40), Frames(20, 40)), {40000}));
+  EXPECT_EQ(b.MoveTimes(first_pass), Concat(Concat(Frames(20, 40), Frames(20, 40)), {52000}));
   ASSERT_EQ(b.rt_ends.size(), 1u);
   EXPECT_EQ(b.Pos(1), 300 + 60);  // frame 40 and the post-roll
   EXPECT_EQ(b.playback.ModeName(), "idle");
@@ -249,7 +254,8 @@ TEST(Playback, PingPongPlaysTheRangeBackwardOnTheSecondPass) {
   ASSERT_EQ(b.playback.StopLoop(), kOk);
   b.Settle();
   EXPECT_EQ(b.playback.passes_done(), 2u);
-  EXPECT_EQ(b.MoveTimes(), Concat(Concat(Frames(20, 40), Frames(40, 20)), {20000}));
+  // The last update: 0.5 s of post-roll at 24 fps below frame 20.
+  EXPECT_EQ(b.MoveTimes(), Concat(Concat(Frames(20, 40), Frames(40, 20)), {8000}));
   for (size_t i = 21; i < 42; ++i) {
     EXPECT_EQ(b.reports[i].motor1_steps, 100 + 10 * static_cast<int64_t>(41 - i)) << i;
   }
@@ -296,14 +302,10 @@ TEST(Playback, JogAllGoesFromTheFrameTheRigIsOnWithoutRtEnd) {
   EXPECT_EQ(b.playback.ModeName(), "jogging-all");
   EXPECT_TRUE(b.playback.ReportsEachFrame());
   b.Settle();
-  // A report at each frame and one when the jog has stopped (the stop and
-  // the last frame fall on the same instant, in either order).
-  std::vector<uint32_t> times = b.MoveTimes();
-  ASSERT_EQ(times.size(), 21u + 1u);
-  EXPECT_EQ(times.back(), 40000u);
+  // A report at each frame, once: the destination's, as the jog comes to
+  // rest there, is also the report of the stop.
+  EXPECT_EQ(b.MoveTimes(), Frames(20, 40));
   EXPECT_EQ(b.reports.back().motor1_steps, 300);
-  times.erase(std::unique(times.begin(), times.end()), times.end());
-  EXPECT_EQ(times, Frames(20, 40));
   EXPECT_TRUE(b.rt_ends.empty()) << "RT_END follows RUN_MOVE and SHOOT_FRAME only";
   EXPECT_EQ(b.Pos(1), 300) << "no pre-roll or post-roll";
   EXPECT_EQ(b.playback.on_frame(), 40u);
@@ -345,6 +347,94 @@ TEST(Playback, JogAllAfterAReuploadStartsFromTheFrameTheRigRestsOn) {
   EXPECT_EQ(b.playback.JogAll({24000, 40}), AckCode::kErrNotInPosition);
 }
 
+// The motion of `motor` as planned now: checks every segment against the
+// motor's limits and returns the largest speed reached.
+struct PlanCheck {
+  double first_v0 = 0;
+  double last_v_end = 0;
+  double max_abs_v = 0;
+  double max_abs_a = 0;
+  double duration_s = 0;
+};
+PlanCheck CheckPlan(const sim::Plan& plan) {
+  PlanCheck c;
+  const std::vector<sim::Segment>& segs = plan.segments();
+  if (segs.empty()) return c;
+  c.first_v0 = segs.front().v0_steps_per_s;
+  for (const sim::Segment& s : segs) {
+    const double v_end = s.v0_steps_per_s + s.a_steps_per_s2 * s.duration_s;
+    c.max_abs_v = std::max({c.max_abs_v, std::fabs(s.v0_steps_per_s), std::fabs(v_end)});
+    c.max_abs_a = std::max(c.max_abs_a, std::fabs(s.a_steps_per_s2));
+    c.duration_s += s.duration_s;
+    c.last_v_end = v_end;
+  }
+  return c;
+}
+
+TEST(Playback, JogAllRampsInAndOutWithinTheMotorsMaxAcceleration) {
+  Bench b;
+  b.UploadRamp(10, 200, 10);  // motor 1: 10 steps per frame
+  sim::MotionProfile mp = b.rig.motor(1).profile();
+  mp.max_accel_steps_per_s2 = 200;  // 20 frames/s^2 along the path
+  ASSERT_EQ(b.rig.motor(1).SetProfile(mp), sim::MoveStatus::kOk);
+  ASSERT_EQ(b.playback.PositionFrame(20), kOk);
+  b.Settle();
+  const TimeNs t0 = b.scheduler.Now();
+  const size_t mark = b.reports.size();
+  // MSG_RT_JOG_ALL "Jog all motors towards the destination frame": the rig
+  // rests on frame 20, so it must start from rest and end at rest on frame 40.
+  ASSERT_EQ(b.playback.JogAll({10000, 40}), kOk);
+  const PlanCheck c = CheckPlan(b.rig.motor(1).CurrentPlan());
+  EXPECT_EQ(c.first_v0, 0) << "starts at rest";
+  EXPECT_NEAR(c.last_v_end, 0, 1e-6) << "ends at rest";
+  EXPECT_LE(c.max_abs_a, 200 + 1e-6) << "within MAX ACCEL";
+  EXPECT_NEAR(c.max_abs_v, 100, 1e-6) << "10 fps x 10 steps per frame between the ramps";
+  // Ramps of 0.5 s (2.5 frames each), 15 frames at 10 fps: 2.5 s.
+  EXPECT_NEAR(c.duration_s, 2.5, 1e-6);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 300);
+  EXPECT_EQ(b.playback.on_frame(), 40u);
+  // Each frame is reported when the rig reaches it on the ramped clock:
+  // frame 21 after sqrt(2 / 20) s, frame 30 in the cruise, 39 in the brake.
+  std::vector<TimeNs> at(41, -1);
+  for (size_t i = mark; i < b.reports.size(); ++i) {
+    const Report& r = b.reports[i];
+    if (r.move_time_x1000 % 1000 == 0 && at[r.move_time_x1000 / 1000] < 0) {
+      at[r.move_time_x1000 / 1000] = r.t_ns - t0;
+      EXPECT_EQ(r.motor1_steps, (r.move_time_x1000 / 1000 - 10) * 10) << "on the frame's position";
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(at[21]), std::sqrt(0.1) * 1e9, 2);
+  EXPECT_NEAR(static_cast<double>(at[30]), (0.5 + 0.75) * 1e9, 2);
+  EXPECT_NEAR(static_cast<double>(at[39]), (2.5 - std::sqrt(0.1)) * 1e9, 2);
+  EXPECT_NEAR(static_cast<double>(at[40]), 2.5e9, 2);
+}
+
+TEST(Playback, JogAllFasterThanAMotorsMaxVelocityPlaysAtTheFastestFpsItCanFollow) {
+  Bench b;
+  b.UploadRamp(10, 200, 10);
+  sim::MotionProfile mp = b.rig.motor(1).profile();
+  mp.max_velocity_steps_per_s = 100;  // 10 fps at 10 steps per frame
+  ASSERT_EQ(b.rig.motor(1).SetProfile(mp), sim::MoveStatus::kOk);
+  ASSERT_EQ(b.playback.PositionFrame(20), kOk);
+  b.Settle();
+  const TimeNs t0 = b.scheduler.Now();
+  // 24 fps would need 240 steps/s: the jog is taken (a jog moves within the
+  // motor's speed, as MOTOR_JOG's SPEED 10000 "jog using the max velocity")
+  // and runs the frame clock at 10 fps.
+  ASSERT_EQ(b.playback.JogAll({24000, 40}), kOk);
+  const PlanCheck c = CheckPlan(b.rig.motor(1).CurrentPlan());
+  EXPECT_LE(c.max_abs_v, 100 + 1e-6);
+  EXPECT_NEAR(c.max_abs_v, 100, 1e-6);
+  EXPECT_LE(c.max_abs_a, b.rig.motor(1).profile().max_accel_steps_per_s2 + 1e-6);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 300);
+  // 20 frames at 10 fps plus a ramp (1000 frames/s^2: 10 ms each way).
+  EXPECT_NEAR(static_cast<double>(b.reports.back().t_ns - t0), 2.01e9, 1e3);
+  // Motor 2 holds still on the path: it limits nothing.
+  EXPECT_EQ(b.Pos(2), 50);
+}
+
 TEST(Playback, StillsTriggerOpensAndClosesTheShutterInEveryFrame) {
   Bench b;
   b.UploadRamp(10, 60, 10);
@@ -356,9 +446,10 @@ TEST(Playback, StillsTriggerOpensAndClosesTheShutterInEveryFrame) {
   const TimeNs t0 = b.scheduler.Now();
   ASSERT_EQ(b.playback.Go(), kOk);
   b.Settle();
-  // Frames 20..24 are each exposed for the first half of the frame (10 fps).
+  // Frames 20..25 are each exposed for the first half of the frame (10 fps),
+  // the end frame too: "camera trigger for every frame".
   std::vector<sim::CameraPort::Edge> want;
-  for (TimeNs k = 0; k < 5; ++k) {
+  for (TimeNs k = 0; k <= 5; ++k) {
     want.push_back({t0 + k * 100 * kNsPerMs, sim::CameraPort::kShutter, true});
     want.push_back({t0 + k * 100 * kNsPerMs + 50 * kNsPerMs, sim::CameraPort::kShutter, false});
   }
@@ -400,6 +491,27 @@ TEST(Playback, ShootFrameExposesWhileTheBlurredMotorCrossesTheShutterAngles) {
   EXPECT_EQ(b.playback.ModeName(), "idle");
 }
 
+// MSG_MOTOR_CONFIGURE "0x02 - blur enabled" decides which of the motors a
+// SHOOT_FRAME lists blur: one without the flag is held on the frame's
+// position through the exposure, as the motors not listed are.
+TEST(Playback, AListedMotorWithoutTheBlurFlagIsHeldOnTheFrame) {
+  Bench b;
+  b.UploadRamp(10, 60, 10);
+  b.rig.motor(1).SetBlur(false);
+  ASSERT_EQ(b.playback.ShootFrame(20, 1, 100, 90, 270, std::vector<dmc::BlurMotor>{{1, 0, 400}}),
+            kOk);
+  b.Settle();
+  EXPECT_EQ(b.Pos(1), 100) << "frame 20's uploaded position, not the ramp start";
+  ASSERT_EQ(b.playback.Go(), kOk);
+  b.Settle();
+  EXPECT_EQ(b.camera.exposures(), 1u);
+  EXPECT_EQ(b.Pos(1), 100);
+  // Listed twice is still refused, blurred or not.
+  EXPECT_EQ(b.playback.ShootFrame(20, 1, 100, 90, 270,
+                                  std::vector<dmc::BlurMotor>{{1, 0, 400}, {1, 0, 400}}),
+            AckCode::kErrRange);
+}
+
 TEST(Playback, ResetForgetsTheFrameAndTheRun) {
   Bench b;
   b.UploadRamp(10, 60, 10);
@@ -415,6 +527,515 @@ TEST(Playback, ResetForgetsTheFrameAndTheRun) {
   b.playback.Reset();
   EXPECT_EQ(b.playback.ModeName(), "idle");
   EXPECT_EQ(b.playback.Go(), AckCode::kErrGeneral);
+}
+
+// --- the whole device: position updates, camera, triggers, errors, switches --------------
+
+using testing::Host;
+
+constexpr std::optional<AckCode> kAckOk = AckCode::kOk;
+constexpr TimeNs kInterval = 100 * kNsPerMs;  // position_report_interval_ms of the default
+
+// Uploads frames start..start+n-1 to the device: motor 1 climbs `step` steps
+// a frame from 0, motor 2 holds 50, DMX channel 3 counts the frames; GIO
+// trigger 0x1 is on at frame index 5 and 0x3 at index 6.
+void UploadRamp(Host& h, uint32_t start, uint32_t n, int32_t step) {
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{start, start + n - 1}), kAckOk);
+  std::vector<int32_t> pos;
+  std::vector<uint8_t> levels;
+  for (uint32_t i = 0; i < n; ++i) {
+    pos.push_back(static_cast<int32_t>(i) * step);
+    levels.push_back(static_cast<uint8_t>(i));
+  }
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, pos}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{2, 0, true, {50}}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveDmx{3, 0, true, levels}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveTriggers{0x3, {{5, 0x1}, {6, 0x3}}}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kAckOk);
+}
+
+// The unsolicited position updates sent at or after `from_ns` (the device
+// numbers its own messages from 1, the host's requests from 0x10000).
+std::vector<std::pair<TimeNs, dmc::MotorPositionReport>> Updates(Host& h, TimeNs from_ns) {
+  std::vector<std::pair<TimeNs, dmc::MotorPositionReport>> v;
+  for (const testing::Out& o : h.out()) {
+    const auto* r = std::get_if<dmc::MotorPositionReport>(&o.msg);
+    if (r != nullptr && o.id < 0x10000 && o.t_ns >= from_ns) v.emplace_back(o.t_ns, *r);
+  }
+  return v;
+}
+
+// The longest wait for an update from `from_ns` up to the last update.
+TimeNs LongestGap(const std::vector<std::pair<TimeNs, dmc::MotorPositionReport>>& ups,
+                  TimeNs from_ns) {
+  TimeNs gap = 0;
+  TimeNs prev = from_ns;
+  for (const auto& [t, r] : ups) {
+    gap = std::max(gap, t - prev);
+    prev = t;
+  }
+  return gap;
+}
+
+// When every motor of the rig will be at rest, as planned now.
+TimeNs RestTime(Host& h) {
+  TimeNs end = h.now();
+  for (int m = 1; m <= h.device().rig_ref().motor_count(); ++m) {
+    const sim::StepperMotor& motor = h.device().rig_ref().motor(m);
+    if (motor.IsMoving()) end = std::max(end, motor.CurrentPlan().EndNs());
+  }
+  return end;
+}
+
+TEST(Dmc16PlaybackReports, UpdatesComeEveryIntervalThroughPrerollFramesAndPostrollAt2Fps) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);  // 20 steps/s at 2 fps
+  ASSERT_EQ(h.Request(RunMove(20, 26, 2000, 1000, 1000)), kAckOk);
+  h.Settle();
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  const auto ups = Updates(h, t_go);
+  ASSERT_FALSE(ups.empty());
+  // MSG_MOTOR_GET_POSITION: "The device should send these out, about every
+  // 0.10 seconds, if any of the motors are moving": in the pre-roll, between
+  // the frames (0.5 s apart at 2 fps) and in the post-roll, until the stop.
+  EXPECT_LE(LongestGap(ups, t_go), kInterval);
+  EXPECT_EQ(ups.back().first, t_go + 5 * kNsPerSecond) << "1 s + 6 intervals at 2 fps + 1 s";
+  EXPECT_FALSE(h.device().rig_ref().AnyMoving());
+  // MSG_RT_GO: "it must send a MSG_MOTOR_GET_POSITION each time it reaches a
+  // new frame": each frame once, at its time, with MOVE TIME = frame x 1000.
+  const TimeNs t_first = t_go + kNsPerSecond;
+  for (uint32_t f = 20; f <= 26; ++f) {
+    int n = 0;
+    for (const auto& [t, r] : ups) {
+      if (r.move_time_x1000 != f * 1000) continue;
+      ++n;
+      EXPECT_EQ(t, t_first + (f - 20) * kNsPerSecond / 2) << f;
+      EXPECT_EQ(r.positions_steps[0], static_cast<int32_t>((f - 10) * 10)) << f;
+    }
+    EXPECT_EQ(n, 1) << "frame " << f;
+  }
+  // The updates between carry MOVE TIME as the frame clock reads: before the
+  // start frame in the pre-roll (2 frames of clock in 1 s), strictly between
+  // two frames in the pass, past the end frame in the post-roll.
+  uint32_t prev = 0;
+  for (const auto& [t, r] : ups) {
+    const uint32_t mt = r.move_time_x1000;
+    EXPECT_GT(mt, prev) << "MOVE TIME runs forward, at " << t - t_go;
+    prev = mt;
+    const double clock_x1000 = 20000 + static_cast<double>(t - t_first) * 2e-6;
+    EXPECT_NEAR(mt, clock_x1000, 1) << "at " << t - t_go;
+    const bool frame_time = t >= t_first && (t - t_first) % (kNsPerSecond / 2) == 0;
+    if (t < t_first) EXPECT_LT(mt, 20000u);
+    if (t > t_first && t < t_first + 3 * kNsPerSecond && !frame_time) EXPECT_NE(mt % 1000, 0u);
+    if (t > t_first + 3 * kNsPerSecond) EXPECT_GT(mt, 26000u);
+  }
+  EXPECT_EQ(ups.back().second.move_time_x1000, 28000u) << "the stop, 1 s past frame 26";
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+}
+
+TEST(Dmc16PlaybackReports, UpdatesGoOnBetweenPingPongPassesHoldingWhereThePassEnded) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  // A post-roll longer than the pre-roll: between passes the rig travels
+  // from the forward post-roll's end back to the backward pass's pre-roll,
+  // 5 steps at 100 steps/s^2 (0.45 s).
+  ASSERT_EQ(h.Request(dmc::MotorSetSpeed{1, 5000, 100}), kAckOk);
+  ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 500, 1000, dmc::kPlayPingPong)), kAckOk);
+  h.Settle();
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  // Forward pass: 0.5 s pre-roll, 2 s of frames, 1 s post-roll; then the
+  // reposition and the backward pass; STOP_LOOP during the second.
+  h.RunMs(4500);
+  ASSERT_EQ(h.Request(dmc::RtStopLoop{}), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.device().playback().passes_done(), 2u);
+  const auto ups = Updates(h, t_go);
+  EXPECT_LE(LongestGap(ups, t_go), kInterval);
+  // After the forward post-roll (1 s at 2 fps past frame 24) MOVE TIME holds
+  // 26000 while the rig repositions; the backward pre-roll then counts down
+  // from 25000 (0.5 s above frame 24) to the frames 24..20.
+  const TimeNs t_pass_end = t_go + 3500 * kNsPerMs;
+  std::vector<uint32_t> between;
+  std::vector<uint32_t> frames;
+  for (const auto& [t, r] : ups) {
+    if (t > t_pass_end && r.move_time_x1000 >= 25000) between.push_back(r.move_time_x1000);
+    if (r.move_time_x1000 % 1000 == 0 && r.move_time_x1000 >= 20000 && r.move_time_x1000 <= 24000) {
+      frames.push_back(r.move_time_x1000);
+    }
+  }
+  ASSERT_FALSE(between.empty()) << "updates while the rig repositions";
+  EXPECT_EQ(between.front(), 26000u);
+  for (uint32_t mt : between) EXPECT_TRUE(mt == 26000u || mt < 25000u + 1) << mt;
+  EXPECT_EQ(frames, (std::vector<uint32_t>{20000, 21000, 22000, 23000, 24000, 24000, 23000, 22000,
+                                           21000, 20000}));
+  EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+}
+
+TEST(Dmc16PlaybackReports, UpdatesGoOnThroughAGoMotionExposureWithTheShotFramesMoveTime) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  dmc::RtShootFrame2 shot;
+  shot.frame = 30;
+  shot.exposure_ms = 1000;
+  shot.open_angle_deg = 0;
+  shot.close_angle_deg = 360;
+  shot.motors = {{1, 150, 250}};  // 100 steps/s while the shutter is open
+  ASSERT_EQ(h.Request(shot), kAckOk);
+  h.Settle();
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  EXPECT_EQ(h.device().camera().exposures(), 1u);
+  const auto ups = Updates(h, t_go);
+  ASSERT_GE(ups.size(), 10u);
+  EXPECT_LE(LongestGap(ups, t_go), kInterval);
+  for (const auto& [t, r] : ups) EXPECT_EQ(r.move_time_x1000, 30000u) << "at " << t - t_go;
+}
+
+TEST(Dmc16PlaybackReports, UpdatesGoOnBetweenTheFramesOfASlowJogAll) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{20}), kAckOk);
+  h.Settle();
+  const TimeNs t0 = h.now();
+  ASSERT_EQ(h.Request(dmc::RtJogAll{2000, 24}), kAckOk);
+  h.Settle();
+  const auto ups = Updates(h, t0);
+  EXPECT_LE(LongestGap(ups, t0), kInterval);
+  // Each frame once: the destination's report is also the one at rest.
+  for (uint32_t f = 21; f <= 24; ++f) {
+    int n = 0;
+    for (const auto& [t, r] : ups) n += r.move_time_x1000 == f * 1000;
+    EXPECT_EQ(n, 1) << "frame " << f;
+  }
+  EXPECT_EQ(ups.back().second.move_time_x1000, 24000u) << "at rest on the destination";
+  EXPECT_FALSE(h.device().rig_ref().AnyMoving());
+}
+
+TEST(Dmc16PlaybackReports, TheProfilesIntervalSetsTheCadenceInEveryPhase) {
+  // The spec's "about every 0.10 seconds" (the default 100 ms) and dmc-lite's
+  // 50 ms (FACTS "DMC v2") from the profile's position_report_interval_ms.
+  for (const uint32_t interval_ms : {100u, 50u}) {
+    Dmc16Profile p = SmallProfile();
+    p.position_report_interval_ms = interval_ms;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 1000, 1000)), kAckOk);
+    h.Settle();
+    const TimeNs t_go = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    const TimeNs interval = TimeNs{interval_ms} * kNsPerMs;
+    const auto ups = Updates(h, t_go + 1);
+    EXPECT_LE(LongestGap(ups, t_go), interval);
+    // The 1 s pre-roll: an update every interval after GO, up to frame 20's.
+    std::vector<TimeNs> preroll;
+    for (const auto& [t, r] : ups) {
+      if (t < t_go + kNsPerSecond) preroll.push_back(t - t_go);
+    }
+    ASSERT_EQ(preroll.size(), 1000u / interval_ms - 1);
+    for (size_t i = 0; i < preroll.size(); ++i) {
+      EXPECT_EQ(preroll[i], static_cast<TimeNs>(i + 1) * interval) << i;
+    }
+  }
+}
+
+TEST(Dmc16PlaybackReports, TheDmcLiteProfileUpdatesEvery50MsThroughARun) {
+  const char* dir = std::getenv("MOCO_SOURCE_DIR");
+  const std::string src = dir != nullptr ? dir : ".";
+  Host h(LoadDmc16Profile(src + "/fixtures/profiles/dmc-lite.json"));
+  ASSERT_EQ(h.device().profile().position_report_interval_ms, 50u);
+  for (uint8_t m = 1; m <= 2; ++m) {
+    ASSERT_EQ(h.Request(dmc::MotorConfigure{m, dmc::kMotorEnabled}), kAckOk);
+  }
+  UploadRamp(h, 10, 100, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 1000, 1000)), kAckOk);
+  h.Settle();
+  h.RunMs(100);  // past its arming time
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  const auto ups = Updates(h, t_go);
+  EXPECT_LE(LongestGap(ups, t_go), 50 * kNsPerMs);
+  EXPECT_GE(ups.size(), 4000u / 50u);
+}
+
+// --- camera triggers and upload triggers -----------------------------------------------------
+
+TEST(Dmc16PlaybackCamera, VideoPressesTheShutterOnceAtTheStartFrameAndOnceAtTheEndFrame) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 30, 10000, 500, 500, dmc::kPlayCameraVideo)), kAckOk);
+  h.Settle();
+  const TimeNs t_first = h.now() + 500 * kNsPerMs;
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  // FLAGS 0x10 "camera trigger at start/stop of move (video)": a press when
+  // the start frame is reached, a press when the end frame is; nothing in
+  // between, nothing per frame.
+  const TimeNs t_last = t_first + kNsPerSecond;
+  const std::vector<sim::CameraPort::Edge> want = {
+      {t_first, sim::CameraPort::kShutter, true},
+      {t_first + kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+      {t_last, sim::CameraPort::kShutter, true},
+      {t_last + kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+  };
+  EXPECT_EQ(h.device().camera().Trace(), want);
+}
+
+TEST(Dmc16PlaybackCamera, VideoPressesNeverMergeAndAStoppedRunStopsTheRecording) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  // One frame interval at 24 fps: the stop press waits until the start
+  // press has been released for as long as it was held.
+  ASSERT_EQ(h.Request(RunMove(20, 21, 24000, 0, 0, dmc::kPlayCameraVideo)), kAckOk);
+  h.Settle();
+  const TimeNs t0 = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  const std::vector<sim::CameraPort::Edge> want = {
+      {t0, sim::CameraPort::kShutter, true},
+      {t0 + kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+      {t0 + 2 * kVideoTriggerPressNs, sim::CameraPort::kShutter, true},
+      {t0 + 3 * kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+  };
+  EXPECT_EQ(h.device().camera().Trace(), want);
+
+  // A run stopped after its start frame stops the camera it started.
+  Host s(SmallProfile());
+  UploadRamp(s, 10, 100, 10);
+  ASSERT_EQ(s.Request(RunMove(20, 60, 10000, 0, 0, dmc::kPlayCameraVideo)), kAckOk);
+  s.Settle();
+  const TimeNs t1 = s.now();
+  ASSERT_EQ(s.Request(dmc::RtGo{}), kAckOk);
+  s.RunMs(1000);
+  ASSERT_EQ(s.Request(dmc::MotorStopAll{}), kAckOk);
+  s.Settle();
+  const std::vector<sim::CameraPort::Edge> stopped = {
+      {t1, sim::CameraPort::kShutter, true},
+      {t1 + kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+      {t1 + kNsPerSecond, sim::CameraPort::kShutter, true},
+      {t1 + kNsPerSecond + kVideoTriggerPressNs, sim::CameraPort::kShutter, false},
+  };
+  EXPECT_EQ(s.device().camera().Trace(), stopped);
+}
+
+TEST(Dmc16PlaybackCamera, StillsExposeEveryFrameFromOpenToCloseAngleEndFrameIncluded) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  dmc::RtRunMove r = RunMove(20, 23, 10000, 0, 0, dmc::kPlayCameraStills);
+  r.camera_open_angle_deg = 0;
+  r.camera_close_angle_deg = 270;
+  ASSERT_EQ(h.Request(r), kAckOk);
+  h.Settle();
+  const TimeNs t0 = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  // FLAGS 0x20 "camera trigger for every frame (stills)": frames 20..23,
+  // each open from its frame time for 270 of the frame's 360 degrees.
+  std::vector<sim::CameraPort::Edge> want;
+  for (TimeNs k = 0; k <= 3; ++k) {
+    want.push_back({t0 + k * 100 * kNsPerMs, sim::CameraPort::kShutter, true});
+    want.push_back({t0 + k * 100 * kNsPerMs + 75 * kNsPerMs, sim::CameraPort::kShutter, false});
+  }
+  EXPECT_EQ(h.device().camera().Trace(), want);
+  // The run has finished shooting when the last exposure has closed.
+  const auto ends = h.All<dmc::RtEnd>();
+  ASSERT_EQ(ends.size(), 1u);
+  EXPECT_EQ(ends[0].first, t0 + 375 * kNsPerMs);
+}
+
+TEST(Dmc16PlaybackTriggers, UploadedTriggersAndDmxPlayOnlyWithSyncDmx) {
+  for (const uint8_t sync : {uint8_t{0}, uint8_t{1}}) {
+    Host h(SmallProfile());
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(dmc::GioOut{0x4}), kAckOk);
+    ASSERT_EQ(h.Request(dmc::Dmx{0, 3, {200}}), kAckOk);
+    // Frames 10..30 at 10 fps; trigger 0x1 at frame 15, 0x3 at frame 16.
+    dmc::RtRunMove r = RunMove(10, 30, 10000, 0, 0);
+    r.sync_dmx = sync;
+    ASSERT_EQ(h.Request(r), kAckOk);
+    h.Settle();
+    const TimeNs t0 = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.scheduler().RunUntil(t0 + 500 * kNsPerMs + 1);  // frame 15
+    const uint32_t at15 = h.device().gio_ref().outputs();
+    const uint8_t dmx15 = h.device().dmx().Value(3);
+    h.scheduler().RunUntil(t0 + 600 * kNsPerMs + 1);  // frame 16
+    const uint32_t at16 = h.device().gio_ref().outputs();
+    h.scheduler().RunUntil(t0 + 700 * kNsPerMs + 1);  // frame 17: no entry
+    const uint32_t at17 = h.device().gio_ref().outputs();
+    h.Settle();
+    if (sync == 1) {
+      // SYNC DMX "1=Play back upload DMX"; MSG_RT_UPLOAD_MOVE_TRIGGERS is
+      // "Only sent if the DMX program has triggers": they play with the DMX.
+      // The triggers own the masked outputs (0x3); output 0x4 stays as set.
+      EXPECT_EQ(at15, 0x5u);
+      EXPECT_EQ(at16, 0x7u);
+      EXPECT_EQ(at17, 0x4u);
+      EXPECT_EQ(dmx15, 5);
+    } else {
+      // "0=don't play DMX": neither the levels nor the triggers.
+      EXPECT_EQ(at15, 0x4u);
+      EXPECT_EQ(at16, 0x4u);
+      EXPECT_EQ(at17, 0x4u);
+      EXPECT_EQ(dmx15, 200);
+      EXPECT_EQ(h.device().dmx().Value(3), 200);
+    }
+  }
+}
+
+// --- ERR_MOVING during a live run ---------------------------------------------------------
+
+TEST(Dmc16PlaybackErrors, DuringALiveRunUploadsAndResetPositionAnswerErrMoving) {
+  Host h(SmallProfile());
+  UploadRamp(h, 10, 100, 10);
+  ASSERT_EQ(h.Request(RunMove(20, 60, 10000, 500, 500)), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.RunMs(1000);
+  ASSERT_EQ(h.device().ModeName(), "running");
+  // ERR_MOVING "Can't handle this command while the rig is moving": the rig
+  // plays the uploaded move, so no upload message may touch it (BEGIN would
+  // clear it: "Any previously loaded move will be cleared") and no position
+  // may be renamed under it, a motor at rest (motor 3) included.
+  constexpr auto kMoving = std::optional<AckCode>(AckCode::kErrMoving);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 10}), kMoving);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, {0}}), kMoving);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveDmx{3, 0, true, {1}}), kMoving);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveTriggers{0x1, {{1, 0x1}}}), kMoving);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kMoving);
+  EXPECT_EQ(h.Request(dmc::MotorResetPosition{3, 77}), kMoving);
+  EXPECT_EQ(h.Request(dmc::MotorResetPosition{2, 77}), kMoving);
+  EXPECT_EQ(h.Pos(3), 0);
+  h.Settle();
+  EXPECT_EQ(h.device().upload().end_frame(), 109u) << "the move played is still there";
+  EXPECT_EQ(h.Pos(1), 500 + 25);
+  // Once the run is over both are taken again.
+  EXPECT_EQ(h.Request(dmc::MotorResetPosition{3, 77}), kAckOk);
+  EXPECT_EQ(h.Pos(3), 77);
+  EXPECT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 10}), kAckOk);
+}
+
+// --- dmc-lite's playback switches (Dmc16Behaviour) ---------------------------------------
+
+TEST(Dmc16PlaybackSwitches, PrerollMoveTimeRunsUpToTheStartFrameOrIsTheStartFrameWithTheSwitch) {
+  for (const bool lite : {false, true}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.preroll_move_time_is_start_frame = lite;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    const TimeNs t_arm = h.now();
+    ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 1000, 0)), kAckOk);
+    h.Settle();
+    const TimeNs t_go = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    std::vector<uint32_t> arming;
+    std::vector<uint32_t> preroll;
+    for (const auto& [t, r] : Updates(h, t_arm)) {
+      // The arming move's last update comes as the rig rests, at t_go.
+      if (t <= t_go) arming.push_back(r.move_time_x1000);
+      if (t > t_go && t < t_go + kNsPerSecond) preroll.push_back(r.move_time_x1000);
+    }
+    ASSERT_FALSE(arming.empty()) << "the rig moves to its pre-roll";
+    ASSERT_EQ(preroll.size(), 9u) << "every 100 ms of the 1 s pre-roll";
+    if (lite) {
+      // FACTS "DMC v2": "during pre-roll MOVE TIME is the start frame's".
+      for (uint32_t mt : arming) EXPECT_EQ(mt, 20000u);
+      for (uint32_t mt : preroll) EXPECT_EQ(mt, 20000u);
+    } else {
+      // The frame clock at 2 fps, 1 s (2 frames) before frame 20 at GO.
+      for (uint32_t mt : arming) EXPECT_EQ(mt, 18000u);
+      for (size_t i = 0; i < preroll.size(); ++i) {
+        EXPECT_EQ(preroll[i], 18000u + 200u * (i + 1)) << i;
+      }
+    }
+  }
+}
+
+TEST(Dmc16PlaybackSwitches, RtEndComesAfterThePostrollOrAtTheLastFrameWithTheSwitch) {
+  for (const bool lite : {false, true}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.rt_end_at_last_frame = lite;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(RunMove(20, 30, 10000, 500, 800)), kAckOk);
+    h.Settle();
+    const TimeNs t_last = h.now() + 1500 * kNsPerMs;  // 0.5 s pre-roll, 10 frames at 10 fps
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    const auto ends = h.All<dmc::RtEnd>();
+    ASSERT_EQ(ends.size(), 1u) << "one RT_END per run either way";
+    // MSG_RT_END: "After a MSG_RT_RUN_MOVE ... has finished shooting": after
+    // the post-roll; dmc-lite sends it as the last frame is reached.
+    EXPECT_EQ(ends[0].first, lite ? t_last : t_last + 800 * kNsPerMs);
+    EXPECT_EQ(h.Pos(1), 200 + 40) << "the post-roll runs its course either way";
+  }
+}
+
+TEST(Dmc16PlaybackSwitches, ShotsEndWithRtEndUnlessTheSwitchSaysNone) {
+  for (const bool end_after_shot : {true, false}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.rt_end_after_shot = end_after_shot;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(dmc::RtShootFrame2{30, 200, 90, 270, {{1, 150, 250}}}), kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::RtShootFrame{30, dmc::kDirectionForward, 200, 500, {{1, 150, 250}}}),
+              kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    EXPECT_EQ(h.device().camera().exposures(), 2u);
+    // MSG_RT_END after "a MSG_RT_RUN_MOVE or MSG_RT_SHOOT_FRAME has finished
+    // shooting"; dmc-lite sends none after SHOOT_FRAME / SHOOT_FRAME2.
+    EXPECT_EQ(h.All<dmc::RtEnd>().size(), end_after_shot ? 2u : 0u);
+    // A live run still ends with RT_END.
+    ASSERT_EQ(h.Request(RunMove(20, 25, 10000, 0, 0)), kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    EXPECT_EQ(h.All<dmc::RtEnd>().size(), end_after_shot ? 3u : 1u);
+  }
+}
+
+TEST(Dmc16PlaybackSwitches, GoRightAfterTheRigRestsIsTakenOrNotInPositionWhileArming) {
+  for (const uint32_t arming_ms : {0u, 50u}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.arming_ms = arming_ms;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(RunMove(20, 30, 10000, 500, 0)), kAckOk);
+    const TimeNs rest = RestTime(h);
+    h.scheduler().RunUntil(rest);
+    ASSERT_FALSE(h.device().rig_ref().AnyMoving());
+    if (arming_ms == 0) {
+      // MSG_RT_GO: "When the device has stopped moving, a MSG_RT_GO command
+      // will perform the run".
+      EXPECT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    } else {
+      // dmc-lite arms for 40-60 ms after the motors stop (FACTS).
+      EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+      h.scheduler().RunUntil(rest + 50 * kNsPerMs - 1);
+      EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+      h.scheduler().RunUntil(rest + 50 * kNsPerMs);
+      EXPECT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    }
+    EXPECT_EQ(h.device().ModeName(), "running");
+    h.Settle();
+    // A shot arms the same way.
+    ASSERT_EQ(h.Request(dmc::RtShootFrame2{30, 200, 90, 270, {{1, 150, 250}}}), kAckOk);
+    const TimeNs shot_rest = RestTime(h);
+    h.scheduler().RunUntil(shot_rest);
+    EXPECT_EQ(h.Request(dmc::RtGo{}),
+              arming_ms == 0 ? kAckOk : std::optional<AckCode>(AckCode::kErrNotInPosition));
+  }
 }
 
 }  // namespace
