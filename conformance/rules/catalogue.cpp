@@ -434,6 +434,10 @@ const std::vector<Rule> kRules = {
      "When the device has stopped moving, a MSG_RT_GO command will perform the run or shoot of the "
      "frame.",
      "MSG_RT_GO"},
+    {"DMC-RT-016", L::kNote, N::kRealTime,
+     "A motor sent to an uploaded frame reads exactly the uploaded position (the reference "
+     "firmware can read one step short: 199 for 200)",
+     "a position read after an upload can be one step short (199 for 200)", "FACTS DMC v2"},
     {"DMC-GM-001", L::kMust, N::kGoMotion,
      "RT_SHOOT_FRAME then RT_GO are acknowledged OK and RT_END follows the exposure",
      "Set up a blur-motion frame capture", "MSG_RT_SHOOT_FRAME; MSG_RT_END"},
