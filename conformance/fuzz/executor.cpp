@@ -88,8 +88,12 @@ FuzzVerdict FuzzExecutor::RunDmc(const Messages& messages) {
       const uint32_t id =
           host.SendFrame(type, wire::ByteView(m).subspan(dmc::kHeaderSize, m.size() - 12), !good);
       // A frame with the ACK flag is the host's acknowledgement, not a
-      // request: nothing answers it ("MSG_FLAG_ACK"), even when damaged.
-      if ((type & dmc::kFlagAck) == 0) ids.push_back(id);
+      // request: nothing answers it ("MSG_FLAG_ACK"), even when damaged. A
+      // damaged frame whose Type no request has (bits outside 0x83FF) is a
+      // false "DF" to the device, dropped unanswered (PlausibleRequestHeader).
+      if (dmc::PlausibleRequestHeader(type) || (good && (type & dmc::kFlagAck) == 0)) {
+        ids.push_back(id);
+      }
     } else {
       host.SendNoise(m);
     }

@@ -276,7 +276,7 @@ const std::vector<Rule> kRules = {
      "The pre-2018 VIRT_JOG_ON_LINE type 0x0204 is answered ERR_UNSUPPORTED",
      "Changed MSG_VIRT_JOG_ON_LINE from 0x0204 to 0x0206", "Document Revision History"},
     {"DMC-ERR-005", L::kMust, N::kNothing,
-     "A known type with a data length that fits no layout is answered with an error, never OK",
+     "A known type with data shorter than its layout is answered with an error, never OK",
      "OK 0x0010 Received, understood, and acted on message", "MSG_FLAG_ACK"},
     {"DMC-ERR-006", L::kNote, N::kNothing,
      "A malformed request (wrong length) is answered with a code other than ERR_GENERAL",
@@ -306,6 +306,10 @@ const std::vector<Rule> kRules = {
      "The largest frame the receive buffer must hold (1048 bytes, an unknown Type) is read whole "
      "and answered ERR_UNSUPPORTED",
      "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
+    {"DMC-ERR-013", L::kNote, N::kNothing,
+     "Bytes after a known layout are refused (a device may ignore them and carry the message out)",
+     "Added PROTOCOL VERSION to end of HI message.",
+     "Document Revision History; docs/protocol-notes (trailing bytes)"},
 
     // --- Soft limits ---
     {"DMC-LIM-001", L::kShould, N::kMotors,

@@ -17,7 +17,12 @@ using Kind = DecodeError::Kind;
 
 class Fields {
  public:
-  explicit Fields(Reader& r) : r_(r) {}
+  Fields(Reader& r, TrailingBytes trailing) : r_(r), ignore_(trailing == TrailingBytes::kIgnore) {}
+  // Whether an optional field or another list entry of `n` bytes is to be
+  // read: strictly, any byte left starts one (a short one is then
+  // kTruncated); ignoring trailing bytes, only `n` whole bytes do.
+  bool Has(size_t n) const { return ignore_ ? r_.remaining() >= n : !r_.empty(); }
+  bool ignoring_trailing() const { return ignore_; }
   Fields& U8(uint8_t& v, const char* name) {
     if (!err_ && !r_.U8(v)) err_ = r_.Truncated(name);
     return *this;
@@ -39,7 +44,7 @@ class Fields {
     return *this;
   }
   Fields& Optional(std::optional<uint16_t>& v, const char* name) {
-    if (!err_ && !r_.empty()) {
+    if (!err_ && Has(2)) {
       uint16_t x = 0;
       U16(x, name);
       if (!err_) v = x;
@@ -54,9 +59,9 @@ class Fields {
     last = (raw & kLastSetFlag) != 0;
     return *this;
   }
-  // At least one more byte must follow (a list of "one or more").
-  Fields& NotEmpty(const char* name) {
-    if (!err_ && r_.empty()) err_ = r_.Truncated(name);
+  // At least one more entry of `n` bytes must follow (a list of "one or more").
+  Fields& NotEmpty(const char* name, size_t n = 1) {
+    if (!err_ && !Has(n)) err_ = r_.Truncated(name);
     return *this;
   }
   void Fail(DecodeError e) {
@@ -68,6 +73,7 @@ class Fields {
 
  private:
   Reader& r_;
+  bool ignore_;
   std::optional<DecodeError> err_;
 };
 
@@ -134,7 +140,7 @@ void Put(Writer& w, const MotorStopAll& m) {
   if (m.flags) w.U32Le(*m.flags);
 }
 void Get(Fields& f, MotorStopAll& m) {
-  if (f.reader().empty()) return;
+  if (!f.Has(4)) return;
   uint32_t flags = 0;
   f.U32(flags, "Flags");
   if (f.ok()) m.flags = flags;
@@ -205,9 +211,11 @@ void Put(Writer& w, const RtUploadMoveAxis& m) {
   for (int32_t p : m.positions_steps) w.I32Le(p);
 }
 void Get(Fields& f, RtUploadMoveAxis& m) {
-  f.U8(m.motor, "MOTOR").StartIndex(m.start_index, m.last_set, "START INDEX").NotEmpty("POSITION");
+  f.U8(m.motor, "MOTOR")
+      .StartIndex(m.start_index, m.last_set, "START INDEX")
+      .NotEmpty("POSITION", 4);
   m.positions_steps.reserve(f.reader().remaining() / 4);
-  while (f.ok() && !f.reader().empty()) {
+  while (f.ok() && f.Has(4)) {
     int32_t p = 0;
     f.I32(p, "POSITION");
     if (f.ok()) m.positions_steps.push_back(p);
@@ -239,7 +247,7 @@ void Put(Writer& w, const RtUploadMoveTriggers& m) {
 void Get(Fields& f, RtUploadMoveTriggers& m) {
   f.U32(m.mask, "MASK");
   m.points.reserve(f.reader().remaining() / 8);
-  while (f.ok() && !f.reader().empty()) {
+  while (f.ok() && f.Has(8)) {
     TriggerPoint p;
     f.U32(p.frame_index, "FRAME").U32(p.values, "VALUES");
     if (f.ok()) m.points.push_back(p);
@@ -291,7 +299,7 @@ void PutMotors(Writer& w, const std::vector<BlurMotor>& motors) {
 }
 void GetMotors(Fields& f, std::vector<BlurMotor>& motors) {
   motors.reserve(f.reader().remaining() / 9);
-  while (f.ok() && !f.reader().empty()) {
+  while (f.ok() && f.Has(9)) {
     BlurMotor b;
     f.U8(b.motor, "MOTOR").I32(b.pos_a_steps, "POS A").I32(b.pos_b_steps, "POS B");
     if (f.ok()) motors.push_back(b);
@@ -399,7 +407,16 @@ void Get(Fields& f, VirtConfig& m) {
       if (!f.ok()) return;
       // ERRATA 1.7: the table and SAFE DISTANCE are each optional; the four
       // possible lengths are distinct, so the form is known from the length.
-      const size_t rest = r.remaining();
+      // Ignoring trailing bytes, the longest form that fits is read.
+      size_t rest = r.remaining();
+      if (f.ignoring_trailing()) {
+        for (const size_t form : {kCompensationSize + 4, kCompensationSize, size_t{4}, size_t{0}}) {
+          if (rest >= form) {
+            rest = form;
+            break;
+          }
+        }
+      }
       if (rest != 0 && rest != 4 && rest != kCompensationSize && rest != kCompensationSize + 4) {
         f.Fail(DecodeError{Kind::kBadLength, r.offset(),
                            "boom-swing-track: expected 0, 4, 484 or 488 bytes after NODAL OFF Z, "
@@ -411,7 +428,7 @@ void Get(Fields& f, VirtConfig& m) {
         b.compensation.emplace();
         for (int32_t& v : *b.compensation) f.I32(v, "Boom Compensation Table");
       }
-      if (r.remaining() == 4) {
+      if (rest == 4 || rest == kCompensationSize + 4) {
         int32_t safe = 0;
         f.I32(safe, "SAFE DISTANCE");
         b.safe_distance_x1000 = safe;
@@ -520,7 +537,7 @@ void Put(Writer& w, const MotorPositionReport& m) {
 void Get(Fields& f, MotorPositionReport& m) {
   f.U32(m.move_time_x1000, "MOVE TIME");
   m.positions_steps.reserve(f.reader().remaining() / 4);
-  while (f.ok() && !f.reader().empty()) {
+  while (f.ok() && f.Has(4)) {
     int32_t p = 0;
     f.I32(p, "MOTOR POS");
     if (f.ok()) m.positions_steps.push_back(p);
@@ -569,7 +586,7 @@ void Get(Fields& f, VirtPositionReport& m) {
       .I32(m.pan_x100000, "vPan POS")
       .I32(m.tilt_x100000, "vTilt POS")
       .I32(m.roll_x100000, "vRoll POS");
-  if (!f.ok() || f.reader().empty()) return;
+  if (!f.ok() || !f.Has(13)) return;
   VirtAim aim;
   f.U8(aim.enabled, "Aim pt enabled")
       .I32(aim.x_x1000, "aim-x")
@@ -581,13 +598,15 @@ void Get(Fields& f, VirtPositionReport& m) {
 // --- Dispatch --------------------------------------------------------------------
 
 template <class T, class Variant>
-Result<Variant> DecodeAs(ByteView data) {
+Result<Variant> DecodeAs(ByteView data, TrailingBytes trailing) {
   T m{};
   Reader r(data);
-  Fields f(r);
+  Fields f(r, trailing);
   Get(f, m);
   if (f.error()) return *f.error();
-  if (!r.empty()) return r.Trailing(TypeName(ToWire(T::kType)));
+  if (!r.empty() && trailing == TrailingBytes::kReject) {
+    return r.Trailing(TypeName(ToWire(T::kType)));
+  }
   return Variant{std::move(m)};
 }
 
@@ -667,78 +686,78 @@ std::array<uint8_t, kHiNameSize> HiResponse::MakeName(std::string_view text) {
   return out;
 }
 
-Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data) {
+Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data, TrailingBytes trailing) {
   using M = HostMessage;
   if ((type & kFlagAck) != 0) return DecodeAck<M>(type, data);
   switch (static_cast<MsgType>(type)) {
     case MsgType::kHi:
-      return DecodeAs<HiRequest, M>(data);
+      return DecodeAs<HiRequest, M>(data, trailing);
     case MsgType::kDmx:
-      return DecodeAs<Dmx, M>(data);
+      return DecodeAs<Dmx, M>(data, trailing);
     case MsgType::kGioOut:
-      return DecodeAs<GioOut, M>(data);
+      return DecodeAs<GioOut, M>(data, trailing);
     case MsgType::kGioIn:
-      return DecodeAs<GioInRequest, M>(data);
+      return DecodeAs<GioInRequest, M>(data, trailing);
     case MsgType::kGioCam:
-      return DecodeAs<GioCam, M>(data);
+      return DecodeAs<GioCam, M>(data, trailing);
     case MsgType::kMotorStatus:
-      return DecodeAs<MotorStatusRequest, M>(data);
+      return DecodeAs<MotorStatusRequest, M>(data, trailing);
     case MsgType::kMotorMove:
-      return DecodeAs<MotorMove, M>(data);
+      return DecodeAs<MotorMove, M>(data, trailing);
     case MsgType::kMotorStop:
-      return DecodeAs<MotorStop, M>(data);
+      return DecodeAs<MotorStop, M>(data, trailing);
     case MsgType::kMotorStopAll:
-      return DecodeAs<MotorStopAll, M>(data);
+      return DecodeAs<MotorStopAll, M>(data, trailing);
     case MsgType::kMotorGetPosition:
-      return DecodeAs<MotorGetPositionRequest, M>(data);
+      return DecodeAs<MotorGetPositionRequest, M>(data, trailing);
     case MsgType::kMotorResetPosition:
-      return DecodeAs<MotorResetPosition, M>(data);
+      return DecodeAs<MotorResetPosition, M>(data, trailing);
     case MsgType::kMotorJog:
-      return DecodeAs<MotorJog, M>(data);
+      return DecodeAs<MotorJog, M>(data, trailing);
     case MsgType::kMotorConfigure:
-      return DecodeAs<MotorConfigure, M>(data);
+      return DecodeAs<MotorConfigure, M>(data, trailing);
     case MsgType::kMotorSetSpeed:
-      return DecodeAs<MotorSetSpeed, M>(data);
+      return DecodeAs<MotorSetSpeed, M>(data, trailing);
     case MsgType::kMotorSetLimits:
-      return DecodeAs<MotorSetLimits, M>(data);
+      return DecodeAs<MotorSetLimits, M>(data, trailing);
     case MsgType::kRtUploadMoveBegin:
-      return DecodeAs<RtUploadMoveBegin, M>(data);
+      return DecodeAs<RtUploadMoveBegin, M>(data, trailing);
     case MsgType::kRtUploadMoveAxis:
-      return DecodeAs<RtUploadMoveAxis, M>(data);
+      return DecodeAs<RtUploadMoveAxis, M>(data, trailing);
     case MsgType::kRtUploadMoveDmx:
-      return DecodeAs<RtUploadMoveDmx, M>(data);
+      return DecodeAs<RtUploadMoveDmx, M>(data, trailing);
     case MsgType::kRtUploadMoveTriggers:
-      return DecodeAs<RtUploadMoveTriggers, M>(data);
+      return DecodeAs<RtUploadMoveTriggers, M>(data, trailing);
     case MsgType::kRtUploadMoveEnd:
-      return DecodeAs<RtUploadMoveEnd, M>(data);
+      return DecodeAs<RtUploadMoveEnd, M>(data, trailing);
     case MsgType::kRtPositionFrame:
-      return DecodeAs<RtPositionFrame, M>(data);
+      return DecodeAs<RtPositionFrame, M>(data, trailing);
     case MsgType::kRtRunMove:
-      return DecodeAs<RtRunMove, M>(data);
+      return DecodeAs<RtRunMove, M>(data, trailing);
     case MsgType::kRtShootFrame:
-      return DecodeAs<RtShootFrame, M>(data);
+      return DecodeAs<RtShootFrame, M>(data, trailing);
     case MsgType::kRtShootFrame2:
-      return DecodeAs<RtShootFrame2, M>(data);
+      return DecodeAs<RtShootFrame2, M>(data, trailing);
     case MsgType::kRtGo:
-      return DecodeAs<RtGo, M>(data);
+      return DecodeAs<RtGo, M>(data, trailing);
     case MsgType::kRtStopLoop:
-      return DecodeAs<RtStopLoop, M>(data);
+      return DecodeAs<RtStopLoop, M>(data, trailing);
     case MsgType::kRtJogAll:
-      return DecodeAs<RtJogAll, M>(data);
+      return DecodeAs<RtJogAll, M>(data, trailing);
     case MsgType::kVirtConfig:
-      return DecodeAs<VirtConfig, M>(data);
+      return DecodeAs<VirtConfig, M>(data, trailing);
     case MsgType::kVirtMove:
-      return DecodeAs<VirtMove, M>(data);
+      return DecodeAs<VirtMove, M>(data, trailing);
     case MsgType::kVirtStop:
-      return DecodeAs<VirtStop, M>(data);
+      return DecodeAs<VirtStop, M>(data, trailing);
     case MsgType::kVirtJog:
-      return DecodeAs<VirtJog, M>(data);
+      return DecodeAs<VirtJog, M>(data, trailing);
     case MsgType::kVirtJogOnLine:
-      return DecodeAs<VirtJogOnLine, M>(data);
+      return DecodeAs<VirtJogOnLine, M>(data, trailing);
     case MsgType::kVirtGetPosition:
-      return DecodeAs<VirtGetPositionRequest, M>(data);
+      return DecodeAs<VirtGetPositionRequest, M>(data, trailing);
     case MsgType::kVirtAimPoint:
-      return DecodeAs<VirtAimPoint, M>(data);
+      return DecodeAs<VirtAimPoint, M>(data, trailing);
     // Sent only by devices: Dragonframe never sends these without kFlagAck.
     case MsgType::kMotorHardStop:
     case MsgType::kRtEnd:
@@ -747,40 +766,40 @@ Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data) {
   return M{Unknown{type, Bytes(data.begin(), data.end())}};
 }
 
-Result<HostMessage> DecodeHostMessage(const Frame& frame) {
-  return DecodeHostMessage(frame.type, frame.data);
+Result<HostMessage> DecodeHostMessage(const Frame& frame, TrailingBytes trailing) {
+  return DecodeHostMessage(frame.type, frame.data, trailing);
 }
 
-Result<DeviceMessage> DecodeDeviceMessage(uint16_t type, ByteView data) {
+Result<DeviceMessage> DecodeDeviceMessage(uint16_t type, ByteView data, TrailingBytes trailing) {
   using M = DeviceMessage;
   if ((type & kFlagAck) != 0) return DecodeAck<M>(type, data);
   switch (static_cast<MsgType>(type)) {
     case MsgType::kHi:
-      return DecodeAs<HiResponse, M>(data);
+      return DecodeAs<HiResponse, M>(data, trailing);
     case MsgType::kMotorStatus:
-      return DecodeAs<MotorStatusResponse, M>(data);
+      return DecodeAs<MotorStatusResponse, M>(data, trailing);
     case MsgType::kMotorMove:
-      return DecodeAs<MotorMoveResponse, M>(data);
+      return DecodeAs<MotorMoveResponse, M>(data, trailing);
     case MsgType::kMotorGetPosition:
-      return DecodeAs<MotorPositionReport, M>(data);
+      return DecodeAs<MotorPositionReport, M>(data, trailing);
     case MsgType::kGioIn:
-      return DecodeAs<GioInReport, M>(data);
+      return DecodeAs<GioInReport, M>(data, trailing);
     case MsgType::kMotorHardStop:
-      return DecodeAs<MotorHardStop, M>(data);
+      return DecodeAs<MotorHardStop, M>(data, trailing);
     case MsgType::kRtEnd:
-      return DecodeAs<RtEnd, M>(data);
+      return DecodeAs<RtEnd, M>(data, trailing);
     case MsgType::kVirtGetPosition:
-      return DecodeAs<VirtPositionReport, M>(data);
+      return DecodeAs<VirtPositionReport, M>(data, trailing);
     case MsgType::kVirtAimPoint:
-      return DecodeAs<VirtAimPoint, M>(data);
+      return DecodeAs<VirtAimPoint, M>(data, trailing);
     default:
       break;  // requests only: a device answers them with an ACK
   }
   return M{Unknown{type, Bytes(data.begin(), data.end())}};
 }
 
-Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame) {
-  return DecodeDeviceMessage(frame.type, frame.data);
+Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame, TrailingBytes trailing) {
+  return DecodeDeviceMessage(frame.type, frame.data, trailing);
 }
 
 uint16_t TypeOf(const HostMessage& m) { return TypeOfAny(m); }

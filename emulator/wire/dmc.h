@@ -477,16 +477,41 @@ using DeviceMessage =
 
 // --- Codec ---------------------------------------------------------------------------------
 
+// What decoding does with data bytes after the last field of a message's
+// layout (and after the last whole entry of a list, or the last optional field
+// that is there whole).
+enum class TrailingBytes : uint8_t {
+  // A kTrailing (or kTruncated) DecodeError: the exact reading, for tools that
+  // judge what a peer sent and for round trips.
+  kReject,
+  // Ignored, as a receiver does: the protocol grows by appending fields
+  // ("Document Revision History": PROTOCOL VERSION at the end of HI, the
+  // STOP_ALL flags, RUN_MOVE FLAGS and camera angles, optional SHOOT_FRAME
+  // parameters), so a device reads the fields it knows and skips what a newer
+  // host appends. Data shorter than the layout is still a DecodeError. Lists
+  // take whole entries only (UPLOAD_MOVE_AXIS positions, trigger pairs, blur
+  // motors, positions); an optional field cut short counts as absent; of
+  // VIRT_CONFIG type 1 the longest of its four forms that fits is read. ACKs
+  // are always exact (2 or 4 bytes).
+  kIgnore,
+};
+
 // Decodes a frame sent by Dragonframe. A type with kFlagAck is an Ack (2 or 4
 // data bytes), whatever the acknowledged type; a type with no request layout
 // is Unknown. A known layout with the wrong data length is a DecodeError
-// (kTruncated / kTrailing, offset into the data section).
-Result<HostMessage> DecodeHostMessage(const Frame& frame);
-Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data);
+// (kTruncated / kTrailing, offset into the data section); see TrailingBytes.
+// Encoding is always exact: what is decoded with kIgnore re-encodes without
+// the ignored bytes.
+Result<HostMessage> DecodeHostMessage(const Frame& frame,
+                                      TrailingBytes trailing = TrailingBytes::kReject);
+Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data,
+                                      TrailingBytes trailing = TrailingBytes::kReject);
 
 // Decodes a frame sent by a device; same rules with the response layouts.
-Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame);
-Result<DeviceMessage> DecodeDeviceMessage(uint16_t type, ByteView data);
+Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame,
+                                          TrailingBytes trailing = TrailingBytes::kReject);
+Result<DeviceMessage> DecodeDeviceMessage(uint16_t type, ByteView data,
+                                          TrailingBytes trailing = TrailingBytes::kReject);
 
 // The Type on the wire (kFlagAck included for an Ack).
 uint16_t TypeOf(const HostMessage& m);

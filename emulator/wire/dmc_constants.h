@@ -25,6 +25,10 @@ inline constexpr size_t kReceiveBufferSize = 1048;
 // ERRATA 1.2: 1048 - header - check bytes. A larger Length is a framing error.
 inline constexpr size_t kMaxDataLength = kReceiveBufferSize - kHeaderSize - kCheckSize;  // 1036
 inline constexpr size_t kMaxFrameSize = kHeaderSize + kMaxDataLength + kCheckSize;       // 1048
+// The spec's 1048 is a minimum: a device may hold more (FACTS: dmc-lite holds
+// 2048) and then waits for a Length that a 1048-byte receiver drops. The
+// largest receive buffer a FrameDecoder (and a DMC-16 profile) models.
+inline constexpr size_t kLargestReceiveBuffer = 4096;
 // Fletcher-16 is summed in blocks of this many bytes before reducing mod 255
 // ("Computing and Validating the Checksum").
 inline constexpr size_t kFletcherBlock = 20;

@@ -282,6 +282,12 @@ StreamEvent ToStreamEvent(const FrameEvent& e) {
   return std::get<FramingError>(e);
 }
 
+FrameDecoder::FrameDecoder(FrameDecoderOptions options)
+    : max_data_length_(
+          std::clamp(options.max_frame_bytes, kHeaderSize + kCheckSize, kLargestReceiveBuffer) -
+          kHeaderSize - kCheckSize),
+      rescan_(options.rescan_rejected) {}
+
 void FrameDecoder::Emit(const FrameEvent& e, Sink sink, void* ctx) {
   if (skipped_ != 0) {
     FramingError skipped;
@@ -299,19 +305,23 @@ FrameDecoder::Step FrameDecoder::Examine(const uint8_t* p, size_t avail, size_t&
     need = kMarkerSize;
     return Step::kNeedMore;
   }
-  if (p[1] != kMarker1) return Step::kReject;
+  if (p[1] != kMarker1) {
+    need = 1;  // the byte after 'D' may start the next candidate
+    return Step::kReject;
+  }
   if (avail < kHeaderSize) {
     need = kHeaderSize;
     return Step::kNeedMore;
   }
   const uint16_t length = LoadU16(p + kLengthOffset);
-  if (length > kMaxDataLength) {
+  if (length > max_data_length_) {
     FramingError e;
     e.kind = FramingError::Kind::kOversize;
     e.length = length;
     e.id = LoadU32(p + kIdOffset);
     e.type = LoadU16(p + kTypeOffset);
     Emit(e, sink, ctx);
+    need = rescan_ ? 1 : kHeaderSize;
     return Step::kReject;
   }
   const size_t total = kHeaderSize + length + kCheckSize;
@@ -321,6 +331,7 @@ FrameDecoder::Step FrameDecoder::Examine(const uint8_t* p, size_t avail, size_t&
   }
   if (!ChecksumIsZero(ByteView(p, total))) {
     Emit(ChecksumError{LoadU32(p + kIdOffset), LoadU16(p + kTypeOffset), length}, sink, ctx);
+    need = rescan_ ? 1 : total;
     return Step::kReject;
   }
   need = total;
@@ -347,8 +358,8 @@ void FrameDecoder::ScanSpan(const uint8_t* p, size_t n, bool at_end, Sink sink, 
         pos += need;
         break;
       case Step::kReject:
-        ++skipped_;
-        ++pos;
+        skipped_ += need;
+        pos += need;
         break;
       case Step::kNeedMore:
         if (at_end) {
@@ -361,8 +372,11 @@ void FrameDecoder::ScanSpan(const uint8_t* p, size_t n, bool at_end, Sink sink, 
             e.type = LoadU16(p + pos + kTypeOffset);
           }
           Emit(e, sink, ctx);
-          ++skipped_;
-          ++pos;
+          // The pending bytes will not be completed: rescan them, or drop
+          // them all as the reference parser does.
+          const size_t drop = rescan_ ? 1 : n - pos;
+          skipped_ += drop;
+          pos += drop;
         } else {
           // An incomplete candidate is shorter than a whole frame, so it fits.
           std::memcpy(buf_.data(), p + pos, n - pos);
@@ -394,12 +408,9 @@ void FrameDecoder::FeedImpl(ByteView chunk, Sink sink, void* ctx) {
       continue;
     }
     // After a good frame the buffer may hold bytes past it (left from a
-    // rescan); after a rejection, everything after the candidate's 'D'.
+    // rescan); after a rejection, everything after the bytes it drops.
     size_t from = need;
-    if (step == Step::kReject) {
-      ++skipped_;
-      from = 1;
-    }
+    if (step == Step::kReject) skipped_ += need;
     const void* d =
         buf_len_ > from ? std::memchr(buf_.data() + from, kMarker0, buf_len_ - from) : nullptr;
     if (d == nullptr) {
@@ -429,9 +440,9 @@ void FrameDecoder::FinishImpl(Sink sink, void* ctx) {
   }
 }
 
-std::vector<StreamEvent> DecodeStream(ByteView stream, bool finish) {
+std::vector<StreamEvent> DecodeStream(ByteView stream, bool finish, FrameDecoderOptions options) {
   std::vector<StreamEvent> events;
-  FrameDecoder dec;
+  FrameDecoder dec(options);
   auto collect = [&events](const FrameEvent& e) { events.push_back(ToStreamEvent(e)); };
   dec.Feed(stream, collect);
   if (finish) dec.Finish(collect);

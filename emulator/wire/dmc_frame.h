@@ -7,8 +7,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <optional>
 #include <memory>
+#include <optional>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -98,7 +98,9 @@ Result<Frame> DecodeFrame(ByteView bytes);
 // A frame whose marker and Length were plausible but whose checksum is not
 // zero. Carries the header fields as received so that the device can answer
 // ACK ERR_CHECKSUM with the request's ID and Type (they may be the corrupted
-// fields themselves: the checksum cannot say which byte was hit).
+// fields themselves: the checksum cannot say which byte was hit). Whether the
+// candidate was a message at all (or a false "DF" in noise) is for the
+// receiver to judge from the header; see PlausibleRequestHeader().
 struct ChecksumError {
   uint32_t id = 0;
   uint16_t type = 0;
@@ -115,12 +117,14 @@ struct FramingError {
     // turn out to start a later frame. Reported once, just before the next
     // other event (or by Finish()), so the count does not depend on chunking.
     kSkipped,
-    // A header declared `length` > kMaxDataLength (ERRATA 1.2). Nothing is
-    // allocated; the scan resumes after the candidate's 'D'.
+    // A header declared `length` above the decoder's max_data_length()
+    // (ERRATA 1.2). Nothing is allocated; the scan resumes after the
+    // candidate's 'D' (or after its header without rescan).
     kOversize,
     // Only from Finish(): the stream ended inside a candidate frame that had
-    // `bytes` bytes of the `length` it declared (0 when the header was not
-    // complete). The scan resumes after the candidate's 'D'.
+    // `bytes` bytes (`length` as declared, 0 when the header was not
+    // complete). The scan resumes after the candidate's 'D' (or the
+    // candidate's bytes are dropped without rescan).
     kTruncated,
   };
   Kind kind = Kind::kSkipped;
@@ -138,31 +142,65 @@ using FrameEvent = std::variant<FrameRef, ChecksumError, FramingError>;
 using StreamEvent = std::variant<Frame, ChecksumError, FramingError>;
 StreamEvent ToStreamEvent(const FrameEvent& e);
 
+// Whether a header whose frame failed its checksum (or never completed) can
+// be a request a host sent, so that answering it ACK ERR_CHECKSUM answers a
+// message and not a false "DF" in noise: no ACK flag (a host's ACK is never
+// answered, "MSG_FLAG_ACK") and a Type within kReferenceTypeMask (the
+// reference host's own parser drops any other type, FACTS). The Length is
+// already known to fit the receiver (the decoder calls anything else
+// kOversize). A random header passes with a chance of about 1 in 64.
+constexpr bool PlausibleRequestHeader(uint16_t type) {
+  return (type & kFlagAck) == 0 && HasReferenceParserType(type);
+}
+
+// How a FrameDecoder bounds and resynchronises; the defaults are the spec's
+// receiver.
+struct FrameDecoderOptions {
+  // The largest frame (header + data + check bytes) taken whole: a Length
+  // above max_frame_bytes - 12 is kOversize. "The receiving buffer on the
+  // device must be at least 1048 bytes": the default is that minimum; a
+  // device may hold more (FACTS: dmc-lite, 2048). Clamped to
+  // kHeaderSize + kCheckSize .. kLargestReceiveBuffer.
+  size_t max_frame_bytes = kMaxFrameSize;
+  // After a rejected candidate (oversize or checksum failure) the scan
+  // resumes at the byte after its 'D', so a real frame inside a false "DF"
+  // is still found. false: every byte of the candidate the decoder read (the
+  // header of an oversize one, the whole frame of a checksum failure, the
+  // pending bytes at Finish()) is dropped, as the reference parser does
+  // (FACTS). A 'D' not followed by 'F' always resumes at the next byte.
+  bool rescan_rejected = true;
+};
+
 // Streaming decoder: push interface with a callback.
 //
-//   FrameDecoder dec;
+//   FrameDecoder dec;                                     // or dec(options)
 //   dec.Feed(chunk, [&](const FrameEvent& e) { ... });   // any chunking
 //   dec.Finish(callback);                                 // end of stream / idle line
 //
 // Events come in stream order and are a function of the byte stream alone,
 // not of how it was chunked. Resynchronisation, as the reference parser does
 // it: hunt for 'D' then 'F'; read the 10-byte header; a Length above
-// kMaxDataLength is kOversize; when header + Length + 2 bytes are there, a zero
-// checksum gives a frame, otherwise ChecksumError. After kOversize or a
+// max_data_length() is kOversize; when header + Length + 2 bytes are there, a
+// zero checksum gives a frame, otherwise ChecksumError. After kOversize or a
 // ChecksumError the scan resumes at the byte AFTER the candidate's 'D', so a
-// real frame swallowed by a false "DF" in noise is still found. Once Finish()
-// has run, every stream byte is in exactly one good frame or one kSkipped count.
+// real frame swallowed by a false "DF" in noise is still found (unless
+// options.rescan_rejected is false). Once Finish() has run, every stream byte
+// is in exactly one good frame or one kSkipped count.
 //
 // Frame types with bits outside kReferenceTypeMask are delivered (the device
 // must answer them with ERR_UNSUPPORTED); see HasReferenceParserType().
 //
-// Memory: a fixed member buffer holds only an incomplete candidate frame
-// (never more than kMaxFrameSize - 1 bytes). Frames wholly inside a fed chunk
-// are checked in place and handed out as views without copying; nothing is
-// allocated per byte or per frame.
+// Memory: a fixed member buffer of kLargestReceiveBuffer bytes holds only an
+// incomplete candidate frame (never more than max_frame_bytes - 1 bytes).
+// Frames wholly inside a fed chunk are checked in place and handed out as
+// views without copying; nothing is allocated, whatever the options.
 class FrameDecoder {
  public:
-  FrameDecoder() = default;
+  explicit FrameDecoder(FrameDecoderOptions options = {});
+
+  // The largest Length taken (max_frame_bytes - 12).
+  size_t max_data_length() const { return max_data_length_; }
+  bool rescan_rejected() const { return rescan_; }
 
   // Consumes all of `chunk`, calling on_event(const FrameEvent&) for each
   // event completed by it. The callback must not call back into this decoder.
@@ -203,8 +241,9 @@ class FrameDecoder {
   }
 
   enum class Step : uint8_t { kNeedMore, kReject, kGood };
-  // Examines the candidate at p[0] == 'D' with `avail` bytes at hand. On
-  // kNeedMore and kGood sets `need` to the bytes needed / the frame size.
+  // Examines the candidate at p[0] == 'D' with `avail` bytes at hand. Sets
+  // `need` to the bytes needed (kNeedMore), the frame size (kGood) or the
+  // bytes to drop before the scan resumes (kReject: 1 with rescan).
   Step Examine(const uint8_t* p, size_t avail, size_t& need, Sink sink, void* ctx);
   void Emit(const FrameEvent& e, Sink sink, void* ctx);
   // Scans a contiguous span starting in direct mode. With at_end, a candidate
@@ -213,16 +252,19 @@ class FrameDecoder {
   void FeedImpl(ByteView chunk, Sink sink, void* ctx);
   void FinishImpl(Sink sink, void* ctx);
 
+  size_t max_data_length_ = kMaxDataLength;
+  bool rescan_ = true;
   // Bytes [0, buf_len_) are the pending candidate, buf_[0] == 'D'; the rest is
   // never read, so it is left uninitialised.
-  std::array<uint8_t, kMaxFrameSize> buf_;
+  std::array<uint8_t, kLargestReceiveBuffer> buf_;
   size_t buf_len_ = 0;
   size_t skipped_ = 0;
 };
 
 // Runs a fresh FrameDecoder over `stream` in one chunk, then Finish() when
 // `finish`, collecting owned events (allocates: for tests and tools).
-std::vector<StreamEvent> DecodeStream(ByteView stream, bool finish = true);
+std::vector<StreamEvent> DecodeStream(ByteView stream, bool finish = true,
+                                      FrameDecoderOptions options = {});
 
 }  // namespace moco::dmc
 

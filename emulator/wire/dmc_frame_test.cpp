@@ -106,9 +106,10 @@ size_t SkippedTotal(const std::vector<StreamEvent>& events) {
 // Feeds `stream` cut at the given sizes (cycled), then Finish(); checks the
 // buffer bound after every chunk.
 std::vector<StreamEvent> DecodeChunked(const Bytes& stream, const std::vector<size_t>& cuts,
-                                       size_t* max_pending = nullptr) {
+                                       size_t* max_pending = nullptr,
+                                       FrameDecoderOptions options = {}) {
   std::vector<StreamEvent> events;
-  FrameDecoder dec;
+  FrameDecoder dec(options);
   auto collect = [&events](const FrameEvent& e) { events.push_back(ToStreamEvent(e)); };
   size_t pos = 0;
   size_t i = 0;
@@ -371,23 +372,35 @@ TEST(DmcFrameDecoderTest, FinishGivesUpOnAnIncompleteFalseFrame) {
   EXPECT_EQ(dec.pending_bytes(), 0u);
 }
 
+// Any receive buffer from the spec's minimum to the largest modelled, with
+// or without rescanning rejected candidates.
+rc::Gen<FrameDecoderOptions> GenOptions() {
+  return rc::gen::build<FrameDecoderOptions>(
+      rc::gen::set(&FrameDecoderOptions::max_frame_bytes,
+                   rc::gen::oneOf(rc::gen::just(kMaxFrameSize), rc::gen::just(size_t{2048}),
+                                  rc::gen::inRange(kMaxFrameSize, kLargestReceiveBuffer + 1))),
+      rc::gen::set(&FrameDecoderOptions::rescan_rejected));
+}
+
 RC_GTEST_PROP(DmcFrameDecoderProp, AnyChunkingYieldsTheSameEvents, ()) {
   const Bytes stream = *GenStream();
   const auto cuts = *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 80));
-  const auto whole = DecodeChunked(stream, {});
-  RC_ASSERT(DecodeChunked(stream, cuts) == whole);
-  RC_ASSERT(DecodeChunked(stream, {1}) == whole);
+  const auto options = *GenOptions();
+  const auto whole = DecodeChunked(stream, {}, nullptr, options);
+  RC_ASSERT(DecodeChunked(stream, cuts, nullptr, options) == whole);
+  RC_ASSERT(DecodeChunked(stream, {1}, nullptr, options) == whole);
 }
 
 RC_GTEST_PROP(DmcFrameDecoderProp, EveryByteIsInAGoodFrameOrSkipped, ()) {
   const Bytes stream = *GenStream();
   const auto cuts = *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 80));
+  const auto options = *GenOptions();
   size_t high = 0;
-  const auto events = DecodeChunked(stream, cuts, &high);
+  const auto events = DecodeChunked(stream, cuts, &high, options);
   size_t framed = 0;
   for (const Frame& f : GoodFrames(events)) framed += kHeaderSize + f.data.size() + kCheckSize;
   RC_ASSERT(framed + SkippedTotal(events) == stream.size());
-  RC_ASSERT(high < kMaxFrameSize);
+  RC_ASSERT(high < options.max_frame_bytes);
 }
 
 RC_GTEST_PROP(DmcFrameDecoderProp, StreamOfGoodFramesDecodesExactly, ()) {
@@ -540,6 +553,114 @@ RC_GTEST_PROP(DmcFrameDecoderProp, FalseMarkerBeforeRealFrameDoesNotLoseIt, ()) 
   const auto cuts = *rc::gen::container<std::vector<size_t>>(rc::gen::inRange<size_t>(1, 80));
   const auto frames = GoodFrames(DecodeChunked(stream, cuts));
   RC_ASSERT(std::find(frames.begin(), frames.end(), real) != frames.end());
+}
+
+// "The receiving buffer on the device must be at least 1048 bytes": a larger
+// one (FACTS: dmc-lite, 2048) takes whole a frame the minimum calls oversize.
+TEST(DmcFrameDecoderTest, LargerReceiveBufferWaitsForALengthUpToIt) {
+  const Bytes big = OracleFrame(3, 0x0101, Bytes(2000, 0x11));  // Length 2000, 2012 bytes
+  FrameDecoderOptions two_k;
+  two_k.max_frame_bytes = 2048;
+  size_t high = 0;
+  const auto events = DecodeChunked(big, {1}, &high, two_k);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(std::get<Frame>(events[0]).data.size(), 2000u);
+  EXPECT_EQ(high, big.size() - 1);  // held in the fixed buffer, nothing allocated
+  // The spec's minimum drops the header as oversize and never buffers the data.
+  const auto minimum = DecodeChunked(big, {7}, &high);
+  ASSERT_FALSE(minimum.empty());
+  EXPECT_EQ(std::get<FramingError>(minimum[0]).kind, FramingError::Kind::kOversize);
+  EXPECT_TRUE(GoodFrames(minimum).empty());
+  EXPECT_LT(high, kMaxFrameSize);
+  // 2048 holds Length 2036 at most.
+  Bytes over = OracleFrame(4, 0x0101, Bytes(2037, 0x11));
+  const auto too_big = DecodeChunked(over, {}, nullptr, two_k);
+  ASSERT_FALSE(too_big.empty());
+  EXPECT_EQ(std::get<FramingError>(too_big[0]).kind, FramingError::Kind::kOversize);
+  EXPECT_EQ(std::get<FramingError>(too_big[0]).length, 2037);
+  FrameDecoderOptions absurd;
+  absurd.max_frame_bytes = 1u << 20;
+  EXPECT_EQ(FrameDecoder(absurd).max_data_length(), kLargestReceiveBuffer - 12);
+}
+
+// FACTS (dmc-lite): bytes behind a false "DF" are dropped, not rescanned. The
+// same stream as FalseMarkerSwallowingARealFrameStillFindsIt loses the frame
+// the false header covered.
+TEST(DmcFrameDecoderTest, WithoutRescanACandidateThatFailsItsCheckIsDroppedWhole) {
+  const Bytes real = OracleFrame(77, 0x0031, {1, 0x10, 0, 0, 0});
+  Bytes stream = {'D', 'F', 9, 9, 9, 9, 0x30, 0x00, 15, 0};  // Length 15: covers `real`
+  stream.insert(stream.end(), real.begin(), real.end());
+  const Bytes later = OracleFrame(78, 0x0030, {});
+  stream.insert(stream.end(), later.begin(), later.end());
+  FrameDecoderOptions drop;
+  drop.rescan_rejected = false;
+  for (const std::vector<size_t>& cuts : {std::vector<size_t>{}, {1}, {5}}) {
+    const auto events = DecodeChunked(stream, cuts, nullptr, drop);
+    ASSERT_EQ(events.size(), 3u);
+    EXPECT_EQ(std::get<ChecksumError>(events[0]), (ChecksumError{0x09090909, 0x0030, 15}));
+    EXPECT_EQ(std::get<FramingError>(events[1]).bytes, 27u);  // the whole candidate
+    EXPECT_EQ(std::get<Frame>(events[2]).id, 78u);
+  }
+  // With rescan (the spec's reading here) the covered frame is found.
+  const auto frames = GoodFrames(DecodeStream(stream));
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].id, 77u);
+}
+
+TEST(DmcFrameDecoderTest, WithoutRescanAnOversizeHeaderIsDroppedWhole) {
+  // A second "DF" inside the oversize header: rescanning finds it as another
+  // (also oversize) candidate; without rescan the 10 header bytes go at once.
+  Bytes stream = {'D', 'F', 'D', 'F', 0, 0, 0x30, 0, 0xff, 0xff};
+  const Bytes good = OracleFrame(2, 0x0030, {});
+  stream.insert(stream.end(), good.begin(), good.end());
+  auto count_oversize = [](const std::vector<StreamEvent>& events) {
+    size_t n = 0;
+    for (const auto& e : events) {
+      const auto* f = std::get_if<FramingError>(&e);
+      n += f != nullptr && f->kind == FramingError::Kind::kOversize ? 1 : 0;
+    }
+    return n;
+  };
+  FrameDecoderOptions drop;
+  drop.rescan_rejected = false;
+  const auto dropped = DecodeChunked(stream, {3}, nullptr, drop);
+  EXPECT_EQ(count_oversize(dropped), 1u);
+  EXPECT_EQ(SkippedTotal(dropped), 10u);
+  EXPECT_EQ(GoodFrames(dropped).size(), 1u);
+  const auto rescanned = DecodeChunked(stream, {3});
+  EXPECT_EQ(count_oversize(rescanned), 2u);
+  EXPECT_EQ(GoodFrames(rescanned).size(), 1u);
+}
+
+TEST(DmcFrameDecoderTest, WithoutRescanFinishDropsThePendingCandidate) {
+  const Bytes real = OracleFrame(77, 0x0031, {1, 0x10, 0, 0, 0});
+  Bytes stream = {'D', 'F', 9, 9, 9, 9, 0x30, 0x00, 0x00, 0x04};  // Length 1024
+  stream.insert(stream.end(), real.begin(), real.end());
+  FrameDecoderOptions drop;
+  drop.rescan_rejected = false;
+  std::vector<StreamEvent> events;
+  FrameDecoder dec(drop);
+  auto collect = [&events](const FrameEvent& e) { events.push_back(ToStreamEvent(e)); };
+  dec.Feed(stream, collect);
+  dec.Finish(collect);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(std::get<FramingError>(events[0]).kind, FramingError::Kind::kTruncated);
+  EXPECT_EQ(std::get<FramingError>(events[1]).bytes, stream.size());
+  EXPECT_EQ(dec.pending_bytes(), 0u);
+}
+
+TEST(DmcFrameTest, PlausibleRequestHeaderIsAnUnflaggedTypeWithinTheReferenceMask) {
+  EXPECT_TRUE(PlausibleRequestHeader(0x0031));
+  EXPECT_TRUE(PlausibleRequestHeader(0x0077));  // unknown but could be sent
+  EXPECT_TRUE(PlausibleRequestHeader(0x0204));
+  EXPECT_FALSE(PlausibleRequestHeader(0x8031));  // a host's ACK
+  EXPECT_FALSE(PlausibleRequestHeader(0x0400));
+  EXPECT_FALSE(PlausibleRequestHeader(0x6820));  // " h": text after a "DF"
+  int plausible = 0;
+  for (uint32_t t = 0; t <= 0xffff; ++t) {
+    plausible += PlausibleRequestHeader(static_cast<uint16_t>(t)) ? 1 : 0;
+  }
+  EXPECT_EQ(plausible, 0x10000 / 64);
 }
 
 TEST(DmcFrameDecoderTest, ResetForgetsPendingBytes) {

@@ -59,6 +59,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const uint8_t pattern = data[0];
   const ByteView stream(data + 1, size - 1);
+  // Bits 5 and 6 of the pattern byte pick the receiver: a 2048-byte buffer
+  // (FACTS: dmc-lite) and dropping rejected candidates without rescanning.
+  FrameDecoderOptions options;
+  if ((pattern & 0x20) != 0) options.max_frame_bytes = 2048;
+  options.rescan_rejected = (pattern & 0x40) == 0;
 
   uint64_t chunked = 0;
   size_t accounted = 0;
@@ -67,21 +72,29 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (const auto* f = std::get_if<FrameRef>(&e)) {
       accounted += f->raw.size();
       Require(f->raw.size() == kHeaderSize + f->data.size() + kCheckSize);
-      Require(f->data.size() <= kMaxDataLength);
+      Require(f->data.size() <= options.max_frame_bytes - kHeaderSize - kCheckSize);
       CheckMessage(*f, DecodeHostMessage(f->type, f->data),
                    [](const Frame& fr) { return DecodeHostMessage(fr); });
+      // A receiver ignoring trailing bytes reads a leading part of the data.
+      const auto lenient = DecodeHostMessage(f->type, f->data, TrailingBytes::kIgnore);
+      if (lenient.ok()) {
+        Bytes again;
+        EncodeData(*lenient, again);
+        Require(again.size() <= f->data.size() &&
+                std::equal(again.begin(), again.end(), f->data.begin()));
+      }
       CheckMessage(*f, DecodeDeviceMessage(f->type, f->data),
                    [](const Frame& fr) { return DecodeDeviceMessage(fr); });
     } else if (const auto* g = std::get_if<FramingError>(&e)) {
       if (g->kind == FramingError::Kind::kSkipped) accounted += g->bytes;
     }
   };
-  FrameDecoder dec;
+  FrameDecoder dec(options);
   size_t pos = 0;
   for (size_t k = 0; pos < stream.size(); ++k) {
     const size_t n = std::min<size_t>(1 + ((pattern ^ (k * 37)) % 97), stream.size() - pos);
     dec.Feed(stream.subspan(pos, n), on_event);
-    Require(dec.pending_bytes() < kMaxFrameSize);
+    Require(dec.pending_bytes() < options.max_frame_bytes);
     pos += n;
   }
   dec.Finish(on_event);
@@ -91,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // (half the inputs, so that the plain path keeps a high exec rate).
   if ((pattern & 0x80) == 0) return 0;
   uint64_t whole = 0;
-  FrameDecoder once;
+  FrameDecoder once(options);
   auto digest = [&whole](const FrameEvent& e) { whole = Digest(whole, e); };
   once.Feed(stream, digest);
   once.Finish(digest);

@@ -8,6 +8,7 @@
 #include <rapidcheck.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
@@ -644,6 +645,192 @@ RC_GTEST_PROP(DmcDecodeProp, AnythingDecodedReencodesToTheSameData, ()) {
     RC_ASSERT(again == data);
     RC_ASSERT(TypeOf(*device) == type);
   }
+}
+
+// --- Trailing bytes ---------------------------------------------------------------------
+// The protocol grows by appending fields ("Document Revision History": PROTOCOL
+// VERSION at the end of HI, STOP_ALL Flags, RUN_MOVE FLAGS and camera angles,
+// SHOOT_FRAME's optional parameters), so a receiver reads the layout it knows
+// and ignores what follows (TrailingBytes::kIgnore); the exact reading stays
+// the default.
+
+Bytes WithTail(const HostMessage& m, size_t extra) {
+  Bytes data;
+  EncodeData(m, data);
+  for (size_t i = 0; i < extra; ++i) data.push_back(static_cast<uint8_t>(0xa5 + i));
+  return data;
+}
+
+TEST(DmcTrailingTest, BytesAfterTheKnownLayoutOfEveryRequestFamilyAreIgnored) {
+  VirtRigBoomSwingTrack bst;
+  bst.boom.motor = 3;
+  VirtRigBoomSwingTrack bst_sd = bst;
+  bst_sd.safe_distance_x1000 = 2500;
+  VirtRigBoomSwingTrack bst_table = bst;
+  bst_table.compensation.emplace();
+  (*bst_table.compensation)[7] = 42;
+  VirtRigBoomSwingTrack bst_both = bst_table;
+  bst_both.safe_distance_x1000 = 2500;
+  RtRunMove run_full;
+  run_full.fps_x1000 = 24000;
+  run_full.flags = kPlayLoop;
+  run_full.camera_open_angle_deg = 90;
+  run_full.camera_close_angle_deg = 270;
+  struct Case {
+    const char* family;
+    HostMessage m;
+    size_t extra;
+  };
+  const Case cases[] = {
+      // No data in the layout.
+      {"HI", HiRequest{}, 2},
+      {"GIO_IN (ERRATA 1.6)", GioInRequest{}, 4},
+      {"MOTOR_STATUS", MotorStatusRequest{}, 1},
+      {"MOTOR_GET_POSITION", MotorGetPositionRequest{}, 3},
+      {"RT_UPLOAD_MOVE_END", RtUploadMoveEnd{}, 1},
+      {"RT_GO", RtGo{}, 2},
+      {"RT_STOP_LOOP", RtStopLoop{}, 1},
+      {"VIRT_GET_POSITION", VirtGetPositionRequest{}, 5},
+      // Fixed layouts.
+      {"GIO_OUT", GioOut{5}, 1},
+      {"GIO_CAM", GioCam{kGioCamShutter}, 3},
+      {"MOTOR_MOVE", MotorMove{3, -1200}, 1},
+      {"MOTOR_STOP", MotorStop{2}, 4},
+      {"MOTOR_RESET_POSITION", MotorResetPosition{1, 77}, 1},
+      {"MOTOR_JOG", MotorJog{1, 500, 9000}, 2},
+      {"MOTOR_CONFIGURE", MotorConfigure{1, kMotorEnabled}, 1},
+      {"MOTOR_SET_SPEED", MotorSetSpeed{1, 3000, 6000}, 3},
+      {"MOTOR_SET_LIMITS", MotorSetLimits{1, 1, -10, 1, 10, 2}, 1},
+      {"RT_UPLOAD_MOVE_BEGIN", RtUploadMoveBegin{0, 10}, 1},
+      {"RT_POSITION_FRAME", RtPositionFrame{4}, 1},
+      {"RT_JOG_ALL", RtJogAll{24000, 3}, 1},
+      {"VIRT_MOVE", VirtMove{1, 100}, 1},
+      {"VIRT_STOP", VirtStop{2}, 1},
+      {"VIRT_JOG", VirtJog{1, 10000, 5}, 1},
+      {"VIRT_JOG_ON_LINE (ERRATA 1.10)", VirtJogOnLine{2, -300}, 1},
+      {"VIRT_AIM_POINT", VirtAimPoint{1, 1, 2, 3}, 1},
+      {"VIRT_CONFIG none", VirtConfig{VirtRigNone{}}, 3},
+      {"VIRT_CONFIG swing-pan", VirtConfig{VirtRigSwingPan{{1, 100}, {2, 200}}}, 1},
+      // Optional fields in their longest form (ERRATA 1.7).
+      {"MOTOR_STOP_ALL with Flags", MotorStopAll{kStopAllSilent}, 2},
+      {"RT_RUN_MOVE with FLAGS and both angles", run_full, 4},
+      {"VIRT_CONFIG boom-swing-track, 93 bytes", VirtConfig{bst}, 3},
+      {"VIRT_CONFIG boom-swing-track + SAFE DISTANCE", VirtConfig{bst_sd}, 3},
+      {"VIRT_CONFIG boom-swing-track + table", VirtConfig{bst_table}, 3},
+      {"VIRT_CONFIG boom-swing-track + both", VirtConfig{bst_both}, 9},
+      // Lists: a partial entry after the whole ones.
+      {"RT_UPLOAD_MOVE_AXIS", RtUploadMoveAxis{1, 0, true, {5, -6}}, 3},
+      {"RT_UPLOAD_MOVE_TRIGGERS", RtUploadMoveTriggers{0x3, {{1, 2}}}, 7},
+      {"RT_SHOOT_FRAME", RtShootFrame{2, 1, 500, 500, {{1, 10, 20}}}, 8},
+      {"RT_SHOOT_FRAME2", RtShootFrame2{2, 500, 90, 270, {{1, 10, 20}}}, 8},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.family);
+    const uint16_t type = TypeOf(c.m);
+    const Bytes data = WithTail(c.m, c.extra);
+    // The exact reading refuses it (kTrailing, or kTruncated / kBadLength
+    // where the tail starts another entry or form).
+    EXPECT_FALSE(DecodeHostMessage(type, data).ok());
+    const auto lenient = DecodeHostMessage(type, data, TrailingBytes::kIgnore);
+    ASSERT_TRUE(lenient.ok()) << wire::Describe(lenient.error());
+    EXPECT_EQ(*lenient, c.m) << Describe(*lenient);
+  }
+}
+
+TEST(DmcTrailingTest, AnOptionalFieldCutShortIsAbsentAndItsBytesIgnored) {
+  // MSG_MOTOR_STOP_ALL "Flags DWORD (Optional)": 2 bytes are no Flags.
+  const auto stop = DecodeHostMessage(0x0033, Bytes{1, 0}, TrailingBytes::kIgnore);
+  ASSERT_TRUE(stop.ok());
+  EXPECT_EQ(std::get<MotorStopAll>(*stop).flags, std::nullopt);
+  // RT_RUN_MOVE: 30 bytes are the 29-byte form; 34 bytes FLAGS + OPEN ANGLE.
+  RtRunMove run;
+  run.fps_x1000 = 24000;
+  const auto thirty = DecodeHostMessage(0x0111, WithTail(run, 1), TrailingBytes::kIgnore);
+  ASSERT_TRUE(thirty.ok());
+  EXPECT_EQ(std::get<RtRunMove>(*thirty), run);
+  const auto open_only = DecodeHostMessage(0x0111, WithTail(run, 5), TrailingBytes::kIgnore);
+  ASSERT_TRUE(open_only.ok());
+  EXPECT_TRUE(std::get<RtRunMove>(*open_only).flags.has_value());
+  EXPECT_TRUE(std::get<RtRunMove>(*open_only).camera_open_angle_deg.has_value());
+  EXPECT_FALSE(std::get<RtRunMove>(*open_only).camera_close_angle_deg.has_value());
+  // VIRT_CONFIG type 1: the longest of 93/97/577/581 that fits is read.
+  VirtRigBoomSwingTrack bst;
+  const auto hundred =
+      DecodeHostMessage(0x0200, WithTail(VirtConfig{bst}, 7), TrailingBytes::kIgnore);
+  ASSERT_TRUE(hundred.ok());
+  EXPECT_TRUE(std::get<VirtRigBoomSwingTrack>(std::get<VirtConfig>(*hundred).rig)
+                  .safe_distance_x1000.has_value());
+  // A byte list takes every byte: DMX values and upload levels have no tail.
+  const Bytes dmx = WithTail(Dmx{0, 1, {10, 20}}, 2);
+  EXPECT_EQ(DecodeHostMessage(0x0020, dmx, TrailingBytes::kIgnore).value(),
+            DecodeHostMessage(0x0020, dmx).value());
+}
+
+TEST(DmcTrailingTest, DataShorterThanTheLayoutStaysAnError) {
+  const struct {
+    const char* what;
+    uint16_t type;
+    size_t length;
+    Kind kind;
+    uint8_t first = 0;
+  } cases[] = {
+      {"MOTOR_MOVE missing a POSITION byte", 0x0031, 4, Kind::kTruncated},
+      {"MOTOR_STOP empty", 0x0032, 0, Kind::kTruncated},
+      {"MOTOR_SET_LIMITS short", 0x0039, 11, Kind::kTruncated},
+      {"DMX without a value", 0x0020, 3, Kind::kTruncated},
+      {"RT_UPLOAD_MOVE_AXIS without a whole position", 0x0101, 8, Kind::kTruncated},
+      {"RT_UPLOAD_MOVE_DMX without a level", 0x0102, 6, Kind::kTruncated},
+      {"RT_UPLOAD_MOVE_TRIGGERS short of MASK", 0x0104, 3, Kind::kTruncated},
+      {"RT_RUN_MOVE short of BLOOP TIME", 0x0111, 28, Kind::kTruncated},
+      {"RT_SHOOT_FRAME2 short header", 0x0115, 11, Kind::kTruncated},
+      {"VIRT_CONFIG empty", 0x0200, 0, Kind::kTruncated},
+      {"VIRT_CONFIG boom-swing-track short", 0x0200, 92, Kind::kTruncated, 1},
+      {"VIRT_CONFIG swing-pan short", 0x0200, 16, Kind::kTruncated, 2},
+      {"VIRT_AIM_POINT short", 0x0207, 12, Kind::kTruncated},
+      {"ACK with 3 bytes", 0x8031, 3, Kind::kBadLength},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    Bytes data(c.length, 0);
+    if (!data.empty()) data[0] = c.first;
+    const auto r = DecodeHostMessage(c.type, data, TrailingBytes::kIgnore);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().kind, c.kind);
+    EXPECT_EQ(SuggestedAck(r.error()), AckCode::kErrGeneral);
+  }
+}
+
+// Laws of kIgnore, both directions, any type and data: it decodes everything
+// the exact reading decodes, to the same message; and whatever it decodes
+// re-encodes to a prefix of the data (the ignored bytes are never kept, so
+// encoding stays exact).
+RC_GTEST_PROP(DmcDecodeProp, IgnoringTrailingBytesReadsALeadingPartOfTheData, ()) {
+  const auto type =
+      *rc::gen::oneOf(rc::gen::arbitrary<uint16_t>(),
+                      rc::gen::elementOf(std::vector<uint16_t>{
+                          0x0001, 0x0020, 0x0022, 0x0031, 0x0033, 0x0034, 0x003a, 0x0101, 0x0102,
+                          0x0104, 0x0111, 0x0112, 0x0115, 0x0200, 0x0205, 0x0206, 0x8031}));
+  const auto data =
+      *rc::gen::oneOf(VecOf<uint8_t>(0, 64, Any<uint8_t>()),
+                      rc::gen::map(VecOf<uint8_t>(0, 600, Any<uint8_t>()), [](Bytes b) {
+                        if (!b.empty()) b[0] = static_cast<uint8_t>(b[0] % 4);
+                        return b;
+                      }));
+  auto check = [&](const auto& exact, const auto& lenient) {
+    if (exact.ok()) {
+      RC_ASSERT(lenient.ok());
+      RC_ASSERT(*lenient == *exact);
+    }
+    if (lenient.ok()) {
+      Bytes again;
+      EncodeData(*lenient, again);
+      RC_ASSERT(again.size() <= data.size());
+      RC_ASSERT(std::equal(again.begin(), again.end(), data.begin()));
+      RC_ASSERT(TypeOf(*lenient) == type);
+    }
+  };
+  check(DecodeHostMessage(type, data), DecodeHostMessage(type, data, TrailingBytes::kIgnore));
+  check(DecodeDeviceMessage(type, data), DecodeDeviceMessage(type, data, TrailingBytes::kIgnore));
 }
 
 // ERRATA 1.7 / FACTS: each optional trailing form keeps its length.

@@ -43,6 +43,31 @@ TEST(TranscriptTest, DmcFramesAreDescribedPerDirectionAndChecksumFailuresFlagged
   EXPECT_NE(lines[0].text.find("BAD CHECKSUM"), std::string::npos) << lines[0].text;
 }
 
+// A session with a device whose receive buffer is larger than the spec's 1048
+// (FACTS: dmc-lite, 2048) and which sends positions under ID 0: the transcript
+// (`mocosim decode`) reads with the spec's buffer, flags the 2048-byte frame,
+// finds the next one, and describes the ID-0 message like any other.
+TEST(TranscriptTest, DmcTranscriptCopesWithA2048ByteFrameAndIdZeroPositions) {
+  TranscriptDecoder d(Protocol::kDmc);
+  Bytes host;
+  dmc::EncodeFrame(9, 0x0101, Bytes(2036, 0x11), host);
+  dmc::Encode(10, dmc::HostMessage{dmc::MotorGetPositionRequest{}}, host);
+  auto lines = d.Feed(Side::kHost, host);
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_TRUE(lines[0].problem);
+  EXPECT_NE(lines[0].text.find("2036"), std::string::npos) << lines[0].text;
+  EXPECT_EQ(lines.back().text.rfind("#10 MOTOR_GET_POSITION", 0), 0u) << lines.back().text;
+  Bytes device;
+  dmc::Encode(0, dmc::DeviceMessage{dmc::MotorPositionReport{0, {5, -6}}}, device);
+  dmc::Encode(10, dmc::DeviceMessage{dmc::Ack{0x0034, dmc::ToWire(dmc::AckCode::kOk)}}, device);
+  lines = d.Feed(Side::kDevice, device);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_FALSE(lines[0].problem);
+  EXPECT_EQ(lines[0].text.rfind("#0 MOTOR_GET_POSITION", 0), 0u) << lines[0].text;
+  EXPECT_EQ(lines[1].text.rfind("#10 ACK MOTOR_GET_POSITION", 0), 0u) << lines[1].text;
+  d.Finish();
+}
+
 TEST(TranscriptTest, DfmocoLearnsDialectFromHiAndFlagsUnterminatedLine) {
   TranscriptDecoder d(Protocol::kDfmoco);
   auto lines = d.Feed(Side::kDevice, View("hi 1 4 1.3.0\r\n"));

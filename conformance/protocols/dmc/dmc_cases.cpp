@@ -478,12 +478,11 @@ void BadLength(DmcCaseContext& c) {
     MsgType type;
     size_t len;
   };
-  std::vector<Bad> bad = {{MsgType::kMotorStatus, 1}, {MsgType::kHi, 2}};
+  // Shorter than the layout.
+  std::vector<Bad> bad = {{MsgType::kGioOut, 2}};
   if (c.device.motor_count > 0) {
-    bad.insert(bad.end(), {{MsgType::kMotorMove, 3},
-                           {MsgType::kMotorSetSpeed, 5},
-                           {MsgType::kMotorResetPosition, 6},
-                           {MsgType::kMotorStop, 0}});
+    bad.insert(bad.end(),
+               {{MsgType::kMotorMove, 3}, {MsgType::kMotorSetSpeed, 5}, {MsgType::kMotorStop, 0}});
   }
   for (const Bad& b : bad) {
     const DeviceRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
@@ -493,6 +492,19 @@ void BadLength(DmcCaseContext& c) {
       c.v.Check("DMC-ERR-006", *code == ToWire(AckCode::kErrGeneral),
                 [&] { return EvOf(h, r, "ERR_GENERAL", CodeText(r)); });
     }
+  }
+  // Longer than the layout: the protocol grows by appending fields, so a
+  // device may ignore what follows the fields it knows (DMC-ERR-013 notes a
+  // device that refuses them instead). Answered either way (DMC-ACK-001).
+  std::vector<Bad> longer = {{MsgType::kMotorStatus, 1}, {MsgType::kHi, 2}};
+  if (c.device.motor_count > 0) longer.push_back({MsgType::kMotorResetPosition, 6});
+  for (const Bad& b : longer) {
+    const DeviceRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
+    if (r == nullptr) continue;
+    const std::optional<uint32_t> code = AckCodeOf(r);
+    c.v.Check("DMC-ERR-013", !code || *code == ToWire(AckCode::kOk), [&] {
+      return EvOf(h, r, "the message carried out, its extra bytes ignored", CodeText(r));
+    });
   }
 }
 

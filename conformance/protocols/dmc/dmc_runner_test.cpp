@@ -14,6 +14,7 @@
 #include <set>
 
 #include "conformance/core/report.h"
+#include "conformance/protocols/dmc/dmc_host.h"
 
 namespace moco::conformance {
 namespace {
@@ -106,6 +107,49 @@ TEST(Runner, EveryRuleHoldsForTheEmulatedDmc16) {
       EXPECT_FALSE(c.outcomes.empty()) << c.suite << "/" << c.name;
     }
   }
+}
+
+// A device built from fixtures/profiles/dmc-lite.json answers MOTOR_GET_POSITION
+// with a positions message of ID 0 and ACK OK, and takes a frame up to its
+// 2048-byte buffer: the host judges both (a rule result, never a crash).
+TEST(Runner, DmcLiteAnswersAndItsLargerBufferAreJudgedWithoutCrashing) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  auto target = InProcessTarget::ForModel(
+      "dmc16", std::string(root != nullptr ? root : ".") + "/fixtures/profiles/dmc-lite.json");
+  ASSERT_FALSE(target->Open().has_value());
+  {
+    Verdicts v;
+    DmcHost h(*target, v, HostOptions{});
+    const wire::Bytes big(2036, 0x11);  // a 2048-byte frame of an unknown type
+    const DeviceRecord* r = h.Await(h.SendFrame(0x0077, big));
+    ASSERT_NE(r, nullptr);
+    EXPECT_EQ(AckCodeOf(r), dmc::ToWire(dmc::AckCode::kErrUnsupported));
+    const size_t before = h.records().size();
+    const DeviceRecord* p = h.Call(dmc::MotorGetPositionRequest{});
+    ASSERT_NE(p, nullptr);
+    EXPECT_EQ(AckCodeOf(p), dmc::ToWire(dmc::AckCode::kOk));
+    const DeviceRecord* id0 = nullptr;
+    for (size_t i = before; i < h.records().size(); ++i) {
+      if (h.records()[i].id == 0) id0 = &h.records()[i];
+    }
+    ASSERT_NE(id0, nullptr);
+    EXPECT_EQ(id0->type, dmc::ToWire(dmc::MsgType::kMotorGetPosition));
+    EXPECT_EQ(id0->request, -1);  // taken as an unsolicited update
+    h.Close();
+    EXPECT_EQ(v.outcomes().at("DMC-ACK-008").status, Status::kFail);
+  }
+  const RunReport report = RunDmc(*target, {});
+  EXPECT_FALSE(report.cases.empty());
+  EXPECT_EQ(report.rules.at("DMC-ACK-008").status, Status::kFail) << "the spec's response is due";
+  EXPECT_EQ(report.rules.at("DMC-ERR-013").status, Status::kPass);
+  // The spec's DMC-16 drops the same 2048-byte frame as oversize, unanswered.
+  auto spec = InProcessTarget::ForModel("dmc16", "");
+  ASSERT_FALSE(spec->Open().has_value());
+  Verdicts v;
+  DmcHost h(*spec, v, HostOptions{});
+  EXPECT_EQ(h.Await(h.SendFrame(0x0077, wire::Bytes(2036, 0x11))), nullptr);
+  EXPECT_NE(h.Call(dmc::HiRequest{}), nullptr);
+  h.Close();
 }
 
 TEST(Runner, RunsAreDeterministicInVirtualTime) {

@@ -24,7 +24,7 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
       upload_(profile_.upload_frame_count, profile_.motor_count, profile_.dmx_channels),
       virtual_(scheduler, rig_, planners_, profile_.virtual_axes, profile_.Advertised(),
                &AckForMoveStatus),
-      decoder_(std::make_unique<dmc::FrameDecoder>()),
+      decoder_(NewDecoder()),
       playback_(scheduler, rig_, planners_, upload_, profile_, dmx_, gio_, camera_,
                 PlaybackHooks{
                     .send_position_update =
@@ -52,6 +52,7 @@ Dmc16::~Dmc16() {
   gio_.SetListener(nullptr);
   physical_.reset();
   CancelAllTimers();
+  CancelTimer(idle_timer_);
 }
 
 LineSettings Dmc16::Line() const {
@@ -92,7 +93,7 @@ void Dmc16::ResetState() {
   for (int ch = 1; ch <= sim::DmxUniverse::kChannels; ++ch) dmx_.Set(ch, 0);
   upload_.Clear();
   virtual_.Reset();
-  decoder_ = std::make_unique<dmc::FrameDecoder>();
+  ResetFraming();
   playback_.Reset();
   last_stop_all_ns_ = -1;
   silent_stop_ = false;
@@ -189,14 +190,14 @@ void Dmc16::PowerOff() {
   virtual_.CancelJog();
   for (int m = 1; m <= rig_.motor_count(); ++m) rig_.motor(m).EmergencyHalt();
   camera_.SetFlags(0);
-  decoder_ = std::make_unique<dmc::FrameDecoder>();
+  ResetFraming();
   playback_.Halt();
 }
 
 void Dmc16::OnHostLink(bool open) {
   // A frame cut by the host closing the port is not completed by the next
   // session's bytes.
-  if (!open) decoder_ = std::make_unique<dmc::FrameDecoder>();
+  if (!open) ResetFraming();
 }
 
 void Dmc16::CancelTimer(sim::Scheduler::TimerId& id) {
@@ -211,32 +212,82 @@ void Dmc16::CancelAllTimers() {
 
 // --- framing and dispatch ---------------------------------------------------------------
 
+std::unique_ptr<dmc::FrameDecoder> Dmc16::NewDecoder() const {
+  dmc::FrameDecoderOptions options;
+  // "The receiving buffer on the device must be at least 1048 bytes": a
+  // larger one waits for a Length the spec's minimum would drop.
+  options.max_frame_bytes = profile_.behaviour.receive_buffer_bytes;
+  options.rescan_rejected = profile_.behaviour.rescan_after_bad_frame;
+  return std::make_unique<dmc::FrameDecoder>(options);
+}
+
+void Dmc16::ResetFraming() {
+  decoder_->Reset();
+  CancelTimer(idle_timer_);
+}
+
 void Dmc16::OnHostBytes(wire::ByteView bytes) {
-  if (!powered_) return;
-  decoder_->Feed(bytes, [this](const dmc::FrameEvent& e) {
-    if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
-      OnFrame(*f);
-    } else if (const auto* c = std::get_if<dmc::ChecksumError>(&e)) {
-      // "If it is not [zero] the device should respond with response code
-      // ACK_ERR_CHECKSUM" — with the ID and Type as received. An ACK from the
-      // host is never answered, even a damaged one.
-      if ((c->type & dmc::kFlagAck) == 0) {
-        ++stats_.checksum_errors;
-        ++stats_.requests;
-        Ack(c->id, c->type, AckCode::kErrChecksum);
-      }
-    } else {
-      // Noise, oversize Length (ERRATA 1.2) or a truncated candidate: nothing
-      // trustworthy to answer (the reference parser drops them silently).
-      ++stats_.framing_errors;
-    }
-  });
+  if (!powered_ || bytes.empty()) return;
+  last_host_bytes_ns_ = scheduler_.Now();
+  decoder_->Feed(bytes, [this](const dmc::FrameEvent& e) { OnFrameEvent(e); });
+  ArmIdleGap();
+}
+
+// Idle line (docs/protocol-notes.md): a candidate frame still incomplete
+// kLineIdleGapNs after the last host bytes will not be completed (a corrupted
+// Length, a false "DF" in noise, a cut frame): the decoder gives it up and
+// rescans its bytes, so requests behind it are answered now rather than
+// after up to a receive buffer's worth of later traffic.
+void Dmc16::ArmIdleGap() {
+  if (decoder_->pending_bytes() == 0) {
+    CancelTimer(idle_timer_);
+    return;
+  }
+  // A timer already set finds the later deadline when it fires.
+  if (idle_timer_ != sim::Scheduler::kNoTimer) return;
+  idle_timer_ = scheduler_.At(last_host_bytes_ns_ + kLineIdleGapNs, [this] { OnIdleGap(); });
+}
+
+void Dmc16::OnIdleGap() {
+  idle_timer_ = sim::Scheduler::kNoTimer;
+  if (scheduler_.Now() < last_host_bytes_ns_ + kLineIdleGapNs) {
+    ArmIdleGap();
+    return;
+  }
+  decoder_->Finish([this](const dmc::FrameEvent& e) { OnFrameEvent(e); });
+}
+
+void Dmc16::OnFrameEvent(const dmc::FrameEvent& e) {
+  if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
+    OnFrame(*f);
+  } else if (const auto* c = std::get_if<dmc::ChecksumError>(&e);
+             c != nullptr && dmc::PlausibleRequestHeader(c->type)) {
+    // "For received messages, this checksum should be zero. If it is not the
+    // device should respond with response code ACK_ERR_CHECKSUM", with the ID
+    // and Type as received ("MSG_FLAG_ACK"). A received message is a
+    // candidate whose header a request can have (no ACK flag: the host's
+    // ACKs are never answered, even damaged; a Type within the reference
+    // mask); any other false "DF" in noise is dropped unanswered, so no
+    // answer ever carries an ID and Type made of noise.
+    ++stats_.checksum_errors;
+    ++stats_.requests;
+    Ack(c->id, c->type, AckCode::kErrChecksum);
+  } else {
+    // Noise, an implausible candidate, an oversize Length (ERRATA 1.2) or a
+    // frame given up at an idle gap: nothing trustworthy to answer (the
+    // reference parser drops them silently).
+    ++stats_.framing_errors;
+  }
 }
 
 void Dmc16::OnFrame(const dmc::FrameRef& f) {
   if ((f.type & dmc::kFlagAck) != 0) {
     // ERRATA 1.9: the host's ACK of an unsolicited message; never waited for.
     ++stats_.host_acks;
+    if (profile_.behaviour.host_acks_silent) return;
+    // dmc-lite answers it like any message it does not take as a request.
+    ++stats_.requests;
+    Ack(f.id, f.type, AckCode::kErrUnsupported);
     return;
   }
   ++stats_.requests;
@@ -248,7 +299,11 @@ void Dmc16::OnFrame(const dmc::FrameRef& f) {
     Ack(f.id, f.type, AckCode::kErrUnsupported);
     return;
   }
-  dmc::Result<dmc::HostMessage> decoded = dmc::DecodeHostMessage(f.type, f.data);
+  // The protocol grows by appending fields ("Document Revision History"):
+  // bytes after a message's known layout are ignored; shorter data is an
+  // error (docs/protocol-notes.md "Trailing bytes").
+  dmc::Result<dmc::HostMessage> decoded =
+      dmc::DecodeHostMessage(f.type, f.data, dmc::TrailingBytes::kIgnore);
   if (!decoded.ok()) {
     Ack(f.id, f.type, dmc::SuggestedAck(decoded.error()));
     return;
@@ -324,6 +379,12 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           [&](const dmc::Dmx& m) { Ack(id, type, OnDmx(m)); },
           [&](const dmc::GioOut& m) { Ack(id, type, OnGioOut(m)); },
           [&](const dmc::GioInRequest&) {
+            // "Dragonframe may request the input state with this message";
+            // dmc-lite takes GIO_IN only as its own unsolicited message.
+            if (!profile_.behaviour.gio_in_request) {
+              Ack(id, type, AckCode::kErrUnsupported);
+              return;
+            }
             Send(id, dmc::GioInReport{gio_.inputs() & GioMask(profile_.gio_inputs)});
           },
           [&](const dmc::GioCam& m) {
@@ -338,7 +399,16 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           [&](const dmc::MotorMove& m) { OnMotorMove(id, m); },
           [&](const dmc::MotorStop& m) { Ack(id, type, OnMotorStop(m)); },
           [&](const dmc::MotorStopAll& m) { Ack(id, type, OnStopAll(m)); },
-          [&](const dmc::MotorGetPositionRequest&) { SendPositions(id); },
+          [&](const dmc::MotorGetPositionRequest&) {
+            if (profile_.behaviour.position_response) {
+              SendPositions(id);
+              return;
+            }
+            // dmc-lite: the positions go out as a message with ID 0, and an
+            // ACK OK carries the request's ID.
+            SendPositions(0);
+            Ack(id, type, AckCode::kOk);
+          },
           [&](const dmc::MotorResetPosition& m) {
             const AckCode code = OnResetPosition(m);
             Ack(id, type, code);
@@ -557,7 +627,12 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
   }
   playback_.OnDirectMotion();
   virtual_.CancelJog();  // a motor commanded directly leaves the line
-  Send(id, dmc::MotorMoveResponse{static_cast<uint8_t>(rig_.motor(m.motor).IsMoving() ? 1 : 0)});
+  // MSG_MOTOR_MOVE "Response Data: MOTOR STATUS"; dmc-lite answers ACK OK.
+  if (profile_.behaviour.move_response) {
+    Send(id, dmc::MotorMoveResponse{static_cast<uint8_t>(rig_.motor(m.motor).IsMoving() ? 1 : 0)});
+  } else {
+    Ack(id, type, AckCode::kOk);
+  }
   EnsurePositionReports();
 }
 
@@ -615,12 +690,20 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
 
 AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
-  if (m.speed < dmc::kJogSpeedInch || m.speed > dmc::kJogSpeedMax) return AckCode::kErrRange;
+  // "SPEED WORD 1=inching, 10000=jog at max velocity". dmc-lite takes any
+  // SPEED; then 0 jogs as 1 and above 10000 as 10000, so a jog never exceeds
+  // the motor's max velocity and acceleration (sim::JogSpeedFraction).
+  uint16_t speed = m.speed;
+  if (profile_.behaviour.jog_speed_checked) {
+    if (speed < dmc::kJogSpeedInch || speed > dmc::kJogSpeedMax) return AckCode::kErrRange;
+  } else {
+    speed = std::clamp(speed, dmc::kJogSpeedInch, dmc::kJogSpeedMax);
+  }
   if (playback_.Playing()) {
     return AckCode::kErrMoving;
   }
   if (IgnoresMotion(m.motor)) return AckCode::kOk;
-  const AckCode code = AckForMoveStatus(rig_.motor(m.motor).Jog(m.destination_steps, m.speed));
+  const AckCode code = AckForMoveStatus(rig_.motor(m.motor).Jog(m.destination_steps, speed));
   if (code == AckCode::kOk) {
     playback_.OnDirectMotion();
     virtual_.CancelJog();

@@ -41,6 +41,15 @@ struct Dmc16Stats {
 
 class Dmc16 final : public Device, private sim::RigObserver {
  public:
+  // The line-idle gap after which a partial frame is given up and its bytes
+  // rescanned (dmc-v2-protocol.txt has no inter-byte timeout; the reading is
+  // in docs/protocol-notes.md "Idle line"): far longer than any pause inside
+  // a frame a host writes in one piece (a byte takes 87 us at 115200 baud; a
+  // USB-serial bridge holds a partial packet for at most its 16 ms latency
+  // timer), and a fifth of the 250 ms a host waits for an answer, so a request
+  // held behind a false header is still answered in time.
+  static constexpr sim::TimeNs kLineIdleGapNs = 50 * sim::kNsPerMs;
+
   // `scheduler` and `out` must outlive the device. The device starts powered off.
   Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile = {});
   ~Dmc16() override;
@@ -82,6 +91,14 @@ class Dmc16 final : public Device, private sim::RigObserver {
 
  private:
   // --- protocol plumbing ---
+  void OnFrameEvent(const dmc::FrameEvent& e);
+  // A fresh decoder for the profile's receive buffer and resync reading.
+  std::unique_ptr<dmc::FrameDecoder> NewDecoder() const;
+  // Forgets a partial frame (power, a host closing the link).
+  void ResetFraming();
+  // (Re)arms the idle-gap timer while the decoder holds bytes.
+  void ArmIdleGap();
+  void OnIdleGap();
   void OnFrame(const dmc::FrameRef& f);
   void Handle(uint32_t id, const dmc::HostMessage& m);
   void Send(uint32_t id, const dmc::DeviceMessage& m);
@@ -168,6 +185,9 @@ class Dmc16 final : public Device, private sim::RigObserver {
   std::vector<std::optional<int64_t>> truncated_;
 
   sim::Scheduler::TimerId report_timer_ = sim::Scheduler::kNoTimer;
+  // The line-idle gap: fires kLineIdleGapNs after the last host chunk.
+  sim::Scheduler::TimerId idle_timer_ = sim::Scheduler::kNoTimer;
+  sim::TimeNs last_host_bytes_ns_ = 0;
   // The real-time playback of the upload (after the rig, I/O, upload and planners it uses).
   Playback playback_;
 };

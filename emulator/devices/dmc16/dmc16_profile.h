@@ -48,7 +48,7 @@ struct Dmc16PhysicalRig {
 };
 
 // The largest receive buffer a profile may declare (behaviour.receive_buffer_bytes).
-inline constexpr uint32_t kMaxReceiveBuffer = 4096;
+inline constexpr uint32_t kMaxReceiveBuffer = static_cast<uint32_t>(dmc::kLargestReceiveBuffer);
 
 // Where a device departs from the spec's reading (docs/devices/dmc16.md
 // "The reference firmware's behaviour"): every switch defaults to the spec's
@@ -59,11 +59,13 @@ struct Dmc16Behaviour {
   // --- the line ---
   // The receive buffer: the largest frame (header + DATA + checksum) taken
   // whole. The spec's 1048 is a minimum; dmc-lite holds 2048, so a header
-  // declaring Length 2000 waits for its 2002 bytes instead of being oversize.
+  // declaring Length 2000 waits for its data and check bytes instead of
+  // being oversize (the decoder's buffer is a fixed kMaxReceiveBuffer bytes).
   uint32_t receive_buffer_bytes = 1048;
-  // After a false "DF" fails its checksum the scan resumes just after its
-  // 'D', so a real frame inside it is still found (spec). false: the
-  // candidate's bytes are dropped (dmc-lite).
+  // After a false "DF" fails its checksum (or declares an oversize Length,
+  // or is given up at an idle gap) the scan resumes just after its 'D', so a
+  // real frame inside it is still found (spec). false: the bytes of the
+  // candidate read so far are dropped (dmc-lite).
   bool rescan_after_bad_frame = true;
 
   // --- answers ---
@@ -81,8 +83,9 @@ struct Dmc16Behaviour {
   // answered ERR_UNSUPPORTED like any message the device does not take
   // as a request (dmc-lite).
   bool host_acks_silent = true;
-  // JOG SPEED outside 1..10000 refused with ERR_BAD_VALUE (spec); false:
-  // accepted, 0 and 10001 included (dmc-lite).
+  // MOTOR_JOG SPEED outside 1..10000 refused with ERR_RANGE (spec); false:
+  // accepted, 0 and 10001 included (dmc-lite), 0 jogging as 1 and anything
+  // above 10000 as 10000.
   bool jog_speed_checked = true;
 
   // --- motion ---

@@ -7,6 +7,7 @@
 #include <rapidcheck/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <set>
 
@@ -133,6 +134,310 @@ TEST(Dmc16Framing, HostHardStopHaltsEverythingAndIsAcked) {
   EXPECT_EQ(h.Request(dmc::Unknown{dmc::ToWire(dmc::MsgType::kMotorHardStop), {}}), kOk);
   h.Settle();
   EXPECT_LT(h.Pos(1), 900);
+}
+
+// --- framing: the idle gap, checksum answers, trailing bytes ---------------------------
+
+// `m` encoded with `extra` bytes appended to its data.
+wire::Bytes WithTail(uint32_t id, const dmc::HostMessage& m, size_t extra) {
+  wire::Bytes data;
+  dmc::EncodeData(m, data);
+  for (size_t i = 0; i < extra; ++i) data.push_back(static_cast<uint8_t>(0x5a + i));
+  wire::Bytes out;
+  dmc::EncodeFrame(id, dmc::TypeOf(m), data, out);
+  return out;
+}
+
+// Frames of the device carrying `id`.
+size_t RepliesTo(Host& h, uint32_t id) {
+  size_t n = 0;
+  for (const Out& o : h.out()) n += o.id == id ? 1 : 0;
+  return n;
+}
+
+// A MOTOR_STATUS request whose Length byte was hit on the line: it declares
+// 600 data bytes, so the device waits for 600 more.
+wire::Bytes CorruptedLength(uint32_t id) {
+  wire::Bytes f = dmc::Encode(id, dmc::HostMessage{dmc::MotorStatusRequest{}});
+  f[dmc::kLengthOffset] = 0x58;
+  f[dmc::kLengthOffset + 1] = 0x02;
+  return f;
+}
+
+// Idle line (docs/protocol-notes.md): the spec has no inter-byte timeout; the
+// device gives up a partial frame once the line has been idle for
+// kLineIdleGapNs, so a corrupted Length holds back nothing after that.
+TEST(Dmc16Framing, CorruptedLengthIsGivenUpAtTheIdleGapSoTheNextRequestIsAnsweredAtOnce) {
+  Host h(SmallProfile());
+  const size_t before = h.out().size();
+  h.SendRaw(CorruptedLength(50));
+  h.RunFor(Dmc16::kLineIdleGapNs);
+  EXPECT_EQ(h.out().size(), before) << "a frame never completed is not answered";
+  const sim::TimeNs sent = h.now();
+  const uint32_t id = h.Send(dmc::HiRequest{});
+  EXPECT_EQ(h.Reply(id).t_ns, sent);
+  EXPECT_EQ(RepliesTo(h, 50), 0u);
+}
+
+TEST(Dmc16Framing, RequestsSwallowedByACorruptedLengthAreAnsweredAtTheIdleGap) {
+  Host h(SmallProfile());
+  h.SendRaw(CorruptedLength(50));
+  h.RunMs(1);
+  const uint32_t hi = h.Send(dmc::HiRequest{});
+  h.RunMs(2);
+  const uint32_t status = h.Send(dmc::MotorStatusRequest{});
+  const sim::TimeNs last = h.now();
+  // Each chunk restarts the gap; the false frame still lacks ~570 bytes.
+  h.RunFor(Dmc16::kLineIdleGapNs - 1);
+  EXPECT_EQ(RepliesTo(h, hi) + RepliesTo(h, status), 0u);
+  h.RunMs(1);
+  EXPECT_EQ(h.Reply(hi).t_ns, last + Dmc16::kLineIdleGapNs);
+  EXPECT_EQ(h.Reply(status).t_ns, last + Dmc16::kLineIdleGapNs);
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(h.Reply(hi).msg));
+  EXPECT_EQ(RepliesTo(h, 50), 0u);
+}
+
+// "For received messages, this checksum should be zero. If it is not the
+// device should respond with response code ACK_ERR_CHECKSUM": a received
+// message has a header a request can have. A false "DF" in noise whose Type
+// is no request's (bits outside the reference mask 0x83FF, or the ACK flag)
+// is dropped silently; the resync then finds the real request.
+TEST(Dmc16Framing, FalseMarkersInNoiseAreNeverAnsweredWithTheirGarbageIdAndType) {
+  Host h(SmallProfile());
+  const wire::Bytes text_df = {'D', 'F', 'M', 'o', 'c', 'o', '5', 'A', 4, 0, 1, 2, 3, 4, 9, 9};
+  const wire::Bytes acked_df = {'D', 'F', 1, 2, 3, 4, 0x34, 0x80, 0, 0, 7, 7};
+  ASSERT_FALSE(dmc::ChecksumIsZero(text_df));   // Type 0x4135, a complete candidate
+  ASSERT_FALSE(dmc::ChecksumIsZero(acked_df));  // Type 0x8034
+  wire::Bytes noise = {'x', 0x00};
+  noise.insert(noise.end(), text_df.begin(), text_df.end());
+  noise.push_back(0xff);
+  noise.insert(noise.end(), acked_df.begin(), acked_df.end());
+  const size_t before = h.out().size();
+  h.SendRaw(noise);
+  const uint32_t id = h.Send(dmc::HiRequest{});
+  h.Settle();
+  ASSERT_EQ(h.out().size(), before + 1) << "only the HI request is answered";
+  EXPECT_EQ(h.out().back().id, id);
+  EXPECT_EQ(h.device().stats().checksum_errors, 0u);
+  EXPECT_GT(h.device().stats().framing_errors, 0u);
+  // A damaged request of a type the device does not know is still a message:
+  // ERR_CHECKSUM with its ID and Type.
+  wire::Bytes unknown;
+  dmc::EncodeFrame(61, 0x0077, wire::Bytes{1, 2}, unknown);
+  unknown.back() ^= 0x5a;
+  h.SendRaw(unknown);
+  const Out& r = h.Reply(61);
+  EXPECT_EQ(r.type, 0x0077 | dmc::kFlagAck);
+  EXPECT_EQ(std::get<dmc::Ack>(r.msg).code, dmc::ToWire(AckCode::kErrChecksum));
+}
+
+// The protocol grows by appending fields ("Document Revision History";
+// STOP_ALL Flags, RUN_MOVE FLAGS): bytes after a known layout are ignored and
+// the message carried out; data shorter than the layout is ERR_GENERAL.
+TEST(Dmc16Framing, BytesAfterAKnownLayoutAreIgnoredAndShorterDataIsErrGeneral) {
+  Host h(SmallProfile());
+  h.SendRaw(WithTail(101, dmc::MotorMove{1, 300}, 3));
+  EXPECT_EQ(std::get<dmc::MotorMoveResponse>(h.Reply(101).msg).moving, 1);
+  h.SendRaw(WithTail(102, dmc::HiRequest{}, 2));
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(h.Reply(102).msg));
+  h.SendRaw(WithTail(103, dmc::MotorGetPositionRequest{}, 1));
+  EXPECT_EQ(std::get<dmc::MotorPositionReport>(h.Reply(103).msg).positions_steps.size(), 4u);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 300);
+  h.SendRaw(WithTail(104, dmc::MotorSetSpeed{2, 100, 200}, 1));
+  EXPECT_EQ(h.AckOf(104), kOk);
+  EXPECT_EQ(h.device().rig_ref().motor(2).profile().max_velocity_steps_per_s, 100);
+  // STOP_ALL with 2 bytes: the optional Flags cut short count as absent.
+  h.SendRaw(WithTail(105, dmc::MotorStopAll{}, 2));
+  EXPECT_EQ(h.AckOf(105), kOk);
+  wire::Bytes short_speed;
+  dmc::EncodeFrame(106, dmc::ToWire(dmc::MsgType::kMotorSetSpeed), wire::Bytes{1, 2, 3, 4, 5},
+                   short_speed);
+  h.SendRaw(short_speed);
+  EXPECT_EQ(h.AckOf(106), AckCode::kErrGeneral);
+  wire::Bytes empty_stop;
+  dmc::EncodeFrame(107, dmc::ToWire(dmc::MsgType::kMotorStop), {}, empty_stop);
+  h.SendRaw(empty_stop);
+  EXPECT_EQ(h.AckOf(107), AckCode::kErrGeneral);
+}
+
+// --- where the reference firmware answers otherwise (Dmc16Behaviour) --------------------
+// Each switch: the spec's default, then the switched (dmc-lite) behaviour.
+
+Dmc16Profile Switched(void (*set)(Dmc16Behaviour&)) {
+  Dmc16Profile p = SmallProfile();
+  set(p.behaviour);
+  return p;
+}
+
+// An RT_UPLOAD_MOVE_AXIS of 499 positions: Length 2001, above the spec's 1036.
+wire::Bytes BigUpload(uint32_t id) {
+  dmc::RtUploadMoveAxis m{1, 0, true, std::vector<int32_t>(499, 7)};
+  wire::Bytes data;
+  dmc::EncodeData(m, data);
+  wire::Bytes out;
+  dmc::EncodeFrame(id, dmc::ToWire(dmc::MsgType::kRtUploadMoveAxis), data, out);
+  return out;
+}
+
+TEST(Dmc16Behaviour, ReceiveBufferOf2048WaitsForALengthTheSpecsMinimumDrops) {
+  // Spec: "at least 1048 bytes"; Length 2001 is oversize and dropped at once.
+  Host spec(SmallProfile());
+  ASSERT_EQ(spec.Request(dmc::RtUploadMoveBegin{0, 600}), kOk);
+  spec.SendRaw(BigUpload(60));
+  const uint32_t hi = spec.Send(dmc::HiRequest{});
+  EXPECT_EQ(spec.Reply(hi).t_ns, spec.now());
+  EXPECT_EQ(RepliesTo(spec, 60), 0u);
+  // receive_buffer_bytes 2048 (dmc-lite): the header waits for its 2003 bytes.
+  Host lite(Switched([](Dmc16Behaviour& b) { b.receive_buffer_bytes = 2048; }));
+  ASSERT_EQ(lite.Request(dmc::RtUploadMoveBegin{0, 600}), kOk);
+  const wire::Bytes big = BigUpload(60);
+  lite.SendRaw(wire::Bytes(big.begin(), big.begin() + 1000));
+  lite.RunMs(10);
+  EXPECT_EQ(RepliesTo(lite, 60), 0u);
+  lite.SendRaw(wire::Bytes(big.begin() + 1000, big.end()));
+  EXPECT_EQ(lite.AckOf(60), kOk);
+  EXPECT_EQ(lite.Request(dmc::RtUploadMoveEnd{}), kOk);
+}
+
+TEST(Dmc16Behaviour, WithoutRescanTheBytesBehindAFalseMarkerAreDropped) {
+  // A false "DF" (Type 0x4000, no request's) whose Length 10 covers a whole
+  // HI request: the candidate fails its checksum.
+  wire::Bytes stream = {'D', 'F', 1, 2, 3, 4, 0x00, 0x40, 10, 0};
+  const wire::Bytes real = dmc::Encode(70, dmc::HostMessage{dmc::HiRequest{}});
+  stream.insert(stream.end(), real.begin(), real.end());
+  ASSERT_FALSE(dmc::ChecksumIsZero(stream));
+  // Spec reading: rescan from the byte after the false 'D' finds the HI.
+  Host spec(SmallProfile());
+  spec.SendRaw(stream);
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(spec.Reply(70).msg));
+  // rescan_after_bad_frame false (dmc-lite): the 22 bytes are gone.
+  Host lite(Switched([](Dmc16Behaviour& b) { b.rescan_after_bad_frame = false; }));
+  lite.SendRaw(stream);
+  lite.Settle();
+  EXPECT_EQ(RepliesTo(lite, 70), 0u);
+  const uint32_t next = lite.Send(dmc::MotorStatusRequest{});
+  EXPECT_EQ(lite.Reply(next).t_ns, lite.now());
+}
+
+TEST(Dmc16Behaviour, MoveAnsweredWithItsResponseOrAckOk) {
+  Host spec(SmallProfile());
+  const uint32_t a = spec.Send(dmc::MotorMove{1, 200});
+  EXPECT_EQ(std::get<dmc::MotorMoveResponse>(spec.Reply(a).msg).moving, 1);
+  Host lite(Switched([](Dmc16Behaviour& b) { b.move_response = false; }));
+  EXPECT_EQ(lite.Request(dmc::MotorMove{1, 200}), kOk);
+  EXPECT_TRUE(lite.device().rig_ref().motor(1).IsMoving());
+  lite.Settle();
+  EXPECT_EQ(lite.Pos(1), 200);
+  // Refusals stay refusals.
+  EXPECT_EQ(lite.Request(dmc::MotorMove{9, 200}), AckCode::kErrRange);
+}
+
+TEST(Dmc16Behaviour, GetPositionAnsweredWithThePositionsOrWithAnIdZeroMessageThenAckOk) {
+  Host spec(SmallProfile());
+  ASSERT_EQ(spec.Request(dmc::MotorResetPosition{2, 55}), kOk);
+  const uint32_t a = spec.Send(dmc::MotorGetPositionRequest{});
+  EXPECT_EQ(std::get<dmc::MotorPositionReport>(spec.Reply(a).msg).positions_steps[1], 55);
+  Host lite(Switched([](Dmc16Behaviour& b) { b.position_response = false; }));
+  ASSERT_EQ(lite.Request(dmc::MotorResetPosition{2, 55}), kOk);
+  const size_t before = lite.out().size();
+  const uint32_t id = lite.Send(dmc::MotorGetPositionRequest{});
+  ASSERT_EQ(lite.out().size(), before + 2);
+  const Out& positions = lite.out()[before];
+  EXPECT_EQ(positions.id, 0u);
+  EXPECT_EQ(positions.type, dmc::ToWire(dmc::MsgType::kMotorGetPosition));
+  EXPECT_EQ(std::get<dmc::MotorPositionReport>(positions.msg).positions_steps,
+            (std::vector<int32_t>{0, 55, 0, 0}));
+  const Out& ack = lite.out()[before + 1];
+  EXPECT_EQ(ack.id, id);
+  EXPECT_EQ(ack.type, dmc::ToWire(dmc::MsgType::kMotorGetPosition) | dmc::kFlagAck);
+  EXPECT_EQ(std::get<dmc::Ack>(ack.msg).code, dmc::ToWire(AckCode::kOk));
+}
+
+TEST(Dmc16Behaviour, GioInRequestAnsweredWithTheInputsOrUnsupported) {
+  for (const bool request : {true, false}) {
+    SCOPED_TRACE(request ? "spec" : "dmc-lite");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.gio_in_request = request;
+    Host h(p);
+    h.device().gio()->SetRawInput(1, true);
+    h.RunMs(50);
+    // The unsolicited message on a change goes out either way.
+    ASSERT_EQ(h.All<dmc::GioInReport>().size(), 1u);
+    const uint32_t id = h.Send(dmc::GioInRequest{});
+    if (request) {
+      EXPECT_EQ(std::get<dmc::GioInReport>(h.Reply(id).msg).triggers, 0x2u);
+    } else {
+      EXPECT_EQ(h.AckOf(id), AckCode::kErrUnsupported);
+    }
+  }
+}
+
+TEST(Dmc16Behaviour, HostAckOfADeviceMessageTakenSilentlyOrAnsweredUnsupported) {
+  // The host ACKs the power-on HI (device-side ID 1), as ERRATA 1.9 says.
+  const dmc::HostMessage ack_of_hi = dmc::Ack{dmc::ToWire(dmc::MsgType::kHi), 0x0010};
+  Host spec(SmallProfile());
+  const size_t before = spec.out().size();
+  spec.SendRaw(dmc::Encode(1, ack_of_hi));
+  EXPECT_EQ(spec.out().size(), before);
+  EXPECT_EQ(spec.device().stats().host_acks, 1u);
+  Host lite(Switched([](Dmc16Behaviour& b) { b.host_acks_silent = false; }));
+  lite.SendRaw(dmc::Encode(1, ack_of_hi));
+  ASSERT_EQ(lite.out().size(), 2u);
+  const Out& r = lite.out().back();
+  EXPECT_EQ(r.id, 1u);
+  EXPECT_EQ(r.type, dmc::ToWire(dmc::MsgType::kHi) | dmc::kFlagAck);
+  EXPECT_EQ(std::get<dmc::Ack>(r.msg).code, dmc::ToWire(AckCode::kErrUnsupported));
+  // A damaged ACK is no request either way.
+  wire::Bytes damaged = dmc::Encode(1, ack_of_hi);
+  damaged[10] ^= 0x01;
+  lite.SendRaw(damaged);
+  EXPECT_EQ(lite.out().size(), 2u);
+}
+
+TEST(Dmc16Behaviour, JogSpeedOutsideTheRangeRefusedOrTakenAtTheNearestEnd) {
+  Host spec(SmallProfile());
+  EXPECT_EQ(spec.Request(dmc::MotorJog{1, 0, 1000}), AckCode::kErrRange);
+  EXPECT_EQ(spec.Request(dmc::MotorJog{1, 10001, 1000}), AckCode::kErrRange);
+  EXPECT_FALSE(spec.device().rig_ref().motor(1).IsMoving());
+  // jog_speed_checked false (dmc-lite): accepted; SPEED 0 jogs as 1 (1% of the
+  // jog speed, sim::JogSpeedFraction) and 10001 or 65535 as 10000 (100%).
+  auto jog_end_ns = [](uint16_t speed) {
+    Host h(Switched([](Dmc16Behaviour& b) { b.jog_speed_checked = false; }));
+    EXPECT_EQ(h.Request(dmc::MotorJog{1, speed, 1000}), kOk) << speed;
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 1000) << speed;
+    return h.device().rig_ref().motor(1).CurrentPlan().EndNs();
+  };
+  EXPECT_EQ(jog_end_ns(0), jog_end_ns(1));
+  EXPECT_EQ(jog_end_ns(10001), jog_end_ns(10000));
+  EXPECT_EQ(jog_end_ns(65535), jog_end_ns(10000));
+  EXPECT_GT(jog_end_ns(0), jog_end_ns(10000));
+}
+
+// fixtures/profiles/dmc-lite.json sets every answer switch as the reference
+// firmware behaves (FACTS "DMC v2").
+TEST(Dmc16Behaviour, DmcLiteProfileAnswersAsTheReferenceFirmware) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  Host h(LoadDmc16Profile(std::string(root != nullptr ? root : ".") +
+                          "/fixtures/profiles/dmc-lite.json"));
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, dmc::kMotorEnabled}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorMove{1, 100}), kOk);
+  const size_t before = h.out().size();
+  const uint32_t pos = h.Send(dmc::MotorGetPositionRequest{});
+  EXPECT_EQ(h.out()[before].id, 0u);
+  EXPECT_EQ(h.AckOf(pos), kOk);
+  EXPECT_EQ(h.Request(dmc::GioInRequest{}), AckCode::kErrUnsupported);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, dmc::kMotorEnabled}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorJog{2, 0, 10}), kOk);
+  // The host ACKs the power-on HI (device-side ID 1).
+  h.SendRaw(dmc::Encode(1, dmc::HostMessage{dmc::Ack{dmc::ToWire(dmc::MsgType::kHi), 0x0010}}));
+  EXPECT_EQ(h.out().back().id, 1u);
+  EXPECT_EQ(std::get<dmc::Ack>(h.out().back().msg).code, dmc::ToWire(AckCode::kErrUnsupported));
+  // A Length up to its 2048-byte buffer is waited for.
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 600}), kOk);
+  h.SendRaw(BigUpload(90));
+  EXPECT_EQ(h.AckOf(90), kOk);
 }
 
 // --- motors -------------------------------------------------------------------------------
@@ -1195,6 +1500,83 @@ RC_GTEST_PROP(Dmc16Laws, NoiseNeverCrashesAndGoodFramesAfterItAreAnswered, ()) {
   int n = 0;
   for (const Out& o : h.out()) n += o.id == id ? 1 : 0;
   RC_ASSERT(n == 1);
+}
+
+// Noise biased towards the marker bytes, so false "DF" candidates are common.
+rc::Gen<wire::Bytes> GenMarkerNoise() {
+  return rc::gen::container<wire::Bytes>(rc::gen::weightedOneOf<uint8_t>(
+      {{4, rc::gen::arbitrary<uint8_t>()},
+       {1, rc::gen::just<uint8_t>('D')},
+       {1, rc::gen::just<uint8_t>('F')},
+       {1, rc::gen::elementOf(std::vector<uint8_t>{0x00, 0x01, 0x30, 0x80})}}));
+}
+
+// Requests with IDs no noise-made answer is likely to carry.
+std::map<uint32_t, uint16_t> SendGoodRequests(Host& h, const std::vector<dmc::HostMessage>& m,
+                                              wire::Bytes* stream) {
+  std::map<uint32_t, uint16_t> sent;
+  uint32_t id = 0xa5000000u;
+  for (const dmc::HostMessage& r : m) {
+    const uint16_t type = dmc::TypeOf(r);
+    if (std::holds_alternative<dmc::Unknown>(r) && dmc::IsKnownType(type)) continue;
+    dmc::Encode(id, r, *stream);
+    sent[id++] = type;
+  }
+  h.SendRaw(*stream);
+  return sent;
+}
+
+// Resync (Message Format; docs/protocol-notes.md "Resync", "Idle line"): after
+// any noise, good requests sent right behind it are each answered exactly
+// once by the time the line has been idle for the gap; and no answer carries
+// a Type made of noise: anything but an answer to them or an unsolicited
+// message is ERR_CHECKSUM for a header a request can have.
+RC_GTEST_PROP(Dmc16Laws, AfterNoiseEveryGoodRequestIsAnsweredOnceAndNothingImplausible, ()) {
+  const auto noise = *GenMarkerNoise();
+  const auto requests = *rc::gen::container<std::vector<dmc::HostMessage>>(GenRequest());
+  Host h(SmallProfile());
+  h.SendRaw(noise);
+  wire::Bytes stream;
+  const auto sent = SendGoodRequests(h, requests, &stream);
+  // Not the law's case: a false frame in the noise that happens to check out.
+  bool noise_frame = false;
+  for (const dmc::StreamEvent& e : dmc::DecodeStream(noise, /*finish=*/false)) {
+    noise_frame = noise_frame || std::holds_alternative<dmc::Frame>(e);
+  }
+  RC_PRE(!noise_frame);
+  h.Settle();
+  std::map<uint32_t, int> answers;
+  for (const Out& o : h.out()) {
+    if (sent.count(o.id) != 0) {
+      ++answers[o.id];
+      continue;
+    }
+    if (o.id < 0x10000u && (o.type & dmc::kFlagAck) == 0) continue;  // unsolicited
+    const auto* a = std::get_if<dmc::Ack>(&o.msg);
+    RC_ASSERT(a != nullptr);
+    RC_ASSERT(a->code == dmc::ToWire(AckCode::kErrChecksum));
+    RC_ASSERT(dmc::PlausibleRequestHeader(a->type));
+  }
+  for (const auto& [id, type] : sent) RC_ASSERT(answers[id] == 1);
+}
+
+// Without rescanning (dmc-lite) a false "DF" may swallow what follows it, but
+// the idle gap ends it: requests after noise and a gap are each answered once.
+RC_GTEST_PROP(Dmc16Laws, WithoutRescanRequestsAfterNoiseAndAnIdleGapAreAnsweredOnce, ()) {
+  const auto noise = *GenMarkerNoise();
+  const auto requests = *rc::gen::container<std::vector<dmc::HostMessage>>(GenRequest());
+  Dmc16Profile p = SmallProfile();
+  p.behaviour.rescan_after_bad_frame = false;
+  p.behaviour.receive_buffer_bytes = 2048;
+  Host h(p);
+  h.SendRaw(noise);
+  h.RunFor(Dmc16::kLineIdleGapNs);
+  wire::Bytes stream;
+  const auto sent = SendGoodRequests(h, requests, &stream);
+  h.Settle();
+  std::map<uint32_t, int> answers;
+  for (const Out& o : h.out()) answers[o.id] += sent.count(o.id) != 0 ? 1 : 0;
+  for (const auto& [id, type] : sent) RC_ASSERT(answers[id] == 1);
 }
 
 TEST(Dmc16State, StateReportsPositionsModeAndCounters) {
