@@ -338,6 +338,18 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
       if (req.type == ToWire(MsgType::kHi) && req.well_formed) {
         verdicts_.Fail("DMC-HI-001", Ev(rec, "HI response", Show(&rec)));
       }
+      // The message's own layout clause is broken too by an ACK OK in its place.
+      if (req.type == ToWire(MsgType::kMotorMove) && *code == ToWire(AckCode::kOk)) {
+        verdicts_.Fail("DMC-MOVE-001", Ev(rec, "the 1-byte MOTOR_MOVE response", "ACK OK"));
+      }
+      // GIO_IN refused by a device that advertises inputs: the request it
+      // must answer ("Dragonframe may request the input state").
+      if (req.type == ToWire(MsgType::kGioIn) && req.well_formed && hi_ && hi_->gio_in_count >= 1) {
+        verdicts_.Fail("DMC-GIO-001", Ev(rec,
+                                         "a 4-byte GIO_IN response (the device advertises " +
+                                             std::to_string(hi_->gio_in_count) + " input(s))",
+                                         "ACK " + dmc::AckCodeName(*code)));
+      }
     }
     if (!req.bad_checksum) {
       verdicts_.Check("DMC-CSUM-004", *code != ToWire(AckCode::kErrChecksum), [&] {

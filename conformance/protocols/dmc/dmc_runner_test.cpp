@@ -9,8 +9,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "conformance/core/report.h"
@@ -39,6 +39,8 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       // MUST: "Requests with a specific response ... answer with the plain
       // Type": MOTOR_MOVE and MOTOR_GET_POSITION are answered ACK OK.
       {"DMC-ACK-008", Status::kFail},
+      {"DMC-MOVE-001", Status::kFail},
+      {"DMC-MOVE-002", Status::kFail},
       // MUST: GIO_IN is answered ERR_UNSUPPORTED though an input is advertised.
       {"DMC-GIO-001", Status::kFail},
       // MUST: no RT_END after a go-motion shot.
@@ -61,6 +63,8 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       {"DMC-RT-016", Status::kNoted},
       // Not exercised: no soft-limit refusal, so nothing to leave in place.
       {"DMC-LIM-003", Status::kNotExercised},
+      // Not exercised: its GIO_IN is refused, and no input changes in the run.
+      {"DMC-GIO-002", Status::kNotExercised},
   };
   const RunReport r = RunInProcess({}, SourceDir() + "/fixtures/profiles/dmc-lite.json");
   for (const auto& [id, s] : r.rules) {
