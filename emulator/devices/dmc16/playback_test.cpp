@@ -627,9 +627,15 @@ TEST(Dmc16PlaybackReports, UpdatesComeEveryIntervalThroughPrerollFramesAndPostro
     const double clock_x1000 = 20000 + static_cast<double>(t - t_first) * 2e-6;
     EXPECT_NEAR(mt, clock_x1000, 1) << "at " << t - t_go;
     const bool frame_time = t >= t_first && (t - t_first) % (kNsPerSecond / 2) == 0;
-    if (t < t_first) EXPECT_LT(mt, 20000u);
-    if (t > t_first && t < t_first + 3 * kNsPerSecond && !frame_time) EXPECT_NE(mt % 1000, 0u);
-    if (t > t_first + 3 * kNsPerSecond) EXPECT_GT(mt, 26000u);
+    if (t < t_first) {
+      EXPECT_LT(mt, 20000u);
+    }
+    if (t > t_first && t < t_first + 3 * kNsPerSecond && !frame_time) {
+      EXPECT_NE(mt % 1000, 0u);
+    }
+    if (t > t_first + 3 * kNsPerSecond) {
+      EXPECT_GT(mt, 26000u);
+    }
   }
   EXPECT_EQ(ups.back().second.move_time_x1000, 28000u) << "the stop, 1 s past frame 26";
   EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
