@@ -241,9 +241,15 @@ const std::vector<Rule> kRules = {
      "MOTOR_STOP_ALL is accepted with and without its optional FLAGS",
      "Flags DWORD (Optional) 0x01 means silent", "MSG_MOTOR_STOP_ALL; ERRATA 1.7"},
     {"DMC-STOP-004", L::kShould, N::kMotors,
-     "A second STOP_ALL soon after the first stops no later than a single one",
+     "A second STOP_ALL soon after the first stops sooner than a single one (a hard stop)",
      "If the device gets a second STOP_ALL soon after a first, it should HARD STOP. Meaning it "
      "should decelerate faster than normal.",
+     "MSG_MOTOR_STOP_ALL"},
+    {"DMC-STOP-005", L::kShould, N::kMotors,
+     "MOTOR_STOP_ALL decelerates: a motor at speed travels on after the STOP_ALL is answered "
+     "instead of halting",
+     "The device should decelerate. (If a controller may move large/heavy equipment, it should "
+     "always decelerate rather than simply stop sending signals.)",
      "MSG_MOTOR_STOP_ALL"},
     {"DMC-CFG-001", L::kMust, N::kMotors,
      "MOTOR_SET_SPEED with positive velocity and acceleration is acknowledged OK",

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
@@ -25,11 +26,17 @@ using dmc::ToWire;
 using Breakage = std::function<void(const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
                                     devices::ByteSink& out)>;
 
-// The real DMC-16 with a broken output stage.
+// What becomes of the host's bytes before the device reads them (a device
+// that acts wrongly on a request); empty: read as sent.
+using InputBreakage = std::function<wire::Bytes(wire::ByteView host_bytes)>;
+
+// The real DMC-16 with a broken output stage (and, optionally, input stage).
 class BrokenDmc16 final : public devices::Device {
  public:
-  BrokenDmc16(sim::Scheduler& s, devices::ByteSink& out, Breakage b, const std::string& profile)
-      : sink_(out,
+  BrokenDmc16(sim::Scheduler& s, devices::ByteSink& out, Breakage b, const std::string& profile,
+              InputBreakage in = {})
+      : in_(std::move(in)),
+        sink_(out,
               [&s, b = std::move(b)](const dmc::FrameRef& f, devices::ByteSink& o) {
                 b(f, wire::Bytes(f.raw.begin(), f.raw.end()), s, o);
               }),
@@ -39,18 +46,28 @@ class BrokenDmc16 final : public devices::Device {
   void PowerOn() override { inner_->PowerOn(); }
   void PowerOff() override { inner_->PowerOff(); }
   bool Powered() const override { return inner_->Powered(); }
-  void OnHostBytes(wire::ByteView bytes) override { inner_->OnHostBytes(bytes); }
+  void OnHostBytes(wire::ByteView bytes) override {
+    if (!in_) {
+      inner_->OnHostBytes(bytes);
+      return;
+    }
+    const wire::Bytes changed = in_(bytes);
+    inner_->OnHostBytes(changed);
+  }
   void OnHostLink(bool open) override { inner_->OnHostLink(open); }
 
  private:
+  InputBreakage in_;
   devices::FaultySink sink_;  // hands each frame the device writes to the breakage
   std::unique_ptr<devices::Device> inner_;
 };
 
-RunReport RunBroken(Breakage b, RunOptions options = {}, const std::string& profile = "") {
-  InProcessTarget target("dmc16-broken", [b, profile](sim::Scheduler& s, devices::ByteSink& out) {
-    return std::make_unique<BrokenDmc16>(s, out, b, profile);
-  });
+RunReport RunBroken(Breakage b, RunOptions options = {}, const std::string& profile = "",
+                    InputBreakage in = {}) {
+  InProcessTarget target("dmc16-broken",
+                         [b, profile, in](sim::Scheduler& s, devices::ByteSink& out) {
+                           return std::make_unique<BrokenDmc16>(s, out, b, profile, in);
+                         });
   EXPECT_FALSE(target.Open().has_value());
   return RunDmc(target, options);
 }
@@ -381,6 +398,100 @@ TEST(BrokenDevice, TheReferenceFirmwaresAimPointCodeIsANoteNotAListedCode) {
       });
   ExpectCaught(r, "DMC-ACK-012", Status::kNoted);
   EXPECT_EQ(r.rules.at("DMC-ACK-007").status, Status::kPass);
+}
+
+std::string WriteProfile(const std::string& name, const std::string& json) {
+  const std::filesystem::path p = std::filesystem::temp_directory_path() /
+                                  ("mococheck_" + name + "_" + std::to_string(getpid()) + ".json");
+  std::ofstream(p) << json;
+  return p.string();
+}
+
+TEST(BrokenDevice, ASecondStopAllThatDeceleratesAsTheFirstIsCaughtByStop004) {
+  // hard_stop_multiple 1: the "hard stop" decelerates as a normal one.
+  const std::string profile =
+      WriteProfile("softhard", R"({"model": "dmc16", "motion": {"hard_stop_multiple": 1}})");
+  const RunReport r = RunBroken(PassThrough, {}, profile);
+  std::filesystem::remove(profile);
+  ExpectCaught(r, "DMC-STOP-004");
+}
+
+TEST(BrokenDevice, MotorsThatHaltAtStopAllAreCaughtByStop005) {
+  // What the host sees of a device that halts: every position after a
+  // STOP_ALL's answer is the one before it, until the next move.
+  struct Seen {
+    bool halted = false;
+    std::vector<int32_t> last;
+  };
+  auto seen = std::make_shared<Seen>();
+  const RunReport r = RunBroken(
+      [seen](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (ToWire(MsgType::kMotorStopAll) | dmc::kFlagAck)) seen->halted = true;
+        if (f.type == ToWire(MsgType::kMotorMove)) seen->halted = false;
+        if (f.type == ToWire(MsgType::kMotorGetPosition)) {
+          auto m = dmc::DecodeDeviceMessage(f.type, f.data);
+          if (m.ok()) {
+            auto report = std::get<dmc::MotorPositionReport>(m.value());
+            if (seen->halted && !seen->last.empty()) {
+              report.positions_steps = seen->last;
+              raw = dmc::Encode(f.id, dmc::DeviceMessage{report});
+            } else {
+              seen->last = report.positions_steps;
+            }
+          }
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-STOP-005");
+}
+
+TEST(BrokenDevice, APositionUpdateSentBeforeTheResetPositionAckIsCaughtByRst002) {
+  // "After changing the internal position and responding to this message":
+  // here the update goes out first and the ACK after it.
+  auto held = std::make_shared<wire::Bytes>();
+  const RunReport r = RunBroken(
+      [held](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == (ToWire(MsgType::kMotorResetPosition) | dmc::kFlagAck)) {
+          *held = raw;
+          return;
+        }
+        out.Write(raw);
+        if (!held->empty() && f.type == ToWire(MsgType::kMotorGetPosition)) {
+          out.Write(*held);
+          held->clear();
+        }
+      });
+  ExpectCaught(r, "DMC-RST-002");
+}
+
+TEST(BrokenDevice, AStopLoopAckedButIgnoredIsCaughtByLoop001) {
+  // The device ACKs STOP_LOOP OK and plays on: the request reaches it as a
+  // MOTOR_STATUS under the same ID, whose answer goes out as STOP_LOOP's ACK.
+  auto ids = std::make_shared<std::set<uint32_t>>();
+  const InputBreakage in = [ids](wire::ByteView bytes) {
+    wire::Bytes out(bytes.begin(), bytes.end());
+    const auto f = dmc::DecodeFrame(bytes);  // the host writes whole frames in-process
+    if (f.ok() && f.value().type == ToWire(MsgType::kRtStopLoop)) {
+      ids->insert(f.value().id);
+      out = dmc::Encode(f.value().id, dmc::HostMessage{dmc::MotorStatusRequest{}});
+    }
+    return out;
+  };
+  const RunReport r = RunBroken(
+      [ids](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (ids->count(f.id) != 0 && f.type == ToWire(MsgType::kMotorStatus)) {
+          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::Ack{ToWire(MsgType::kRtStopLoop),
+                                                              ToWire(dmc::AckCode::kOk)}});
+        }
+        out.Write(raw);
+      },
+      [] {
+        RunOptions o;
+        o.cases = "rt/stop-loop";
+        return o;
+      }(),
+      "", in);
+  ExpectCaught(r, "DMC-LOOP-001");
 }
 
 TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {

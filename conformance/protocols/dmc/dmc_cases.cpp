@@ -285,8 +285,18 @@ void StopAll(DmcCaseContext& c) {
     const DeviceRecord* r = h.Call(stop);
     ExpectOk(c, "DMC-STOP-002", r);
     ExpectOk(c, "DMC-STOP-003", r);
+    // Motor 1 was at about 1600 steps/s: decelerating at 4000 steps/s^2 it
+    // travels about 300 steps after the STOP_ALL; a halt travels none.
+    const auto at_stop = GetPositions(h);
     Expect(c, "DMC-STOP-002", WaitRest(h, 10'000 * kMs), "every motor at rest after STOP_ALL",
            "still moving");
+    const auto at_rest = GetPositions(h);
+    if (at_stop && at_rest) {
+      const int64_t travel = static_cast<int64_t>(At(*at_rest, 0)) - At(*at_stop, 0);
+      Expect(c, "DMC-STOP-005", travel > 0,
+             "motor 1 decelerating on after STOP_ALL (about 300 steps at 4000 steps/s^2)",
+             std::to_string(travel) + " steps after the STOP_ALL was answered");
+    }
     h.Idle(1500 * kMs);  // past any "soon after" window
   }
   for (uint8_t m = 1; m <= motors; ++m) h.Call(dmc::MotorMove{m, At(*p0, m - 1u)});
@@ -316,8 +326,10 @@ void HardStop(DmcCaseContext& c) {
   const auto single = StopDistance(c, false);
   const auto twice = StopDistance(c, true);
   if (!single || !twice) return;
-  Expect(c, "DMC-STOP-004", *twice <= *single,
-         "no further than a single STOP_ALL (" + std::to_string(*single) + " steps)",
+  // "it should HARD STOP. Meaning it should decelerate faster than normal":
+  // strictly shorter, so a device ignoring the second STOP_ALL fails.
+  Expect(c, "DMC-STOP-004", *twice < *single,
+         "shorter than after a single STOP_ALL (" + std::to_string(*single) + " steps)",
          std::to_string(*twice) + " steps after two");
 }
 
@@ -327,8 +339,15 @@ void Reset(DmcCaseContext& c) {
   if (!p0) return;
   const int32_t value = At(*p0, 0) + 12345;
   const size_t mark = h.records().size();
-  ExpectOk(c, "DMC-RST-001", h.Call(dmc::MotorResetPosition{1, value}));
-  const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+  const DeviceRecord* ack = h.Call(dmc::MotorResetPosition{1, value});
+  ExpectOk(c, "DMC-RST-001", ack);
+  // "After changing the internal position and responding to this message":
+  // the update follows the answer, so only records after the ACK count.
+  size_t after = mark;
+  for (size_t k = mark; ack != nullptr && k < h.records().size(); ++k) {
+    if (&h.records()[k] == ack) after = k + 1;
+  }
+  const int i = h.WaitFor(after, 500 * kMs, [](const DeviceRecord& r) {
     return IsUnsolicited(r, MsgType::kMotorGetPosition);
   });
   const DeviceRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;

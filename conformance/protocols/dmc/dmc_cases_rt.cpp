@@ -261,7 +261,68 @@ void Shoot(DmcCaseContext& c, bool second) {
   }
 }
 
-void StopLoop(DmcCaseContext& c) { ExpectOk(c, "DMC-LOOP-001", c.host.Call(dmc::RtStopLoop{})); }
+// A ping-pong run of frames 0..10 at 24 fps; once its second pass (back
+// towards frame 0) is under way, STOP_LOOP: "The currently running
+// loop/ping-pong must stop after it reaches the next end point", frame 0.
+void StopLoop(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  if (c.device.motor_count == 0 || (c.device.capabilities & dmc::kCapRealTime) == 0) {
+    ExpectOk(c, "DMC-LOOP-001", h.Call(dmc::RtStopLoop{}));
+    return;
+  }
+  const auto u = Upload(c);
+  if (!u) return;
+  AtFrame(c, *u, 0, "DMC-RT-002");
+  const uint32_t end = std::min<uint32_t>(10, u->end);
+  dmc::RtRunMove run = ShortRun(end);
+  run.flags = dmc::kPlayPingPong;
+  ExpectOk(c, "DMC-LOOP-001", h.Call(run));
+  WaitRest(h, kRestTimeout);
+  const size_t mark = h.records().size();
+  ExpectOk(c, "DMC-LOOP-001", Go(c));
+  const auto frame_report = [](const DeviceRecord& r, auto pred) {
+    const auto* p = As<dmc::MotorPositionReport>(&r);
+    return r.request < 0 && p != nullptr && p->move_time_x1000 % 1000 == 0 &&
+           pred(p->move_time_x1000 / 1000);
+  };
+  const int at_end = h.WaitFor(mark, 10'000 * kMs, [&](const DeviceRecord& r) {
+    return frame_report(r, [&](uint32_t k) { return k == end; });
+  });
+  const int back =
+      at_end < 0
+          ? -1
+          : h.WaitFor(static_cast<size_t>(at_end) + 1, 10'000 * kMs, [&](const DeviceRecord& r) {
+              return frame_report(r, [&](uint32_t k) { return k > 0 && k < end; });
+            });
+  if (!Expect(c, "DMC-LOOP-001", back >= 0, "a second, backward pass of the ping-pong run",
+              at_end < 0 ? "frame " + std::to_string(end) + " never reported"
+                         : "no frame reported on the way back")) {
+    h.Call(dmc::MotorStopAll{});
+    WaitRest(h, kRestTimeout);
+    return;
+  }
+  const size_t stop_mark = h.records().size();
+  ExpectOk(c, "DMC-LOOP-001", h.Call(dmc::RtStopLoop{}));
+  const int e = h.WaitFor(stop_mark, 10'000 * kMs,
+                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+  if (!Expect(c, "DMC-LOOP-001", e >= 0, "RT_END once the run reaches frame 0",
+              "no RT_END within 10 s of STOP_LOOP (the loop went on)")) {
+    h.Call(dmc::MotorStopAll{});
+    WaitRest(h, kRestTimeout);
+    return;
+  }
+  // The end point it stopped at: the last frame reported before RT_END.
+  std::optional<uint32_t> last;
+  for (size_t i = stop_mark; i < static_cast<size_t>(e); ++i) {
+    const auto* p = As<dmc::MotorPositionReport>(&h.records()[i]);
+    if (h.records()[i].request < 0 && p != nullptr && p->move_time_x1000 % 1000 == 0) {
+      last = p->move_time_x1000 / 1000;
+    }
+  }
+  Expect(c, "DMC-LOOP-001", last && *last == 0, "the run ends at frame 0, its next end point",
+         last ? "last frame reported " + std::to_string(*last) : "no frame reported");
+  WaitRest(h, kRestTimeout);
+}
 
 void VirtPosition(DmcCaseContext& c) {
   const DeviceRecord* r = c.host.Call(dmc::VirtGetPositionRequest{});
