@@ -494,6 +494,77 @@ TEST(BrokenDevice, AStopLoopAckedButIgnoredIsCaughtByLoop001) {
   ExpectCaught(r, "DMC-LOOP-001");
 }
 
+TEST(BrokenDevice, GoMotionThatDoesNotMoveIsCaughtByTheGoMotionRules) {
+  // The device reads every blur motor's POS A and POS B as the frame's
+  // position: the shutter opens on a rig that stands still.
+  const InputBreakage in = [](wire::ByteView bytes) {
+    wire::Bytes out(bytes.begin(), bytes.end());
+    const auto f = dmc::DecodeFrame(bytes);  // the host writes whole frames in-process
+    if (!f.ok()) return out;
+    auto m = dmc::DecodeHostMessage(f.value());
+    if (!m.ok()) return out;
+    auto still = [](std::vector<dmc::BlurMotor>& motors) {
+      for (dmc::BlurMotor& b : motors) {
+        b.pos_a_steps = b.pos_b_steps = (b.pos_a_steps + b.pos_b_steps) / 2;
+      }
+    };
+    if (auto* s1 = std::get_if<dmc::RtShootFrame>(&m.value())) {
+      still(s1->motors);
+      out = dmc::Encode(f.value().id, dmc::HostMessage{*s1});
+    } else if (auto* s2 = std::get_if<dmc::RtShootFrame2>(&m.value())) {
+      still(s2->motors);
+      out = dmc::Encode(f.value().id, dmc::HostMessage{*s2});
+    }
+    return out;
+  };
+  RunOptions o;
+  o.cases = "gomotion/*";
+  const RunReport r = RunBroken(PassThrough, o, "", in);
+  ExpectCaught(r, "DMC-GM-001");
+  ExpectCaught(r, "DMC-GM-002");
+}
+
+TEST(BrokenDevice, AFrameReportDroppedFromALiveRunIsCaughtByRt004) {
+  // Frame 5's report (MOVE TIME 5000) never goes out.
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorGetPosition) && f.id < DmcHost::kFirstHostId) {
+          const auto m = dmc::DecodeDeviceMessage(f.type, f.data);
+          if (m.ok() && std::get<dmc::MotorPositionReport>(m.value()).move_time_x1000 == 5000) {
+            return;
+          }
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-RT-004");
+}
+
+TEST(BrokenDevice, AcksWithoutTheAckBitAreCaughtByAck009) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if ((f.type & dmc::kFlagAck) != 0) {
+          wire::Bytes plain;
+          dmc::EncodeFrame(f.id, static_cast<uint16_t>(f.type & ~dmc::kFlagAck), f.data, plain);
+          raw = plain;
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-ACK-009");
+  EXPECT_EQ(ExitCode(r), 1);
+}
+
+TEST(BrokenDevice, AMotorStatusThatNeverShowsMotionIsCaughtByStat004) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorStatus) && f.data.size() == 5) {
+          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::MotorStatusResponse{0, 0}});
+        }
+        out.Write(raw);
+      });
+  ExpectCaught(r, "DMC-STAT-004");
+  EXPECT_EQ(ExitCode(r), 1);
+}
+
 TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   const std::filesystem::path session = std::filesystem::temp_directory_path() /
                                         ("mococheck_shrunk_" + std::to_string(getpid()) + ".jsonl");
