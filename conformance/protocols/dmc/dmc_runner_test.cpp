@@ -78,7 +78,9 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
     ASSERT_TRUE(r.rules.count(id)) << id;
     const Rule* rule = FindRule(id);
     ASSERT_NE(rule, nullptr) << id;
-    if (s == Status::kFail) EXPECT_NE(rule->level, Level::kNote) << id;
+    if (s == Status::kFail) {
+      EXPECT_NE(rule->level, Level::kNote) << id;
+    }
   }
   EXPECT_EQ(ExitCode(r), 1);
 }
