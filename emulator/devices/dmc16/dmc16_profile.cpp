@@ -159,8 +159,9 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
   {
     ProfileReader b = r.Child("behaviour");
     Dmc16Behaviour& v = p.behaviour;
-    v.receive_buffer_bytes = static_cast<uint32_t>(b.GetInt(
-        "receive_buffer_bytes", v.receive_buffer_bytes, dmc::kReceiveBufferSize, kMaxReceiveBuffer));
+    v.receive_buffer_bytes =
+        static_cast<uint32_t>(b.GetInt("receive_buffer_bytes", v.receive_buffer_bytes,
+                                       dmc::kReceiveBufferSize, kMaxReceiveBuffer));
     v.rescan_after_bad_frame = b.GetBool("rescan_after_bad_frame", v.rescan_after_bad_frame);
     v.move_response = b.GetBool("move_response", v.move_response);
     v.position_response = b.GetBool("position_response", v.position_response);
