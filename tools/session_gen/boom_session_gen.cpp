@@ -16,7 +16,7 @@
 #include "devices/dmc16/dmc16_profile.h"
 #include "session/session.h"
 #include "sim/scheduler.h"
-#include "tools/session_gen/device_recorder.h"
+#include "tools/session_gen/dmc16_script.h"
 #include "wire/dmc.h"
 
 namespace {
@@ -56,27 +56,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "boom_session_gen: %s\n", e.what());
     return 2;
   }
-  session::SessionHeader h;
-  h.protocol = wire::Protocol::kDmc;
-  h.device = "dmc16";
-  h.clock = "virtual";
-  h.note =
+  const std::string note =
       "DMC-16 with fixtures/profiles/dmc16-boom.json (physical_rig: boom-jib), powered on at "
       "t = 0: HI, SET_SPEED of motors 1-5, then at 0.5 s one combined move: track (1) 0.4 m, "
       "swing (2) -30 deg (away from the light stand), boom (3) 15 deg, pan (4) -40 deg, "
       "tilt (5) 10 deg, 1 s ramps each, all at rest by 5.51 s; status at 6 s. Written by "
       "tools/session_gen/boom_session_gen.cpp";
-  session::SessionWriter writer(argv[2], h);
-  sim::Scheduler scheduler;
-  session_gen::DeviceRecorder sink(scheduler, writer);
-  devices::Dmc16 device(scheduler, sink, std::move(profile));
-  device.PowerOn();
-  uint32_t id = 2000;
+  session_gen::Dmc16Script script(argv[2], note, std::move(profile), 2000);
   auto send = [&](sim::TimeNs t_ms, const dmc::HostMessage& m) {
-    scheduler.RunUntil(t_ms * sim::kNsPerMs);
-    const wire::Bytes bytes = dmc::Encode(id++, m);
-    sink.Host(bytes);
-    device.OnHostBytes(bytes);
+    script.Send(t_ms * sim::kNsPerMs, m);
   };
   send(100, dmc::HiRequest{});
   sim::TimeNs t_ms = 200;
@@ -90,18 +78,14 @@ int main(int argc, char** argv) {
     t_ms += 2;
   }
   send(6000, dmc::MotorStatusRequest{});
-  scheduler.RunUntil(6100 * sim::kNsPerMs);
+  const bool written = script.Finish(6100 * sim::kNsPerMs, "boom_session_gen");
   // The fixture is only useful if every request was accepted and every
   // motor reached its target.
-  bool ok = device.stats().error_replies == 0;
+  bool ok = script.device().stats().error_replies == 0;
   for (const JointMove& j : kMoves) {
-    ok = ok && device.rig_ref().motor(j.motor).Position() == j.target_steps;
+    ok = ok && script.device().rig_ref().motor(j.motor).Position() == j.target_steps;
   }
-  std::string error;
-  if (!writer.Finish(&error)) {
-    std::fprintf(stderr, "boom_session_gen: %s\n", error.c_str());
-    return 1;
-  }
+  if (!written) return 1;
   if (!ok) {
     std::fprintf(stderr, "boom_session_gen: a request was refused or a motor missed its target\n");
     return 1;

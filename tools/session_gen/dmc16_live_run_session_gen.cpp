@@ -15,7 +15,7 @@
 #include "devices/dmc16/dmc16.h"
 #include "session/session.h"
 #include "sim/scheduler.h"
-#include "tools/session_gen/device_recorder.h"
+#include "tools/session_gen/dmc16_script.h"
 #include "wire/dmc.h"
 
 int main(int argc, char** argv) {
@@ -24,11 +24,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: dmc16_live_run_session_gen OUT.jsonl\n");
     return 2;
   }
-  session::SessionHeader h;
-  h.protocol = wire::Protocol::kDmc;
-  h.device = "dmc16";
-  h.clock = "virtual";
-  h.note =
+  const std::string note =
       "Default DMC-16 (fixtures/profiles/dmc16.json), powered on at t = 0: HI, an upload of "
       "frames 10..40 (motor 1 climbs 40 steps a frame from 0, motor 2 holds 300, DMX channel 1 "
       "counts frames), POSITION_FRAME 12 (motor 1 to 80), RUN_MOVE 12..18 at 2 fps (80 steps/s) "
@@ -38,17 +34,9 @@ int main(int argc, char** argv) {
       "TIME = frame x 1000), updates between them with fractions of a frame (MOTOR_GET_POSITION "
       "at 4.25 s answers 13500), then the post-roll (past 18000, 20000 at rest at 7.5 s) and "
       "RT_END";
-  session::SessionWriter writer(argv[1], h);
-  sim::Scheduler scheduler;
-  session_gen::DeviceRecorder sink(scheduler, writer);
-  devices::Dmc16 device(scheduler, sink);
-  device.PowerOn();
-  uint32_t id = 1000;
+  session_gen::Dmc16Script script(argv[1], note, devices::Dmc16Profile{}, 1000);
   auto send = [&](double t_s, const dmc::HostMessage& m) {
-    scheduler.RunUntil(static_cast<sim::TimeNs>(t_s * 1e9));
-    const wire::Bytes bytes = dmc::Encode(id++, m);
-    sink.Host(bytes);
-    device.OnHostBytes(bytes);
+    script.Send(session_gen::Seconds(t_s), m);
   };
   send(0.1, dmc::HiRequest{});
   send(0.2, dmc::RtUploadMoveBegin{10, 40});
@@ -74,11 +62,5 @@ int main(int argc, char** argv) {
   send(2.0, dmc::RtGo{});
   send(4.25, dmc::MotorGetPositionRequest{});
   send(8.0, dmc::MotorStatusRequest{});
-  scheduler.RunUntil(8500 * sim::kNsPerMs);
-  std::string error;
-  if (!writer.Finish(&error)) {
-    std::fprintf(stderr, "dmc16_live_run_session_gen: %s\n", error.c_str());
-    return 1;
-  }
-  return 0;
+  return script.Finish(8500 * sim::kNsPerMs, "dmc16_live_run_session_gen") ? 0 : 1;
 }

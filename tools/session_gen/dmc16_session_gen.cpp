@@ -12,7 +12,7 @@
 #include "devices/dmc16/dmc16.h"
 #include "session/session.h"
 #include "sim/scheduler.h"
-#include "tools/session_gen/device_recorder.h"
+#include "tools/session_gen/dmc16_script.h"
 #include "wire/dmc.h"
 
 namespace {
@@ -26,11 +26,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: dmc16_session_gen OUT.jsonl\n");
     return 2;
   }
-  session::SessionHeader h;
-  h.protocol = wire::Protocol::kDmc;
-  h.device = "dmc16";
-  h.clock = "virtual";
-  h.note =
+  const std::string note =
       "Default DMC-16 (fixtures/profiles/dmc16.json), powered on at t = 0: HI, SET_SPEED "
       "4000/8000, a move of motor 1 to 2400 (0.5 s ramps + 0.1 s cruise: 1.1 s, updates every "
       "100 ms, 40 steps at 0.1 s), status, RESET_POSITION, motor 17 (ERR_RANGE), a damaged "
@@ -39,19 +35,9 @@ int main(int argc, char** argv) {
       "a report per frame and updates every 100 ms in the pre-roll (MOVE TIME 0: the frame "
       "clock before frame 0) and the post-roll (MOVE TIME past frame 24, 36000 at rest), "
       "RT_END after the post-roll (2860 + 120 = 2980)";
-  session::SessionWriter writer(argv[1], h);
-  sim::Scheduler scheduler;
-  session_gen::DeviceRecorder sink(scheduler, writer);
-  devices::Dmc16 device(scheduler, sink);
-  device.PowerOn();
-  uint32_t id = 1000;
-  auto send_bytes = [&](sim::TimeNs t, const wire::Bytes& bytes) {
-    scheduler.RunUntil(t);
-    sink.Host(bytes);
-    device.OnHostBytes(bytes);
-  };
+  session_gen::Dmc16Script script(argv[1], note, devices::Dmc16Profile{}, 1000);
   auto send = [&](double t_s, const dmc::HostMessage& m) {
-    send_bytes(static_cast<sim::TimeNs>(t_s * 1e9), dmc::Encode(id++, m));
+    script.Send(session_gen::Seconds(t_s), m);
   };
   send(0.5, dmc::HiRequest{});
   send(0.6, dmc::MotorSetSpeed{1, 4000, 8000});
@@ -59,9 +45,9 @@ int main(int argc, char** argv) {
   send(2.0, dmc::MotorStatusRequest{});
   send(2.1, dmc::MotorResetPosition{2, 100});
   send(2.2, dmc::MotorMove{17, 5});
-  wire::Bytes damaged = dmc::Encode(id++, dmc::HostMessage{dmc::MotorStop{1}});
+  wire::Bytes damaged = script.Encode(dmc::MotorStop{1});
   damaged[10] ^= 0x40;
-  send_bytes(2300 * sim::kNsPerMs, damaged);
+  script.SendBytes(2300 * sim::kNsPerMs, damaged);
   send(2.4, dmc::Unknown{0x0077, {}});
   send(2.5, dmc::RtUploadMoveBegin{1, 24});
   dmc::RtUploadMoveAxis axis{1, 0, true, {}};
@@ -77,11 +63,5 @@ int main(int argc, char** argv) {
   send(2.8, run);
   send(3.5, dmc::RtGo{});
   send(6.0, dmc::MotorStatusRequest{});
-  scheduler.RunUntil(7 * sim::kNsPerSecond);
-  std::string error;
-  if (!writer.Finish(&error)) {
-    std::fprintf(stderr, "dmc16_session_gen: %s\n", error.c_str());
-    return 1;
-  }
-  return 0;
+  return script.Finish(7 * sim::kNsPerSecond, "dmc16_session_gen") ? 0 : 1;
 }
