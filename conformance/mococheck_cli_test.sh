@@ -197,6 +197,60 @@ mococheck_cli_serial_target_is_labelled_serial)
   grep -q "\"target\": \"serial:$work/dev" r.json || fail "JSON label"
   ;;
 
+# --board, --driver and --vcd: refused with the fix before anything runs.
+mococheck_cli_pin_options_are_checked_before_the_run)
+  board=$src/fixtures/boards/own-dfmoco.json
+  expect_rc 2 "$m" run --target in-process:dfmoco --vcd x.vcd
+  grep -q -- "--vcd needs --board" err.txt || fail "--vcd without --board"
+  expect_rc 2 "$m" run --target in-process:dfmoco --board "$board"
+  grep -q "only on a simavr: target" err.txt || fail "--board on an in-process target"
+  expect_rc 2 "$m" run --target in-process:dfmoco --board "$board" --driver l298
+  grep -q "not a known driver; give one of a4988, drv8825, tmc2209" err.txt || fail "driver"
+  printf '{"board": "x", "motors": [{"step": "PD4", "dir": "PD4"}]}' >twice.json
+  expect_rc 2 "$m" run --target in-process:dfmoco --board twice.json
+  grep -q "PD4 is named twice" err.txt || fail "a pin named twice"
+  expect_rc 2 "$m" run --target in-process:dfmoco --board /dev/null
+  grep -q "board profile" err.txt || fail "an empty board"
+  test ! -e x.vcd || fail "a VCD was written"
+  ;;
+
+# mocosim --vcd: the step model's pulses, read back by sigrok-cli -I vcd, reach the
+# position motor 1 reported at rest (motor/move: 6000, then back to where it was;
+# the model's report of that return may come after the case, FACTS DFMoco).
+mocosim_vcd_read_by_sigrok_counts_the_reported_steps)
+  "$sim" dfmoco --pty "$work/dev" --vcd model.vcd >sim.log 2>&1 &
+  sim_pid=$!
+  pids="$pids $sim_pid"
+  wait_for test -L "$work/dev" || fail "no PTY"
+  expect_rc 0 "$m" run --target "pty:$work/dev" --protocol dfmoco --cases 'motor/move' -q \
+    --json run.json
+  kill -TERM "$sim_pid"
+  wait "$sim_pid" || fail "mocosim did not stop cleanly"
+  [ -s model.vcd ] || fail "no VCD written"
+  sigrok-cli -I vcd:downsample=1000 -i model.vcd -O vcd -o back.vcd >sigrok.txt 2>&1 ||
+    fail "sigrok-cli could not read model.vcd"
+  steps=$(awk '
+    /^\$var/ { name[$4] = $5; next }
+    /^[#01]/ { for (i = 1; i <= NF; i++) {
+        f = $i; v = substr(f, 1, 1); id = substr(f, 2)
+        if (v == "#") continue
+        if (name[id] == "m1_dir") dir = v
+        if (name[id] == "m1_step") {
+          if (v == 1 && step == 0) { n += (dir == 1 ? 1 : -1); rises++; if (n > hi) hi = n }
+          step = v } } }
+    END { print n + 0, hi + 0, rises + 0 }' back.vcd)
+  reported=$(python3 -c '
+import json, sys
+c = json.load(open(sys.argv[1]))["cases"][0]
+print(c["position_range"]["1"][1])
+' run.json)
+  echo "sigrok: final, highest, rising edges: $steps; highest reported: $reported"
+  set -- $steps
+  [ "$2" = "$reported" ] || fail "sigrok counts up to $2 steps; mp 1 said $reported"
+  [ "$1" = 0 ] || fail "sigrok counts motor 1 back at $1, not 0"
+  [ "$3" = 12000 ] || fail "sigrok counts $3 STEP pulses, not 12000 (6000 out, 6000 back)"
+  ;;
+
 # In-process runs write their reports, atomically (no partial file left).
 mococheck_cli_in_process)
   expect_rc 0 "$m" run --target in-process:dmc16 -q --junit mococheck.xml --json mococheck.json

@@ -23,6 +23,8 @@
 #include "physics/bullet/rig_path_svg.h"
 #include "plot/rig_plot.h"
 #include "serve/serve.h"
+#include "serve/tap.h"
+#include "session/pcapng.h"
 #include "session/session.h"
 #include "transport/control_socket.h"
 #include "wire/transcript.h"
@@ -90,6 +92,51 @@ int Decode(const std::string& path, bool show_time, bool strict) {
   }
   std::printf("%zu problem(s) in the traffic\n", problems);
   return strict && problems > 0 ? 1 : 0;
+}
+
+// `mocosim export --pcapng SESSION -o FILE`: writes the session's traffic as
+// a pcapng capture (session/pcapng.h, docs/wireshark.md), atomically. Exit 0
+// when written, 1 when writing failed, 2 for bad arguments or files.
+int ExportPcapng(const std::string& session_path, const std::string& out_path) {
+  const std::string out =
+      out_path.empty() ? std::filesystem::path(session_path).replace_extension(".pcapng").string()
+                       : out_path;
+  if (auto error = moco::base::CheckOutputPath(out, "--output")) {
+    std::fprintf(stderr, "mocosim export: %s\n", error->c_str());
+    return 2;
+  }
+  if (moco::base::SameFile(out, session_path)) {
+    std::fprintf(stderr,
+                 "mocosim export: --output %s is the session itself; writing it would destroy "
+                 "it: give another -o\n",
+                 out.c_str());
+    return 2;
+  }
+  auto loaded = LoadSession(session_path);
+  if (const auto* e = std::get_if<SessionError>(&loaded)) {
+    std::fprintf(stderr, "mocosim export: %s%s%s\n", session_path.c_str(),
+                 e->line ? (":" + std::to_string(e->line) + ": ").c_str() : ": ",
+                 e->message.c_str());
+    return 2;
+  }
+  const Session& s = std::get<Session>(loaded);
+  if (const std::string w = SessionWarning(s); !w.empty()) {
+    std::fprintf(stderr, "mocosim export: %s: %s\n", session_path.c_str(), w.c_str());
+  }
+  moco::session::PcapngStats stats;
+  const std::string capture = moco::session::SessionToPcapng(s, &stats);
+  if (auto error = moco::base::WriteFileAtomically(out, capture)) {
+    std::fprintf(stderr, "mocosim export: %s\n", error->c_str());
+    return 1;
+  }
+  std::printf("wrote %s: %zu packet(s), %zu byte(s) of %s traffic", out.c_str(), stats.packets,
+              stats.bytes, std::string(ProtocolName(s.header.protocol)).c_str());
+  if (stats.events_left_out > 0) {
+    std::printf(" (%zu event line(s) left out: a capture holds traffic only)",
+                stats.events_left_out);
+  }
+  std::printf("\n");
+  return 0;
 }
 
 // Arguments of `mocosim plot`.
@@ -292,6 +339,23 @@ int main(int argc, char** argv) {
                    "Exit with status 1 when the traffic has problems (bad checksums, "
                    "unparsable lines, skipped bytes)");
 
+  std::string export_session, export_out;
+  bool export_pcapng = false;
+  auto* export_cmd = app.add_subcommand(
+      "export",
+      "Convert a session file to a capture other tools open. --pcapng: one packet per "
+      "recorded chunk with its time (ns) and direction (LINKTYPE_USER0, interface 0 host to "
+      "device, 1 device to host); open it in Wireshark with tools/wireshark/mocosim.lua "
+      "(docs/wireshark.md). Example: mocosim export --pcapng "
+      "fixtures/sessions/dmc16-workflow.jsonl -o workflow.pcapng");
+  export_cmd->add_flag("--pcapng", export_pcapng, "Write pcapng (the one format so far)")
+      ->required();
+  export_cmd->add_option("session", export_session, "Session file (.jsonl)")->required();
+  export_cmd
+      ->add_option("-o,--output", export_out,
+                   "File to write, atomically (default: the session's path with .pcapng)")
+      ->check(moco::cli::NonEmptyPath());
+
   PlotArgs plot_args;
   auto* plot = app.add_subcommand(
       "plot",
@@ -369,6 +433,11 @@ int main(int argc, char** argv) {
                      "session file (.jsonl, docs/sessions.md; completed on exit)")
         ->check(moco::cli::NonEmptyPath());
     o->cmd
+        ->add_option("--vcd", o->config.vcd_path,
+                     "Write each motor's STEP and DIR from the step model's exact edge times to "
+                     "this Value Change Dump on exit (GTKWave, PulseView; docs/pins.md)")
+        ->check(moco::cli::NonEmptyPath());
+    o->cmd
         ->add_option("--control", o->control_path,
                      "Serve the JSON-lines control socket at this path (e-stop, limits, "
                      "inputs, power, faults, state; docs/control.md)")
@@ -409,14 +478,88 @@ int main(int argc, char** argv) {
 
   auto* models = app.add_subcommand("models", "List the device models that can be emulated");
 
+  // --- mocosim tap: a recording proxy between a host and a real device ---
+  moco::serve::TapConfig tap_config;
+  std::string tap_protocol, tap_pty, tap_tcp, tap_flow = "none";
+  auto* tap = app.add_subcommand(
+      "tap",
+      "Record what a host and a real device say to each other (docs/tap.md). The tap sits "
+      "between them: the host opens the tap's PTY (or connects to its TCP port) instead of the "
+      "device, and the tap opens the device's serial port (or TCP address). Bytes pass "
+      "unchanged both ways, and each chunk is recorded with its arrival time and decoded "
+      "messages into a session file that mococheck replay/fuzz and mocosim decode/plot read "
+      "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (57600 "
+      "baud) and a host setting another speed on the PTY; a host closing and reopening the "
+      "PTY does not end it; a device going away is reported and looked for again; Ctrl-C "
+      "(SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
+      "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "
+      "--record dragonframe.jsonl  (then point Dragonframe at /tmp/dmc16)\n"
+      "Example: mocosim tap --protocol stackshot --device tcp:192.168.1.20:5000 --tcp 5001 "
+      "--record stack.jsonl");
+  tap->add_option("--protocol", tap_protocol,
+                  "What the device speaks: dmc, dfmoco or stackshot. Sets the header's "
+                  "protocol, the decoding and the default baud. Example: --protocol stackshot")
+      ->required()
+      ->check(CLI::IsMember({"dmc", "dmc2", "dfmoco", "stackshot", "stackshot3x"}));
+  tap->add_option("--device", tap_config.device,
+                  "The real device's side: serial:PATH (a serial port, raw 8N1 at --baud; a "
+                  "bare path works too) or tcp:HOST:PORT. Example: --device serial:/dev/ttyUSB0")
+      ->required();
+  auto* tap_pty_opt = tap->add_option(
+      "--pty", tap_pty,
+      "The host's side: a PTY with a stable symlink at this path (mode 0600), as `mocosim "
+      "dmc16 --pty` makes. Example: --pty /tmp/dmc16");
+  auto* tap_tcp_opt = tap->add_option(
+      "--tcp", tap_tcp,
+      "The host's side: listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = "
+      "any free port, logged). Example: --tcp 127.0.0.1:5001");
+  tap_pty_opt->excludes(tap_tcp_opt);
+  AddNumber(tap, "--baud", tap_config.baud, uint32_t{0}, uint32_t{4000000},
+            "Line speed of a serial device (default 0: the protocol's: DMC v2 115200, DFMoco "
+            "57600, StackShot 38400). Example: --baud 57600");
+  tap->add_option("--flow", tap_flow,
+                  "Flow control on the serial port: none (default) or rtscts (hardware "
+                  "RTS/CTS). Example: --flow rtscts")
+      ->check(CLI::IsMember({"none", "rtscts"}));
+  tap->add_option("--record", tap_config.record_path,
+                  "Session file to write (.jsonl, docs/sessions.md): lines written through as "
+                  "they come, the file completed atomically on exit. Without it the tap only "
+                  "passes bytes. Example: --record session.jsonl")
+      ->check(moco::cli::NonEmptyPath());
+  tap->add_option("--device-model", tap_config.device_model,
+                  "The header's device: the emulated model a replay builds (default: dmc16, "
+                  "dfmoco or stackshot3x by --protocol). Example: --device-model dfmoco");
+  tap->add_option("--profile", tap_config.profile,
+                  "Recorded in the header as \"profile\": the device profile a replay of this "
+                  "session should use. Example: --profile fixtures/profiles/dmc16.json");
+  tap->add_option("--note", tap_config.note,
+                  "The header's note (default: where the tap ran). Example: --note \"rig A, "
+                  "first take\"");
+  AddNumber(tap, "--time-tolerance-ms", tap_config.time_tolerance_ms, int64_t{0}, int64_t{600000},
+            "The header's tolerances.time_ms: how far a replayed reply may be from its "
+            "recorded (wall-clock) time. Example: --time-tolerance-ms 100");
+
   // A parse error is a usage error, exit 2; --help and --version exit 0.
   if (const auto exit_code = moco::cli::ParseCommandLine(app, argc, argv)) return *exit_code;
 
   if (decode->parsed()) return Decode(session_path, !no_time, strict);
+  if (export_cmd->parsed()) return ExportPcapng(export_session, export_out);
   if (plot->parsed()) {
     if (from_opt->count() > 0) plot_args.from_s = from_s;
     if (to_opt->count() > 0) plot_args.to_s = to_s;
     return Plot(plot_args);
+  }
+  if (tap->parsed()) {
+    tap_config.protocol = *moco::wire::ParseProtocolOrAlias(tap_protocol);
+    tap_config.rtscts = tap_flow == "rtscts";
+    if (tap_pty.empty() && tap_tcp.empty()) {
+      std::fprintf(stderr,
+                   "mocosim tap: say where the host connects: --pty /tmp/dmc16 or --tcp "
+                   "127.0.0.1:5001\n");
+      return 2;
+    }
+    tap_config.host = tap_pty.empty() ? "tcp:" + tap_tcp : "pty:" + tap_pty;
+    return moco::serve::RunTap(std::move(tap_config));
   }
   if (models->parsed()) {
     for (const auto& m : moco::devices::DeviceModels()) {

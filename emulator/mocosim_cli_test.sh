@@ -138,6 +138,41 @@ mocosim_cli_profile_and_run_file_errors_name_the_file_and_field)
   grep -q 'devices\[\].no_pacing' err.txt || fail "run file: no field name"
   ;;
 
+# `mocosim export --pcapng`: a golden session becomes a capture (SHB magic,
+# one packet per chunk); a missing or damaged session, a directory or the
+# session itself as the output are refused with exit 2 and nothing written;
+# a planted symlink's target is replaced whole, not written through; a cut
+# session exports the lines before the cut with a warning; /dev/null works.
+mocosim_cli_export_pcapng_refuses_bad_paths_and_keeps_what_is_there)
+  session="$src/fixtures/sessions/dmc16-handshake.jsonl"
+  expect_rc 0 "$sim" export --pcapng "$session" -o cap.pcapng
+  grep -q '23 packet(s)' out.txt || fail "no packet count"
+  [ "$(od -An -tx1 -N4 cap.pcapng | tr -d ' ')" = 0a0d0d0a ] || fail "not a pcapng section"
+  expect_rc 2 "$sim" export --pcapng missing.jsonl -o x.pcapng
+  grep -q 'missing.jsonl' err.txt || fail "missing session not named"
+  test ! -e x.pcapng || fail "an output for a missing session"
+  mkdir adir
+  expect_rc 2 "$sim" export --pcapng "$session" -o adir
+  grep -q 'directory' err.txt || fail "directory output not explained"
+  cp "$session" s.jsonl
+  expect_rc 2 "$sim" export --pcapng s.jsonl -o s.jsonl
+  cmp -s s.jsonl "$session" || fail "the session was overwritten"
+  printf 'not json\n' >bad.jsonl
+  expect_rc 2 "$sim" export --pcapng bad.jsonl -o bad.pcapng
+  grep -q 'bad.jsonl:1' err.txt || fail "damaged session: line not named"
+  test ! -e bad.pcapng || fail "an output for a damaged session"
+  echo keep >victim.txt
+  ln -s victim.txt link.pcapng
+  expect_rc 0 "$sim" export --pcapng "$session" -o link.pcapng
+  cmp -s victim.txt cap.pcapng || fail "the symlink's target is not the capture"
+  test -L link.pcapng || fail "the symlink was replaced"
+  head -c 700 "$session" >cut.jsonl
+  expect_rc 0 "$sim" export --pcapng cut.jsonl -o cut.pcapng
+  grep -q 'cut short' err.txt || fail "cut session: no warning"
+  expect_rc 0 "$sim" export --pcapng "$session" -o /dev/null
+  expect_rc 2 "$sim" export "$session" -o y.pcapng
+  ;;
+
 *)
   echo "unknown test $test_name" >&2
   exit 1

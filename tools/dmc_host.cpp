@@ -51,10 +51,16 @@ bool Watch(DmcHostClient& c, Done done) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2 || std::string(argv[1]) == "--help") {
-    std::fprintf(stderr,
-                 "usage: dmc-host PATH | tcp:PORT | tcp:127.0.0.1:PORT\n"
-                 "Plays a short DMC v2 session against the device and prints it.\n");
+  static constexpr const char* kUsage =
+      "usage: dmc-host PATH | tcp:PORT | tcp:127.0.0.1:PORT\n"
+      "Plays a short DMC v2 session against the device and prints it.\n"
+      "Example: mocosim dmc16 --pty /tmp/dmc16 & dmc-host /tmp/dmc16\n";
+  if (argc == 2 && std::string(argv[1]) == "--help") {
+    std::fputs(kUsage, stdout);  // asked for: stdout, exit 0 (the man page is made from it)
+    return 0;
+  }
+  if (argc != 2) {
+    std::fputs(kUsage, stderr);
     return 2;
   }
   const std::string target = argv[1];

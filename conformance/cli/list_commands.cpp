@@ -11,10 +11,19 @@ namespace moco::conformance::cli {
 
 Runner AddRulesCommand(CLI::App& app, CLI::App*& sub) {
   auto markdown = std::make_shared<bool>(false);
-  sub = app.add_subcommand("rules", "List the rule catalogue");
-  sub->add_flag("--markdown", *markdown, "Print docs/rules.md (the catalogue as Markdown)");
-  return [markdown] {
-    std::cout << (*markdown ? RulesMarkdown() : RulesText());
+  auto json = std::make_shared<bool>(false);
+  sub = app.add_subcommand("rules",
+                           "List the rule catalogue: id, level, what the device must do and the "
+                           "test that proves the rule can fail");
+  auto* md = sub->add_flag("--markdown", *markdown,
+                           "Print docs/rules.md (the catalogue as Markdown, with each rule's "
+                           "clause, why its level, and its proving tests)");
+  sub->add_flag("--json", *json,
+                "Print the catalogue as JSON (id, protocol, level, needs, title, clause, source, "
+                "reason, proofs)")
+      ->excludes(md);
+  return [markdown, json] {
+    std::cout << (*json ? RulesJson() : *markdown ? RulesMarkdown() : RulesText());
     return 0;
   };
 }

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "base/file_io.h"
+#include "base/vcd.h"
 #include "cli_numbers.h"
 #include "conformance/cli/commands.h"
 #include "conformance/core/report.h"
@@ -53,7 +54,7 @@ void InstallStopHandlers() {
 
 struct RunArgs {
   std::string target_text, protocol, profile, rules_glob, cases_glob, junit, json_path, html_path,
-      shard = "1/1", session_path;
+      shard = "1/1", session_path, board_path, driver, vcd_path;
   uint64_t seed = 1;
   int steps = 40;
   uint32_t baud = 0;
@@ -61,6 +62,33 @@ struct RunArgs {
   std::vector<std::string> deadlines;
   bool verbose = false, quiet = false;
 };
+
+// The watched pins of every case, one after the other on one time line (each
+// case starts where the previous ended plus 1 ms, every level low as the
+// firmware restarts), as a Value Change Dump.
+std::string PinsVcd(const RunReport& report) {
+  std::vector<base::VcdWire> wires;
+  std::string comment = "mococheck " + report.target + "; cases:";
+  int64_t offset = 0;
+  for (const CaseResult& c : report.cases) {
+    if (!c.pins) continue;
+    const PinTrace& t = *c.pins;
+    if (wires.empty()) {
+      for (const PinSignal& s : t.signals) wires.push_back({s.name, false, {}});
+    }
+    comment += " " + c.suite + "/" + c.name + " at " + std::to_string(offset) + " ns;";
+    int64_t end = c.target_ns;
+    for (size_t i = 0; i < t.signals.size() && i < wires.size(); ++i) {
+      wires[i].changes.emplace_back(offset, t.signals[i].initial);
+      for (const PinEdge& e : t.signals[i].edges) {
+        wires[i].changes.emplace_back(offset + e.t_ns, e.level);
+        end = std::max<int64_t>(end, e.t_ns);
+      }
+    }
+    offset += end + sim::kNsPerMs;
+  }
+  return base::VcdText("board", comment, wires);
+}
 
 int Run(const RunArgs& a) {
   TargetRequest request;
@@ -137,6 +165,23 @@ int Run(const RunArgs& a) {
   options.random.seed = a.seed;
   options.random.steps = a.steps;
   options.random.session_path = a.session_path;
+  std::optional<Board> board;
+  if (a.board_path.empty() && (!a.driver.empty() || !a.vcd_path.empty())) {
+    return Fail(std::string(a.driver.empty() ? "--vcd" : "--driver") +
+                " needs --board: give the board profile naming the watched pins, e.g. --board "
+                "fixtures/boards/own-dfmoco.json");
+  }
+  if (!a.board_path.empty()) {
+    auto loaded = LoadBoard(a.board_path);
+    if (const auto* err = std::get_if<std::string>(&loaded)) return Fail(*err);
+    auto driver = LoadDriver(a.driver.empty() ? "a4988" : a.driver);
+    if (const auto* err = std::get_if<std::string>(&driver)) return Fail(*err);
+    board = std::get<Board>(loaded);
+    PinJudgeOptions pins;
+    pins.board = *board;
+    pins.driver = std::get<DriverProfile>(driver);
+    options.pins = pins;
+  }
 
   // Every output is checked before the run, not after it (docs/files.md).
   {
@@ -144,7 +189,8 @@ int Run(const RunArgs& a) {
         {"--junit", a.junit},
         {"--html", a.html_path},
         {"--json", a.json_path},
-        {"--save-session", a.session_path}};
+        {"--save-session", a.session_path},
+        {"--vcd", a.vcd_path}};
     for (size_t i = 0; i < outputs.size(); ++i) {
       const auto& [option, path] = outputs[i];
       if (path.empty()) continue;
@@ -164,6 +210,9 @@ int Run(const RunArgs& a) {
   // From here a signal stops the run and the reports of what ran are written.
   InstallStopHandlers();
   std::unique_ptr<Target> target = std::move(rt.target);
+  if (board) {
+    if (auto err = target->WatchPins(*board)) return Fail(*err);
+  }
   if (auto err = target->Open()) return Fail(*err);
 
   // The console streams: the title now, the device once it answered, each
@@ -231,6 +280,9 @@ int Run(const RunArgs& a) {
       return Fail(err);
     }
   }
+  if (!a.vcd_path.empty()) {
+    if (auto err = WriteAtomically(a.vcd_path, PinsVcd(report)); !err.empty()) return Fail(err);
+  }
   if (!a.json_path.empty()) {
     if (auto err = WriteAtomically(a.json_path, JsonReport(report).dump(2) + "\n"); !err.empty()) {
       return Fail(err);
@@ -286,6 +338,17 @@ Runner AddRunCommand(CLI::App& app, CLI::App*& sub) {
             "DMC-POS-002: the largest gap between position updates while moving");
   run->add_option("--save-session", a->session_path,
                   "Save a failing random sequence here (JSON Lines, docs/sessions.md)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--board", a->board_path,
+                  "Board profile (JSON, fixtures/boards/) naming the pins to watch on a simavr: "
+                  "target; enables the pin rules (*-PIN-*)")
+      ->check(moco::cli::NonEmptyPath());
+  run->add_option("--driver", a->driver,
+                  "Step driver whose STEP/DIR timing the pin rules judge: a4988 (default), "
+                  "drv8825, tmc2209, or a driver profile (JSON, fixtures/drivers/)");
+  run->add_option("--vcd", a->vcd_path,
+                  "Write the watched pins of every case here as a Value Change Dump (GTKWave, "
+                  "PulseView, sigrok-cli -I vcd); needs --board")
       ->check(moco::cli::NonEmptyPath());
   run->add_flag("-v,--verbose", a->verbose, "List passing rules and every case's log");
   run->add_flag("-q,--quiet", a->quiet, "Print only the summary line");

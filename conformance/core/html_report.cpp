@@ -37,6 +37,43 @@ Series Moved(Series s) {
   return s;
 }
 
+// The watched pins from t - half to t + half, one row per signal, a red line
+// at t: what a step driver saw around a pin rule's failure.
+std::string PulsesAround(const PinTrace& trace, TimeNs t, TimeNs half) {
+  constexpr double kW = 720, kL = 90, kR = 10, kRow = 22, kHigh = 14;
+  const TimeNs a = std::max<TimeNs>(0, t - half), b = t + half;
+  const double h = 20 + kRow * static_cast<double>(trace.signals.size());
+  auto x = [&](TimeNs v) {
+    return kL + (kW - kL - kR) * static_cast<double>(std::clamp(v, a, b) - a) /
+                    static_cast<double>(std::max<TimeNs>(1, b - a));
+  };
+  std::string s = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + Num(kW) + "\" height=\"" +
+                  Num(h) + "\" font-family=\"monospace\" font-size=\"11\">\n";
+  for (size_t i = 0; i < trace.signals.size(); ++i) {
+    const PinSignal& sig = trace.signals[i];
+    const double base = 10 + kRow * static_cast<double>(i + 1);
+    auto y = [&](bool level) { return level ? base - kHigh : base; };
+    s += "<text x=\"2\" y=\"" + Num(base) + "\">" + Esc(sig.name) + "</text>\n";
+    bool level = sig.LevelAt(a);
+    std::string pts = Num(x(a)) + "," + Num(y(level));
+    auto it = std::upper_bound(sig.edges.begin(), sig.edges.end(), a,
+                               [](TimeNs v, const PinEdge& e) { return v < e.t_ns; });
+    size_t drawn = 0;
+    for (; it != sig.edges.end() && it->t_ns <= b && drawn < 2000; ++it, ++drawn) {
+      pts += " " + Num(x(it->t_ns)) + "," + Num(y(level));
+      level = it->level;
+      pts += " " + Num(x(it->t_ns)) + "," + Num(y(level));
+    }
+    pts += " " + Num(x(b)) + "," + Num(y(level));
+    s += "<polyline fill=\"none\" stroke=\"#1f77b4\" points=\"" + pts + "\"/>\n";
+  }
+  s += "<line x1=\"" + Num(x(t)) + "\" y1=\"4\" x2=\"" + Num(x(t)) + "\" y2=\"" + Num(h) +
+       "\" stroke=\"#d62728\"/>\n";
+  s += "</svg>\n<p>pins from " + Esc(base::Ms(a, 3)) + " to " + Esc(base::Ms(b, 3)) +
+       " (red: the failure)</p>\n";
+  return s;
+}
+
 std::string Plot(const Series& series) {
   constexpr double kW = 720, kH = 260, kL = 70, kR = 20, kT = 20, kB = 40;
   TimeNs t0 = INT64_MAX, t1 = INT64_MIN;
@@ -207,6 +244,11 @@ std::string HtmlReport(const RunReport& report) {
              "</td></tr><tr><th>at</th><td>" + Esc(base::Ms(e.t_ns, 3)) + "</td></tr>";
         if (!e.hex.empty()) s += "<tr><th>bytes</th><td><code>" + Esc(e.hex) + "</code></td></tr>";
         s += "</table>\n" + TranscriptAround(lines, e.t_ns);
+        if (c.pins && id.find("-PIN-") != std::string::npos) {
+          // Pulse timing shows at 100 us; counts, rates and reversals over 50 ms.
+          const bool timing = id.ends_with("003") || id.ends_with("004") || id.ends_with("005");
+          s += PulsesAround(*c.pins, e.t_ns, (timing ? 100 : 50'000) * sim::kNsPerUs);
+        }
       }
       if (o.failures > o.evidence.size()) {
         s += "<p>(" + std::to_string(o.failures - o.evidence.size()) + " more)</p>\n";

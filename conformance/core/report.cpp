@@ -183,6 +183,18 @@ nlohmann::json JsonReport(const RunReport& report) {
                          {"evidence", evidence(o)}});
       }
       jc["rules"] = rules;
+      // The last position each motor was reported at ({"1": 6000}).
+      // ... and the lowest and highest ({"1": [0, 6000]}).
+      json last = json::object(), range = json::object();
+      for (const auto& [motor, series] : c.positions) {
+        if (series.empty()) continue;
+        last[std::to_string(motor)] = series.back().second;
+        int64_t lo = series.front().second, hi = lo;
+        for (const auto& [t, p] : series) lo = std::min(lo, p), hi = std::max(hi, p);
+        range[std::to_string(motor)] = {lo, hi};
+      }
+      jc["last_positions"] = last;
+      jc["position_range"] = range;
       jc["log"] = c.log;
     }
     cases.push_back(jc);

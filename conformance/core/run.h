@@ -29,7 +29,10 @@
 //
 // A device that did not introduce itself is treated the same for every
 // protocol: the cases and rules that need nothing still run (their greeting
-// goes unanswered, which fails the run), the others are not applicable.
+// goes unanswered, which fails the run), the others are not applicable. When
+// such a device has still sent no byte after kSilentCasesBeforeGivingUp cases,
+// the rest are not run (each says why), so a dead link ends the run in a few
+// answer timeouts instead of one per case.
 #ifndef MOCO_CONFORMANCE_CORE_RUN_H_
 #define MOCO_CONFORMANCE_CORE_RUN_H_
 
@@ -41,6 +44,7 @@
 #include <vector>
 
 #include "conformance/core/cases.h"
+#include "conformance/core/pin_judge.h"
 #include "conformance/core/run_report.h"
 #include "conformance/core/transcript.h"
 #include "conformance/rules/catalogue.h"
@@ -56,6 +60,25 @@ std::string NotApplicableBecause(Needs needs,
   if (!device) return "the device did not introduce itself";
   if (Traits::Applies(needs, *device)) return "";
   return std::string(Traits::kLacking) + std::string(NeedsText(needs));
+}
+
+// How many cases a device that never introduced itself may spend without
+// sending a single byte before the run stops trying.
+inline constexpr size_t kSilentCasesBeforeGivingUp = 2;
+inline constexpr const char* kGaveUpOnSilence =
+    "not run: the device has sent nothing (no introduction, and no byte in the first cases); "
+    "check the port, the cable, the baud rate and that the device is powered";
+
+// The same, where Needs::kPins asks the target: it must watch pins.
+template <typename Traits>
+std::string NotApplicableOn(const Target& target, Needs needs,
+                            const std::optional<typename Traits::Device>& device) {
+  if (needs != Needs::kPins) return NotApplicableBecause<Traits>(needs, device);
+  if (!device) return "the device did not introduce itself";
+  if (target.Pins() == nullptr) {
+    return "the target watches no pins (give --board with a simavr: target)";
+  }
+  return "";
 }
 
 template <typename Traits>
@@ -80,7 +103,7 @@ RunReport Run(Target& target, const RunOptions& options) {
 
   if (options.on_progress) options.on_progress(report);
   const std::vector<Case>& cases = Traits::Cases();
-  size_t total = 0, started = 0;
+  size_t total = 0, started = 0, silent_cases = 0;
   for (size_t i = 0; i < cases.size(); ++i) {
     total += CaseSelected(options, i, cases[i].suite + "/" + cases[i].name);
   }
@@ -98,7 +121,11 @@ RunReport Run(Target& target, const RunOptions& options) {
     result.suite = k.suite;
     result.name = k.name;
     result.summary = k.summary;
-    if (std::string why = NotApplicableBecause<Traits>(k.needs, device); !why.empty()) {
+    std::string why = NotApplicableOn<Traits>(target, k.needs, device);
+    if (why.empty() && !device && silent_cases >= kSilentCasesBeforeGivingUp) {
+      why = kGaveUpOnSilence;
+    }
+    if (!why.empty()) {
       result.applicable = false;
       result.not_applicable_because = std::move(why);
       report.cases.push_back(std::move(result));
@@ -117,6 +144,11 @@ RunReport Run(Target& target, const RunOptions& options) {
       k.run(ctx);
     }
     host.Close();
+    if (const PinTrace* pins = target.Pins(); pins != nullptr && options.pins) {
+      // What a step driver saw during the case (conformance/rules/pin_rules.cpp).
+      JudgePinsFor(Traits::kProtocol, *pins, host.traffic(), *options.pins, host.Now(), verdicts);
+      result.pins = std::make_shared<const PinTrace>(*pins);
+    }
     if (host.link_lost()) result.log.push_back("the link to the device was lost");
     // The random suite saves a shrunk session of its own instead.
     if (verdicts.MustFailed() && k.suite != "random") {
@@ -124,6 +156,10 @@ RunReport Run(Target& target, const RunOptions& options) {
     }
     result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+    const bool device_spoke =
+        std::any_of(host.traffic().begin(), host.traffic().end(),
+                    [](const Chunk& c) { return !c.from_host && !c.bytes.empty(); });
+    silent_cases = device_spoke ? 0 : silent_cases + 1;
     result.outcomes = verdicts.outcomes();
     result.KeepTraffic(host.traffic());
     result.positions = Traits::Positions(result.traffic);
@@ -139,7 +175,8 @@ RunReport Run(Target& target, const RunOptions& options) {
   }
 
   SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
-    return NotApplicableBecause<Traits>(rule.needs, device).empty();
+    if (rule.needs == Needs::kPins && !options.pins) return false;
+    return NotApplicableOn<Traits>(target, rule.needs, device).empty();
   });
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return report;

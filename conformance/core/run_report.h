@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +17,7 @@
 
 #include "conformance/core/cases.h"
 #include "conformance/core/host_link.h"
+#include "conformance/core/pin_judge.h"
 #include "conformance/core/verdicts.h"
 #include "conformance/rules/catalogue.h"
 
@@ -29,6 +32,9 @@ struct RunOptions {
   uint32_t shard_count = 1;
   HostOptions host;
   RandomOptions random;
+  // The driver and board the pin rules judge against (--board, --driver);
+  // nullopt: no pin rules apply.
+  std::optional<PinJudgeOptions> pins;
   // Called once the device has introduced itself (report.device is set, no
   // case has run yet) and again after each case is appended to report.cases:
   // the console streams its verdicts from here. May be empty.
@@ -63,6 +69,8 @@ struct CaseResult {
   std::vector<Chunk> traffic;
   // The positions the device reported in that traffic (the HTML report's plots).
   PositionSeries positions;
+  // The pins watched during the case (a simavr: target with --board), else null.
+  std::shared_ptr<const PinTrace> pins;
   bool MustFailed() const;
   // Keeps the first kMaxTrafficChunks chunks of a case's traffic.
   void KeepTraffic(const std::vector<Chunk>& all);

@@ -1,6 +1,8 @@
 // Laws every registered protocol's runner obeys alike (core/run.h).
 #include "conformance/protocols/registry.h"
 
+#include "conformance/core/run.h"
+
 #include <gtest/gtest.h>
 
 #include <set>
@@ -45,7 +47,8 @@ TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
 
 // A device that does not introduce itself fails certification under every
 // protocol: the cases that need nothing run and find their greeting
-// unanswered; the others are not applicable, and say why.
+// unanswered; the others are not applicable, and say why. Once two cases
+// have drawn no byte from it, the rest are not run, and say why.
 TEST(Registry, ASilentDeviceFailsUnderEveryProtocolAlike) {
   for (const ProtocolRunner& r : Runners()) {
     SCOPED_TRACE(std::string(ProtocolName(r.protocol)));
@@ -56,18 +59,23 @@ TEST(Registry, ASilentDeviceFailsUnderEveryProtocolAlike) {
     const RunReport report = r.run(target, options);
     EXPECT_TRUE(report.device.empty());
     EXPECT_EQ(ExitCode(report), 1);
-    size_t ran = 0, not_applicable = 0;
+    size_t ran = 0, not_applicable = 0, given_up = 0;
     for (const CaseResult& c : report.cases) {
       if (c.applicable) {
         ++ran;
         EXPECT_TRUE(c.MustFailed()) << c.suite << "/" << c.name;
+        EXPECT_EQ(given_up, 0u) << "a case ran after the run gave up: " << c.name;
+      } else if (c.not_applicable_because == kGaveUpOnSilence) {
+        ++given_up;
       } else {
         ++not_applicable;
         EXPECT_EQ(c.not_applicable_because, "the device did not introduce itself");
       }
     }
-    EXPECT_GT(ran, 0u);
+    EXPECT_EQ(ran, kSilentCasesBeforeGivingUp);
+    EXPECT_GT(given_up, 0u);
     EXPECT_GT(not_applicable, 0u);
+    EXPECT_EQ(report.cases.size(), r.cases().size()) << "every case is reported";
     for (const auto& [id, s] : report.rules) {
       const Rule* rule = FindRule(id);
       ASSERT_NE(rule, nullptr);
@@ -75,6 +83,53 @@ TEST(Registry, ASilentDeviceFailsUnderEveryProtocolAlike) {
         EXPECT_EQ(s.status, Status::kNotApplicable) << id;
       }
     }
+  }
+}
+
+// A device that says nothing at first but answers later (a board still
+// booting) is not given up on while it sends bytes: the run goes on as long
+// as the cases draw an answer.
+class LateTarget final : public Target {
+ public:
+  explicit LateTarget(size_t silent_sends) : silent_sends_(silent_sends) {}
+  std::string Name() const override { return "late"; }
+  bool VirtualClock() const override { return true; }
+  bool CanRestart() const override { return true; }
+  std::optional<std::string> Open() override { return std::nullopt; }
+  void Restart() override {}
+  TimeNs Now() const override { return now_; }
+  bool Send(wire::ByteView) override {
+    if (sends_++ >= silent_sends_) pending_ = true;
+    return true;
+  }
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override {
+    if (pending_) {
+      pending_ = false;
+      out.push_back('?');  // a byte that is no answer: the device is there
+      now_ += 1000;
+      return true;
+    }
+    now_ = std::max(now_, deadline_ns);
+    return true;
+  }
+
+ private:
+  size_t silent_sends_;
+  size_t sends_ = 0;
+  bool pending_ = false;
+  TimeNs now_ = 0;
+};
+
+TEST(Registry, ADeviceThatSendsBytesIsNeverGivenUpOnForSilence) {
+  const ProtocolRunner* r = FindRunner(Protocol::kDfmoco);
+  ASSERT_NE(r, nullptr);
+  LateTarget target(0);
+  ASSERT_FALSE(target.Open());
+  RunOptions options;
+  options.random.steps = 5;
+  const RunReport report = r->run(target, options);
+  for (const CaseResult& c : report.cases) {
+    EXPECT_NE(c.not_applicable_because, kGaveUpOnSilence) << c.suite << "/" << c.name;
   }
 }
 

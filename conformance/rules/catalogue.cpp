@@ -4,6 +4,8 @@
 #include "conformance/rules/catalogue.h"
 
 #include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <unordered_map>
 
 namespace moco::conformance {
@@ -336,6 +338,12 @@ const std::vector<Rule> kRules = {
     {"DMC-LIM-006", L::kShould, N::kMotors,
      "A jog towards a point past an enabled soft limit never passes the limit",
      "UPPER LIMIT DWORD The upper software step limit", "MSG_MOTOR_SET_LIMITS; MSG_MOTOR_JOG"},
+    {"DMC-LIM-007", L::kShould, N::kHwLimits,
+     "A hardware limit switch that closes while its bound motor moves towards it halts the motor "
+     "and is reported by MOTOR_HARD_STOP with REASON 1 (upper) or 2 (lower) and that MOTOR",
+     "The device can send this when a limit has been hit ... REASON BYTE 1=Upper Limit, 2=Lower "
+     "Limit; MOTOR BYTE Motor number (only present if REASON is 1 or 2)",
+     "MSG_MOTOR_HARD_STOP; MSG_MOTOR_SET_LIMITS (HW SET)"},
 
     // --- Unsolicited messages (ERRATA 1.9) ---
     {"DMC-UNS-001", L::kMust, N::kNothing,
@@ -371,6 +379,10 @@ const std::vector<Rule> kRules = {
      "Set the state for general I/O output triggers.", "MSG_GIO_OUT"},
     {"DMC-GIO-004", L::kMust, N::kNothing, "GIO_CAM is acknowledged OK", "Test the camera outputs.",
      "MSG_GIO_CAM"},
+    {"DMC-GIO-005", L::kShould, N::kGioIn,
+     "A change of a general I/O input is sent unsolicited as GIO_IN carrying the new TRIGGERS",
+     "The device should also send this message, unsolicited, any time the inputs change.",
+     "MSG_GIO_IN"},
     {"DMC-DMX-001", L::kMust, N::kDmx, "MSG_DMX within the advertised channels is acknowledged OK",
      "Set DMX light values. The request specifies the initial channel to change, and then one or "
      "more light values.",
@@ -549,6 +561,8 @@ std::string_view NeedsText(Needs needs) {
       return "GIO OUT COUNT >= 1";
     case Needs::kGioIn:
       return "GIO INPUT COUNT >= 1";
+    case Needs::kHwLimits:
+      return "HW LIMIT COUNT >= 1, MOTOR COUNT >= 1";
     case Needs::kRealTime:
       return "capability 0x0001 (real-time)";
     case Needs::kGoMotion:
@@ -577,6 +591,8 @@ std::string_view NeedsText(Needs needs) {
       return "hi: version >= 1.2.7 (go-motion)";
     case Needs::kDfmBlurRefusal:
       return "hi: version >= 1.3.1 (bf -1)";
+    case Needs::kPins:
+      return "watched pins (a simavr: target with --board)";
   }
   return "?";
 }
@@ -653,6 +669,97 @@ std::string Escape(std::string_view s) {
 
 }  // namespace
 
+namespace detail {
+extern const std::string_view kProofTables[3];
+extern const std::string_view kReasonTables[3];
+}  // namespace detail
+
+namespace {
+
+struct RuleTables {
+  std::map<std::string_view, std::vector<std::string_view>> proofs;
+  std::map<std::string_view, std::string_view> reasons;
+  std::vector<std::string> problems;
+};
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) {
+    s.remove_prefix(1);
+  }
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) {
+    s.remove_suffix(1);
+  }
+  return s;
+}
+
+// Reads "ID<tab>value" lines ('#' comments and blank lines skipped).
+template <typename Add>
+void ReadTable(std::string_view text, const char* name, std::vector<std::string>& problems,
+               Add add) {
+  size_t line_no = 0;
+  while (!text.empty()) {
+    const size_t nl = text.find('\n');
+    const std::string_view line = text.substr(0, nl);
+    text.remove_prefix(nl == std::string_view::npos ? text.size() : nl + 1);
+    ++line_no;
+    if (Trim(line).empty() || Trim(line).front() == '#') continue;
+    const size_t tab = line.find('\t');
+    const std::string where = std::string(name) + " line " + std::to_string(line_no);
+    if (tab == std::string_view::npos || Trim(line.substr(tab + 1)).empty()) {
+      problems.push_back(where + ": expected RULE-ID<tab>text");
+      continue;
+    }
+    const std::string_view id = Trim(line.substr(0, tab));
+    if (FindRule(id) == nullptr) {
+      problems.push_back(where + ": no rule " + std::string(id));
+      continue;
+    }
+    add(where, FindRule(id)->id, Trim(line.substr(tab + 1)));
+  }
+}
+
+const RuleTables& Tables() {
+  static const RuleTables tables = [] {
+    RuleTables t;
+    static const char* const kNames[] = {"dmc", "dfmoco", "stackshot"};
+    for (size_t i = 0; i < 3; ++i) {
+      const std::string proofs = std::string("proofs/") + kNames[i] + ".tsv";
+      ReadTable(detail::kProofTables[i], proofs.c_str(), t.problems,
+                [&](const std::string&, std::string_view id, std::string_view test) {
+                  auto& list = t.proofs[id];
+                  if (std::find(list.begin(), list.end(), test) == list.end()) {
+                    list.push_back(test);
+                  }
+                });
+      const std::string reasons = std::string("reasons/") + kNames[i] + ".tsv";
+      ReadTable(detail::kReasonTables[i], reasons.c_str(), t.problems,
+                [&](const std::string& where, std::string_view id, std::string_view why) {
+                  if (!t.reasons.emplace(id, why).second) {
+                    t.problems.push_back(where + ": " + std::string(id) + " has a reason already");
+                  }
+                });
+    }
+    return t;
+  }();
+  return tables;
+}
+
+}  // namespace
+
+std::vector<std::string_view> ProofsOf(std::string_view id) {
+  const auto& p = Tables().proofs;
+  const auto it = p.find(id);
+  return it == p.end() ? std::vector<std::string_view>{} : it->second;
+}
+
+std::string_view LevelReasonOf(std::string_view id) {
+  const auto& r = Tables().reasons;
+  const auto it = r.find(id);
+  return it == r.end() ? std::string_view{} : it->second;
+}
+
+std::vector<std::string> RuleTableProblems() { return Tables().problems; }
+
 bool GlobMatch(std::string_view patterns, std::string_view text) {
   size_t start = 0;
   while (start <= patterns.size()) {
@@ -688,6 +795,10 @@ std::string RulesMarkdown() {
   s += "levels are checked against the reference firmware's behaviour (the DMC-16's\n";
   s += "`fixtures/profiles/dmc-lite.json`), which fails only where it departs from a\n";
   s += "must or a should.\n\n";
+  s += "Every MUST and SHOULD rule is proven able to fail: its \"proven by\" test plants\n";
+  s += "a fault and shows the rule failing (conformance/rules/proofs/, checked by CTest\n";
+  s += "conformance_rule_proofs). \"Why this level\" reads the level off the clause\n";
+  s += "(conformance/rules/reasons/).\n\n";
   s += std::to_string(RuleCount()) + " rules: " + std::to_string(must) + " MUST, " +
        std::to_string(should) + " SHOULD, " + std::to_string(note) + " NOTE.\n";
   for (Protocol p : kAllProtocols) {
@@ -700,12 +811,19 @@ std::string RulesMarkdown() {
     s += "\n## " + std::string(wire::Info(p).title) + " (" + std::to_string(rules.size()) +
          " rules: " + std::to_string(pm) + " MUST, " + std::to_string(ps) + " SHOULD, " +
          std::to_string(pn) + " NOTE)\n\n";
-    s += "| id | level | applies when | rule | spec clause | where |\n";
-    s += "| --- | --- | --- | --- | --- | --- |\n";
+    s +=
+        "| id | level | why this level | applies when | rule | spec clause | where | proven by |\n";
+    s += "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for (const Rule& r : rules) {
+      const std::string_view why = LevelReasonOf(r.id);
+      std::string proofs;
+      for (std::string_view t : ProofsOf(r.id)) {
+        proofs += (proofs.empty() ? "`" : ", `") + std::string(t) + "`";
+      }
       s += "| " + std::string(r.id) + " | " + std::string(LevelName(r.level)) + " | " +
-           Escape(NeedsText(r.needs)) + " | " + Escape(r.title) + " | \"" + Escape(r.clause) +
-           "\" | " + Escape(r.source) + " |\n";
+           (why.empty() ? std::string("-") : Escape(why)) + " | " + Escape(NeedsText(r.needs)) +
+           " | " + Escape(r.title) + " | \"" + Escape(r.clause) + "\" | " + Escape(r.source) +
+           " | " + (proofs.empty() ? std::string("-") : proofs) + " |\n";
     }
   }
   return s;
@@ -719,10 +837,33 @@ std::string RulesText() {
       id.resize(14, ' ');
       std::string level(LevelName(r.level));
       level.resize(7, ' ');
-      s += id + level + std::string(r.title) + "\n";
+      s += id + level + std::string(r.title);
+      const auto proofs = ProofsOf(r.id);
+      if (!proofs.empty()) s += " [proof: " + std::string(proofs.front()) + "]";
+      s += "\n";
     }
   }
   return s;
+}
+
+std::string RulesJson() {
+  nlohmann::json out = nlohmann::json::array();
+  for (Protocol p : kAllProtocols) {
+    for (const Rule& r : RulesFor(p)) {
+      nlohmann::json proofs = nlohmann::json::array();
+      for (std::string_view t : ProofsOf(r.id)) proofs.push_back(std::string(t));
+      out.push_back({{"id", std::string(r.id)},
+                     {"protocol", std::string(wire::Info(p).name)},
+                     {"level", std::string(LevelName(r.level))},
+                     {"needs", std::string(NeedsText(r.needs))},
+                     {"title", std::string(r.title)},
+                     {"clause", std::string(r.clause)},
+                     {"source", std::string(r.source)},
+                     {"reason", std::string(LevelReasonOf(r.id))},
+                     {"proofs", proofs}});
+    }
+  }
+  return out.dump(2) + "\n";
 }
 
 }  // namespace moco::conformance

@@ -36,6 +36,7 @@ enum class Needs {
   kDmx,             // DMX COUNT >= 1
   kGioOut,          // GIO OUT COUNT >= 1
   kGioIn,           // GIO INPUT COUNT >= 1
+  kHwLimits,        // HW LIMIT COUNT >= 1 and MOTOR COUNT >= 1
   kRealTime,        // capability 0x0001
   kGoMotion,        // capability 0x0002
   kGoMotion2,       // capability 0x0080
@@ -52,6 +53,8 @@ enum class Needs {
   kDfmBlurRefusal,  // `hi` version 1.3.1 or later (`bf -1`)
   // StackShot 3X: what the device reports (stackshot_rules.cpp).
   kSsThreeAxes,  // answers CC_RAIL_STATUS for axes X, Y and Z (a StackShot 3X)
+  // Any protocol: the target watches the firmware's pins (simavr with --board).
+  kPins,
 };
 std::string_view NeedsText(Needs needs);
 
@@ -68,6 +71,8 @@ struct Rule {
 const std::vector<Rule>& DmcRules();
 // Every DFMoco rule (conformance/rules/dfmoco_rules.cpp).
 const std::vector<Rule>& DfmocoRules();
+// The DFMoco pin rules (conformance/rules/pin_rules.cpp), part of DfmocoRules().
+const std::vector<Rule>& DfmocoPinRules();
 // Every StackShot 3X rule (conformance/rules/stackshot_rules.cpp).
 const std::vector<Rule>& StackshotRules();
 // The rules of one protocol.
@@ -77,6 +82,17 @@ size_t RuleCount();
 // Searches every protocol's rules; nullptr for an unknown id.
 const Rule* FindRule(std::string_view id);
 
+// The tests that plant a fault and show this rule failing
+// (conformance/rules/proofs/*.tsv, checked by CTest conformance_rule_proofs);
+// empty when none is recorded.
+std::vector<std::string_view> ProofsOf(std::string_view id);
+// Why the rule has its level, read with its clause
+// (conformance/rules/reasons/*.tsv); empty when none is recorded.
+std::string_view LevelReasonOf(std::string_view id);
+// What is wrong with those tables: a malformed line, an id no rule has, a rule
+// listed twice in the reasons; empty when they are sound.
+std::vector<std::string> RuleTableProblems();
+
 // Shell-style match: '*' any run, '?' one character; a comma separates
 // alternatives ("DMC-HI-*,DMC-ACK-00?").
 bool GlobMatch(std::string_view patterns, std::string_view text);
@@ -84,6 +100,9 @@ bool GlobMatch(std::string_view patterns, std::string_view text);
 // The catalogue as Markdown (docs/rules.md) and as plain text (`mococheck rules`).
 std::string RulesMarkdown();
 std::string RulesText();
+// The catalogue as JSON (`mococheck rules --json`): one object per rule with
+// its id, level, needs, title, clause, source, reason and proofs.
+std::string RulesJson();
 
 }  // namespace moco::conformance
 

@@ -98,5 +98,48 @@ TEST(Catalogue, MarkdownCountsLevels) {
   EXPECT_NE(RulesMarkdown().find(std::to_string(must) + " MUST"), std::string::npos);
 }
 
+// The proving-test and level-reason tables name only rules that exist, in
+// well-formed lines, one reason per rule.
+TEST(Catalogue, RuleTablesNameOnlyRulesThatExist) {
+  const std::vector<std::string> problems = RuleTableProblems();
+  EXPECT_TRUE(problems.empty()) << problems.size() << " problem(s), first: "
+                                << (problems.empty() ? "" : problems.front());
+}
+
+// Every rule says why it has its level (conformance/rules/reasons/*.tsv), and
+// the reason opens with the level's word, so a level changed later without its
+// reason fails here instead of showing a reason that argues for another level.
+TEST(Catalogue, EveryRuleSaysWhyItHasItsLevel) {
+  size_t checked = 0;
+  for (Protocol p : kAllProtocols) {
+    for (const Rule& r : RulesFor(p)) {
+      ++checked;
+      const std::string_view why = LevelReasonOf(r.id);
+      const std::string word = std::string(LevelName(r.level)) + ":";
+      if (why.empty()) {
+        ADD_FAILURE() << r.id << " has no reason in conformance/rules/reasons/" << ProtocolName(p)
+                      << ".tsv";
+        continue;
+      }
+      EXPECT_EQ(why.substr(0, word.size()), word)
+          << r.id << " is " << LevelName(r.level) << " but its reason says: " << why;
+      EXPECT_GT(why.size(), word.size() + 20) << r.id << " gives no reason after " << word;
+    }
+  }
+  EXPECT_EQ(checked, RuleCount());
+  EXPECT_GE(checked, 200u);
+}
+
+TEST(Catalogue, ProvingTestsAreShownByTheCatalogue) {
+  const std::string json = RulesJson();
+  for (const Rule& r : DmcRules()) {
+    for (std::string_view t : ProofsOf(r.id)) {
+      EXPECT_NE(RulesMarkdown().find("`" + std::string(t) + "`"), std::string::npos) << t;
+      EXPECT_NE(json.find("\"" + std::string(t) + "\""), std::string::npos) << t;
+    }
+  }
+  EXPECT_FALSE(ProofsOf("DMC-CSUM-001").empty()) << "the corrupted-checksum test proves it";
+}
+
 }  // namespace
 }  // namespace moco::conformance

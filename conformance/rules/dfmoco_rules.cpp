@@ -186,9 +186,9 @@ const std::vector<Rule> kRules = {
     {"DFM-IM-001", L::kMust, N::kDfmMotors, "`im m dest` is answered `im m`", "OUT: im <motor>",
      "Inch Motor (im)"},
     {"DFM-IM-002", L::kMust, N::kDfmMotors,
-     "An inch from rest moves the motor towards its destination by at least one step, never past "
-     "it",
-     "move the in very small increments towards destination", "Inch Motor (im)"},
+     "An inch from rest moves the motor towards its destination by at least one step, at most "
+     "one step past it",
+     "move the in very small increments towards destination", "Inch Motor (im); FACTS DFMoco"},
     {"DFM-IM-003", L::kShould, N::kDfmMotors, "One inch moves the motor 16 steps at most",
      "move the in very small increments towards destination", "Inch Motor (im); FACTS DFMoco"},
 
@@ -280,6 +280,13 @@ const std::vector<Rule> kRules = {
 
 }  // namespace
 
-const std::vector<Rule>& DfmocoRules() { return kRules; }
+const std::vector<Rule>& DfmocoRules() {
+  static const std::vector<Rule> kAll = [] {
+    std::vector<Rule> all = kRules;
+    all.insert(all.end(), DfmocoPinRules().begin(), DfmocoPinRules().end());
+    return all;
+  }();
+  return kAll;
+}
 
 }  // namespace moco::conformance

@@ -324,9 +324,12 @@ const std::vector<Rule> kStackshotRules = {
 
     // --- Bezier curves (CC_MOTION_CONFIG / CC_MOTION_START, StackShot 3X; ERRATA 5) ---
     {"SS-CURVE-001", L::kMust, N::kSsThreeAxes,
-     "A CC_MOTION_CONFIG meeting every listed requirement is accepted",
+     "A CC_MOTION_CONFIG meeting every listed requirement is accepted, a position jump between "
+     "curves and a speed beyond the axis's maximum included (the list requires neither)",
      "Motion paths in StackShot 3X are defined using cubic Bézier curves. Up to four curves can be "
-     "specified to form a Bézier spline yielding five keyframes.",
+     "specified to form a Bézier spline yielding five keyframes. ... A curve's initial P0.x must "
+     "match the previous curves P3.x to provide continuity. ... Limits should be applied to "
+     "prevent sudden velocity changes which may result in loss of steps.",
      "2 CC_MOTION_CONFIG; ERRATA 5"},
     {"SS-CURVE-002", L::kMust, N::kSsThreeAxes,
      "A curve 0 whose P0.x is not zero is refused BAD_PARAM",

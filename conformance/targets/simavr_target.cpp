@@ -12,6 +12,7 @@
 #include <system_error>
 
 extern "C" {
+#include "avr_ioport.h"
 #include "avr_uart.h"
 #include "sim_avr.h"
 #include "sim_elf.h"
@@ -121,6 +122,10 @@ void SimavrTarget::Teardown() {
     avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XON), &OnXon, this);
     avr_irq_unregister_notify(avr_io_getirq(avr_, ctl, UART_IRQ_OUT_XOFF), &OnXoff, this);
   }
+  for (const auto& hook : pin_hooks_) {
+    avr_irq_unregister_notify(hook->irq, &OnPin, hook.get());
+  }
+  pin_hooks_.clear();
   // simavr 1.6's avr_terminate() leaves the core's IRQs allocated (a few KB per core).
   avr_terminate(avr_);
   std::free(avr_);
@@ -216,7 +221,65 @@ std::optional<std::string> SimavrTarget::Build() {
     // Added after the UART's own handler for this register, so it runs second.
     avr_register_io_write(avr_, uart_->txen.reg, &OnControlWrite, this);
   }
+  if (watching_) {
+    trace_ = PinTrace::For(board_);
+    trace_.frequency_hz = frequency_hz_;
+    trace_edges_ = 0;
+    timed_.assign(trace_.signals.size(), 0);
+    for (size_t i = 0; i < trace_.signals.size(); ++i) {
+      const PinRef pin = trace_.signals[i].pin;
+      avr_irq_t* irq = avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(pin.port), pin.bit);
+      if (irq == nullptr) {
+        const std::string mcu = mcu_;
+        Teardown();
+        return "board \"" + board_.name + "\": " + trace_.signals[i].name + " is on " + pin.Name() +
+               ", but the MCU \"" + mcu + "\" has no port " + pin.port +
+               "; fix the board profile or give the board's MCU (@MCU)";
+      }
+      pin_hooks_.push_back(std::make_unique<PinHook>(PinHook{this, static_cast<int>(i), irq}));
+      avr_irq_register_notify(irq, &OnPin, pin_hooks_.back().get());
+    }
+  }
   return std::nullopt;
+}
+
+std::optional<std::string> SimavrTarget::WatchPins(const Board& board) {
+  if (avr_ != nullptr) return "pins must be chosen before the firmware starts";
+  board_ = board;
+  watching_ = true;
+  return std::nullopt;
+}
+
+// A PORTx bit changed: the edge's time is the cycle of the instruction writing it.
+void SimavrTarget::OnPin(avr_irq_t* /*irq*/, uint32_t value, void* param) {
+  auto* hook = static_cast<PinHook*>(param);
+  SimavrTarget* self = hook->self;
+  PinSignal& s = self->trace_.signals[static_cast<size_t>(hook->signal)];
+  const bool level = (value & 1) != 0;
+  const bool last = s.edges.empty() ? s.initial : s.edges.back().level;
+  if (level == last) return;
+  const uint64_t c = self->avr_->cycle;
+  if (self->trace_edges_ >= kMaxPinEdges) {
+    self->trace_.complete_until_ns = std::min(self->trace_.complete_until_ns, self->CyclesToNs(c));
+    return;
+  }
+  ++self->trace_edges_;
+  s.edges.push_back(PinEdge{0, c, level});  // t_ns: filled in by Pins()
+}
+
+TimeNs SimavrTarget::CyclesToNs(uint64_t c) const {
+  return static_cast<TimeNs>((c / frequency_hz_) * kNsPerSecond +
+                             (c % frequency_hz_) * kNsPerSecond / frequency_hz_);
+}
+
+const PinTrace* SimavrTarget::Pins() const {
+  if (!watching_) return nullptr;
+  for (size_t i = 0; i < trace_.signals.size() && i < timed_.size(); ++i) {
+    std::vector<PinEdge>& edges = trace_.signals[i].edges;
+    for (size_t k = timed_[i]; k < edges.size(); ++k) edges[k].t_ns = CyclesToNs(edges[k].cycle);
+    timed_[i] = edges.size();
+  }
+  return &trace_;
 }
 
 uint64_t SimavrTarget::cycles() const { return avr_ == nullptr ? 0 : avr_->cycle; }

@@ -7,8 +7,10 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "conformance/targets/target.h"
 
@@ -40,6 +42,13 @@ namespace moco::conformance {
 //    Send() and Receive() return false and Name() says what happened.
 // simavr's own console output is silenced; its error messages go into Open()'s
 // error text.
+//
+// Pin model (WatchPins): every pin the board names is followed through simavr's
+// I/O port IRQs (AVR_IOCTL_IOPORT_GETIRQ), which fire as the instruction writing
+// PORTx executes; each level change is kept with avr->cycle, so an edge's time is
+// exact to one CPU cycle and nothing polls. All levels start low (the reset
+// state of PORTx). A case keeps at most kMaxPinEdges edges; later ones are
+// dropped and PinTrace::complete_until_ns says from when.
 class SimavrTarget final : public Target {
  public:
   struct Options {
@@ -76,6 +85,11 @@ class SimavrTarget final : public Target {
   // Cycles one USART0 frame takes at the firmware's current settings.
   uint64_t FrameCycles() const;
 
+  static constexpr size_t kMaxPinEdges = size_t{8} << 20;
+  std::optional<std::string> WatchPins(const Board& board) override;
+  // Edge times (t_ns) are filled in here, from their cycles, off the firmware's hot path.
+  const PinTrace* Pins() const override;
+
  private:
   struct OutByte {
     uint8_t value;
@@ -86,6 +100,7 @@ class SimavrTarget final : public Target {
   void Teardown();
   bool CheckAlive();
   uint64_t NsToCycles(TimeNs ns) const;
+  TimeNs CyclesToNs(uint64_t cycles) const;
   void StartPacer();
   void ArmWake(uint64_t cycle);
 
@@ -95,6 +110,13 @@ class SimavrTarget final : public Target {
   static void OnXon(avr_irq_t* irq, uint32_t value, void* param);
   static void OnXoff(avr_irq_t* irq, uint32_t value, void* param);
   static void OnControlWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param);
+  static void OnPin(avr_irq_t* irq, uint32_t value, void* param);
+
+  struct PinHook {
+    SimavrTarget* self;
+    int signal;  // index into trace_.signals
+    avr_irq_t* irq;
+  };
 
   SimavrSpec spec_;
   Options options_;
@@ -113,6 +135,12 @@ class SimavrTarget final : public Target {
   std::deque<OutByte> from_device_;  // written by the firmware, maybe still shifting
   uint64_t tx_line_free_cycle_ = 0;  // the device's line is idle from here
   uint64_t wake_cycle_ = 0;          // an armed WakeTick, 0 when none
+  bool watching_ = false;
+  Board board_;
+  mutable PinTrace trace_;
+  mutable std::vector<size_t> timed_;  // per signal: edges whose t_ns is filled in
+  size_t trace_edges_ = 0;
+  std::vector<std::unique_ptr<PinHook>> pin_hooks_;
 };
 
 }  // namespace moco::conformance

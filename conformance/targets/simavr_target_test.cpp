@@ -441,3 +441,89 @@ TEST(SimavrTarget, TargetSpecsParseAndBuild) {
 
 }  // namespace
 }  // namespace moco::conformance
+
+namespace moco::conformance {
+namespace {
+
+// fixtures/boards/own-dfmoco.json: motor 1 on PD4/PD5, motor 3 on PB0/PB1.
+Board OwnBoard() {
+  Board b;
+  b.name = "own-dfmoco";
+  b.motors = {{PinRef{'D', 4}, PinRef{'D', 5}, std::nullopt},
+              {PinRef{'D', 6}, PinRef{'D', 7}, std::nullopt},
+              {PinRef{'B', 0}, PinRef{'B', 1}, std::nullopt},
+              {PinRef{'B', 2}, PinRef{'B', 3}, std::nullopt}};
+  return b;
+}
+
+// The signed count of rising STEP edges of motor `i` (0-based), DIR high counting up.
+int64_t SignedSteps(const PinTrace& t, size_t i) {
+  const PinSignal& step = t.signals[static_cast<size_t>(t.motors[i].step)];
+  const PinSignal& dir = t.signals[static_cast<size_t>(t.motors[i].dir)];
+  int64_t n = 0;
+  for (const PinEdge& e : step.edges) {
+    if (e.level) n += dir.LevelAt(e.t_ns) ? 1 : -1;
+  }
+  return n;
+}
+
+TEST(SimavrPins, EveryStepIsOnePulseOnItsPinTimedToTheCpuCycleOfThePortWrite) {
+  SimavrTarget target(FirmwareSpec());
+  ASSERT_EQ(target.WatchPins(OwnBoard()), std::nullopt);
+  ASSERT_EQ(target.Open(), std::nullopt);
+  Link link(target);
+  ASSERT_EQ(link.ReadLine(50 * kMs), kHello);
+  EXPECT_EQ(link.Ask("mm 1 300", "mm"), "mm 1 300");
+  EXPECT_EQ(link.Ask("mm 3 -200", "mm"), "mm 3 -200");
+  link.Idle(target.Now() + 2 * kSecond);
+  EXPECT_EQ(Position(*link.Ask("mp 1", "mp 1")), 300);
+  EXPECT_EQ(Position(*link.Ask("mp 3", "mp 3")), -200);
+  const PinTrace* pins = target.Pins();
+  ASSERT_NE(pins, nullptr);
+  EXPECT_EQ(SignedSteps(*pins, 0), 300);
+  EXPECT_EQ(SignedSteps(*pins, 2), -200);
+  EXPECT_EQ(SignedSteps(*pins, 1), 0) << "motor 2 never stepped";
+  const PinSignal& step = pins->signals[static_cast<size_t>(pins->motors[0].step)];
+  ASSERT_EQ(step.edges.size(), 600u);
+  for (size_t k = 0; k < step.edges.size(); ++k) {
+    const PinEdge& e = step.edges[k];
+    // Time is the cycle over 16 MHz (62.5 ns), rounded down.
+    EXPECT_EQ(e.t_ns, static_cast<TimeNs>(e.cycle * 1000 / 16));
+    if (k % 2 == 1) {
+      // The next 40 kHz tick (400 cycles later) lowers the pin as its ISR's first write;
+      // the raise came after that ISR had run every motor's phase accumulator, so a
+      // pulse is one tick less that path (about 110 cycles, longer while more motors step).
+      const uint64_t high = e.cycle - step.edges[k - 1].cycle;
+      EXPECT_GT(high, 200u) << "pulse " << k / 2;
+      EXPECT_LT(high, 400u) << "pulse " << k / 2;
+    }
+  }
+}
+
+TEST(SimavrPins, RestartStartsAnEmptyTraceAtTimeZero) {
+  SimavrTarget target(FirmwareSpec());
+  ASSERT_EQ(target.WatchPins(OwnBoard()), std::nullopt);
+  ASSERT_EQ(target.Open(), std::nullopt);
+  Link link(target);
+  ASSERT_EQ(link.ReadLine(50 * kMs), kHello);
+  link.Ask("mm 2 50", "mm");
+  link.Idle(target.Now() + 500 * kMs);
+  EXPECT_EQ(SignedSteps(*target.Pins(), 1), 50);
+  target.Restart();
+  EXPECT_EQ(target.Pins()->EdgeCount(), 0u);
+  EXPECT_TRUE(target.WatchPins(OwnBoard()).has_value()) << "pins are chosen before Open()";
+}
+
+TEST(SimavrPins, APinOnAPortTheMcuLacksIsRefusedAtOpen) {
+  SimavrTarget target(FirmwareSpec());
+  Board b = OwnBoard();
+  b.motors[0].step = PinRef{'L', 0};  // a Mega port; the ATmega328P has B, C and D
+  ASSERT_EQ(target.WatchPins(b), std::nullopt);
+  const auto err = target.Open();
+  ASSERT_TRUE(err.has_value());
+  EXPECT_NE(err->find("no port L"), std::string::npos) << *err;
+  EXPECT_NE(err->find("m1_step"), std::string::npos) << *err;
+}
+
+}  // namespace
+}  // namespace moco::conformance

@@ -21,6 +21,7 @@
 
 #include "devices/registry.h"
 #include "devices/stackshot3x/stackshot3x.h"
+#include "sim/io.h"
 #include "sim/rig.h"
 
 #ifdef MOCO_HAVE_SIMAVR
@@ -146,6 +147,20 @@ bool InProcessTarget::SetEStop(bool engaged) {
   } else {
     rig->ReleaseEStop();
   }
+  return true;
+}
+
+bool InProcessTarget::SetLimitInput(int set, bool high, bool active) {
+  sim::Rig* rig = device_ ? device_->rig() : nullptr;
+  if (rig == nullptr || set < 1 || set > rig->limit_set_count()) return false;
+  rig->ForceInput(set, high ? sim::SwitchInput::kHigh : sim::SwitchInput::kLow, active);
+  return true;
+}
+
+bool InProcessTarget::SetGioInput(int bit, bool level) {
+  sim::GioPort* gio = device_ ? device_->gio() : nullptr;
+  if (gio == nullptr || bit < 0 || bit > 31) return false;
+  gio->SetRawInput(bit, level);
   return true;
 }
 

@@ -14,6 +14,7 @@
 
 #include <sys/stat.h>
 
+#include "conformance/targets/simavr_pins.h"
 #include "devices/device.h"
 #include "sim/scheduler.h"
 #include "wire/bytes.h"
@@ -53,11 +54,28 @@ class Target {
   // Presses (true) or releases the device's e-stop button, where the runner
   // can reach it (in-process only). False when it cannot.
   virtual bool SetEStop(bool /*engaged*/) { return false; }
+  // Drives an input of hardware limit set `set` (1-based; `high`: the HIGH
+  // switch, else LOW) on or off, as a switch closing would, where the runner
+  // can reach it (in-process only). False when it cannot or the set is unknown.
+  virtual bool SetLimitInput(int /*set*/, bool /*high*/, bool /*active*/) { return false; }
+  // Drives general I/O input `bit` (0-based) to `level`, as a wired trigger
+  // would (in-process only). False when it cannot.
+  virtual bool SetGioInput(int /*bit*/, bool /*level*/) { return false; }
 
   // Why the link is gone for good (the device closed the connection, a
   // write or read failed), or nullopt while it is up. A lost link makes the
   // run a target error: what follows proves nothing about the device.
   virtual std::optional<std::string> LinkLost() const { return std::nullopt; }
+
+  // Watches the firmware's pins that `board` names from the next Open() /
+  // Restart() on (a simavr: target only). Returns an error naming the fix, or
+  // nullopt.
+  virtual std::optional<std::string> WatchPins(const Board& /*board*/) {
+    return "pins can be watched only on a simavr: target (--board needs "
+           "--target simavr:PATH.elf)";
+  }
+  // The watched pins since the last Open() / Restart(); nullptr when none are.
+  virtual const PinTrace* Pins() const { return nullptr; }
 };
 
 // Asks a running conformance run to stop (from a SIGINT, SIGTERM or SIGHUP
@@ -94,6 +112,8 @@ class InProcessTarget final : public Target {
   bool Send(wire::ByteView bytes) override;
   bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
   bool SetEStop(bool engaged) override;
+  bool SetLimitInput(int set, bool high, bool active) override;
+  bool SetGioInput(int bit, bool level) override;
 
   // The device under test (null before Open()).
   devices::Device* device() { return device_.get(); }

@@ -10,12 +10,16 @@
 #include <sstream>
 
 #include "base/file_io.h"
+#include "base/vcd.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
+#include "devices/stackshot3x/stackshot3x.h"
 #include "serve/file_state_store.h"
 #include "serve/link_control_adapter.h"
 #include "serve/session_tap.h"
 #include "session/session.h"
+#include "sim/rig.h"
+#include "sim/step_trace.h"
 #include "transport/link_faults.h"
 #include "wire/transcript.h"
 
@@ -92,6 +96,7 @@ void CheckFiles(const EmulatorConfig& c) {
   std::vector<File> inputs;
   for (const DeviceConfig& d : c.devices) {
     if (!d.record_path.empty()) outputs.push_back({d.record_path, d.name + "'s recording"});
+    if (!d.vcd_path.empty()) outputs.push_back({d.vcd_path, d.name + "'s VCD"});
     if (!d.state_path.empty()) outputs.push_back({d.state_path, d.name + "'s state file"});
     if (!d.profile_path.empty()) inputs.push_back({d.profile_path, d.name + "'s profile"});
   }
@@ -144,7 +149,21 @@ struct Emulator::Served {
   std::unique_ptr<DeviceServer> server;
   std::unique_ptr<DeviceServerLink> link;  // the server as control reaches it
   std::unique_ptr<devices::Device> device;
+  // --vcd: per motor a STEP and a DIR wire, fed by step traces on the rig.
+  std::vector<base::VcdWire> vcd_wires;
+  std::vector<std::unique_ptr<sim::StepTrace>> step_traces;  // after `device`: destroyed first
+  size_t vcd_changes = 0;
 };
+
+namespace {
+
+// Each step of the model as a pulse at its exact edge time (kVcdPulseNs wide),
+// DIR set kVcdDirLeadNs before the step that needs it (docs/pins.md).
+constexpr int64_t kVcdPulseNs = 2'000;
+constexpr int64_t kVcdDirLeadNs = 1'000;
+constexpr size_t kVcdMaxChanges = size_t{16} << 20;
+
+}  // namespace
 
 Emulator::Emulator(EmulatorConfig config, LogFn log)
     : config_(std::move(config)), log_(std::move(log)), driver_(io_, scheduler_) {
@@ -246,6 +265,33 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       } catch (const std::exception& e) {
         throw ConfigError(d.name + ": " + e.what());
       }
+      if (s->server->wifi() != nullptr) {
+        // A StackShot on Wi-Fi: TCP framing, binary protocol only.
+        if (auto* ss = dynamic_cast<devices::Stackshot3x*>(s->device.get())) {
+          ss->SetHostLink(devices::Stackshot3x::HostLink::kWifi);
+        }
+      }
+      if (!d.vcd_path.empty() && s->device->rig() != nullptr) {
+        sim::Rig& rig = *s->device->rig();
+        Served* served = s.get();
+        for (int id = 1; id <= rig.motor_count(); ++id) {
+          const size_t step = served->vcd_wires.size();
+          served->vcd_wires.push_back({"m" + std::to_string(id) + "_step", false, {}});
+          served->vcd_wires.push_back({"m" + std::to_string(id) + "_dir", true, {}});
+          served->step_traces.push_back(std::make_unique<sim::StepTrace>(
+              rig.motor(id), 1, 0, sim::kTimeNever, [served, step](const sim::StepEdge& e) {
+                if (served->vcd_changes >= kVcdMaxChanges) return;
+                base::VcdWire& dir = served->vcd_wires[step + 1];
+                const bool up = e.direction > 0;
+                const bool was = dir.changes.empty() ? dir.initial : dir.changes.back().second;
+                if (up != was) dir.changes.emplace_back(e.time_ns - kVcdDirLeadNs, up);
+                auto& pulses = served->vcd_wires[step].changes;
+                pulses.emplace_back(e.time_ns, true);
+                pulses.emplace_back(e.time_ns + kVcdPulseNs, false);
+                served->vcd_changes += 3;
+              }));
+        }
+      }
       // Last, so that a device failing to start leaves no recording behind.
       if (!d.record_path.empty()) {
         session::SessionHeader h;
@@ -343,6 +389,18 @@ void Emulator::Stop() {
     if (s->server) s->server->Stop();
   }
   driver_.Stop();
+  for (auto& s : served_) {
+    if (s->config.vcd_path.empty() || s->vcd_wires.empty()) continue;
+    for (auto& t : s->step_traces) t->Sync();
+    const std::string text =
+        base::VcdText(s->config.name, "mocosim " + s->config.model + " step model", s->vcd_wires);
+    if (auto error = base::WriteFileAtomically(s->config.vcd_path, text)) {
+      Log(LogLevel::kError, s->config.name + ": VCD not written: " + *error);
+      exit_code_ = 1;
+    } else {
+      Log(LogLevel::kInfo, s->config.name + ": wrote " + s->config.vcd_path);
+    }
+  }
   for (auto& s : served_) {
     if (s->writer) {
       std::string error;

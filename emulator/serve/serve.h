@@ -36,6 +36,9 @@ struct DeviceConfig {
   std::string endpoint;      // "pty:/tmp/dmc16", "tcp:127.0.0.1:5000", "tcp:5000"
   std::string profile_path;  // empty: the model's built-in profile
   std::string record_path;   // empty: no recording
+  // Each motor's STEP and DIR from the step model's exact edge times, written
+  // as a Value Change Dump when mocosim stops; empty: none.
+  std::string vcd_path;
   // Models with NVM (StackShot): the state file; empty: the default
   // $XDG_STATE_HOME/mocosim/<name>.json (~/.local/state/mocosim/<name>.json).
   std::string state_path;

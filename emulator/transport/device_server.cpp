@@ -118,6 +118,7 @@ DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeO
     // No serial line on Wi-Fi: bytes are not paced; output with no host is dropped.
     lo.pacing = false;
     lo.hold_while_closed = false;
+    lo.max_write_bytes = kWifiMaxPacketBytes;  // section 4.2
     // Loopback unless asked: on 0.0.0.0 any machine that sends FINDSTACK
     // makes the emulator connect out to it.
     const std::string address = spec_.address.value_or(options.bind_address);

@@ -113,7 +113,10 @@ void Link::PumpWriter() {
   const sim::TimeNs now = driver_.NowNs();
   write_buf_.clear();
   sim::TimeNs next_due = now;
-  while (!out_.empty() && write_buf_.size() < kMaxWriteChunk) {
+  const size_t chunk = options_.max_write_bytes == 0
+                           ? kMaxWriteChunk
+                           : std::min(options_.max_write_bytes, kMaxWriteChunk);
+  while (!out_.empty() && write_buf_.size() < chunk) {
     const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
     const sim::TimeNs due = out_pacer_.DueTime(ready);
     if (due > now) {

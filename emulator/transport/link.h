@@ -83,6 +83,10 @@ struct LinkOptions {
   bool hold_while_closed = true;
   // Tell the device Device::OnHostLink on host open/close.
   bool report_host_link = true;
+  // Most device bytes handed to the stream in one write (StackShot Wi-Fi:
+  // 1000, "The maximum size of a single packet"). 0 or above the link's own
+  // chunk (4096): the chunk.
+  size_t max_write_bytes = 0;
   FaultConfig faults;
   TrafficObserver* observer = nullptr;  // not owned; must outlive the link
   LogFn log = LogToStderr;

@@ -18,6 +18,7 @@ using testing::RunUntil;
 struct FakeEnd {
   asio::io_context* io = nullptr;
   std::string written;
+  std::vector<size_t> write_sizes;  // one entry per AsyncWriteAll
   ByteStream::Handler pending_read;
   asio::mutable_buffer read_buf;
   bool closed = false;
@@ -46,6 +47,7 @@ class FakeStream final : public ByteStream {
   }
   void AsyncWriteAll(asio::const_buffer buffer, Handler handler) override {
     end_->written.append(static_cast<const char*>(buffer.data()), buffer.size());
+    end_->write_sizes.push_back(buffer.size());
     asio::post(*end_->io, [h = std::move(handler), n = buffer.size()] { h(ErrorCode(), n); });
   }
   void Close() override {
@@ -276,6 +278,28 @@ TEST_F(LinkTest, DestroyingTheLinkWithWorkPendingIsSafe) {
   io_.restart();
   io_.run_for(std::chrono::milliseconds(20));
   EXPECT_TRUE(end->closed);
+}
+
+TEST_F(LinkTest, MaxWriteBytesSplitsDeviceOutputIntoWritesNoLargerThanIt) {
+  // StackShot Wi-Fi (section 4.2): "The maximum size of a single packet is
+  // set to 1000 bytes."
+  LinkOptions o = Unpaced();
+  o.max_write_bytes = 1000;
+  Build(o);
+  auto end = AttachFake();
+  const std::string out(2500, 'x');
+  device_->Send(out);
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == out.size(); }));
+  EXPECT_EQ(end->written, out);
+  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{1000, 1000, 500}));
+}
+
+TEST_F(LinkTest, WithoutMaxWriteBytesOneWriteCarriesUpTo4096Bytes) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  device_->Send(std::string(2500, 'y'));
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == 2500; }));
+  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{2500}));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -64,6 +65,13 @@ class PtyPort {
   bool detects_host() const { return inotify_fd_ >= 0; }
   // Host descriptors currently open on the slave (0 when !detects_host()).
   int host_opens() const { return host_opens_; }
+  // The line speed set on the PTY (the host's tcsetattr, or SetLineBaud), in
+  // baud; 0 when it cannot be read or is not a standard rate. A PTY moves
+  // bytes at any speed: the setting is what the host asked of its "port".
+  uint32_t LineBaud() const;
+  // Sets the PTY's line speed as a serial port's would read back. False when
+  // `baud` is not a standard rate or the PTY is closed.
+  bool SetLineBaud(uint32_t baud);
 
  private:
   class MasterStream;

@@ -113,6 +113,12 @@ Result<Payload> ParseText(ByteView data) {
 // Parses `data` (which starts at packet offset kOffsetData) as shape s.
 // REQUIRES: s != kNone.
 Result<Payload> ParseShape(Shape s, ByteView data, std::string_view name, std::string_view what) {
+  const bool padded = s == Shape::kMotionStart && data.size() == kMotionStartListedBytes;
+  if (padded) {
+    // The table's header says Length 132 while listing three bools: a host
+    // that pads to the header's length is read by its first three bytes.
+    data = data.first(kMotionStartBytes);
+  }
   const size_t fixed = FixedSize(s);
   if (fixed != SIZE_MAX && data.size() != fixed) {
     return LengthError(name, what, fixed, fixed, data.size());
@@ -236,6 +242,7 @@ Result<Payload> ParseShape(Shape s, ByteView data, std::string_view name, std::s
       m.x = ReadU8(r) != 0;
       m.y = ReadU8(r) != 0;
       m.z = ReadU8(r) != 0;
+      m.padded = padded;
       return Payload{m};
     }
     case Shape::kRaw:
@@ -254,7 +261,7 @@ bool IsPingAtTableId(const Packet& p, const DecodeOptions& options) {
 struct PayloadWriter {
   Writer& w;
   void F(F32 v) { w.U32Le(v.bits()); }
-  void operator()(const Empty&) {}
+  void operator()(const Empty& e) { w.Raw(e.ignored); }
   void operator()(const UnitsQuery& q) {
     if (q.units) w.U8(static_cast<uint8_t>(*q.units));
   }
@@ -330,6 +337,9 @@ struct PayloadWriter {
     w.U8(m.x ? 1 : 0);
     w.U8(m.y ? 1 : 0);
     w.U8(m.z ? 1 : 0);
+    if (m.padded) {
+      for (size_t i = kMotionStartBytes; i < kMotionStartListedBytes; ++i) w.U8(0);
+    }
   }
   void operator()(const Raw& r) { w.Raw(r.data); }
   void operator()(const Unknown& u) { w.Raw(u.data); }
@@ -366,6 +376,12 @@ Result<HostCommand> DecodeHostPacket(const Packet& p, const DecodeOptions& optio
     return c;
   }
   const Shape shape = is_read ? info->read_request : info->write_request;
+  if (is_read && p.command == Id(Command::kRailConfigAutoReturn) && p.data.size() == 1) {
+    // The garbled AUTO_RETURN read table lists a bool under "Cmd Data":
+    // a read carrying one byte is a read all the same.
+    c.payload = Empty{Bytes(p.data.begin(), p.data.end())};
+    return c;
+  }
   if (shape == Shape::kNone) {
     return DecodeError{DecodeError::Kind::kBadValue, kOffsetAction,
                        std::string(info->name) + " is " + (is_read ? "write" : "read") + "-only"};

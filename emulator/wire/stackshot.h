@@ -62,6 +62,10 @@ class F32 {
 // Typed payloads
 // ---------------------------------------------------------------------------
 struct Empty {
+  // Bytes a request carries beyond its empty layout and that are read past
+  // (the AUTO_RETURN read's bool, as its garbled table lists), kept so the
+  // packet re-encodes as it came.
+  Bytes ignored;
   bool operator==(const Empty&) const = default;
 };
 // Read request of a units+f32 value: the tables send the units byte, the
@@ -206,6 +210,9 @@ struct MotionStart {
   bool x = false;
   bool y = false;
   bool z = false;
+  // Sent padded to the table header's Length 132 (read by its first three
+  // bytes); re-encoded padded with zeros.
+  bool padded = false;
   bool operator==(const MotionStart&) const = default;
 };
 // Data of a command whose layout the spec does not give (NAND, NOR, WIFI,

@@ -257,9 +257,10 @@ static_assert(BezierPointOffset(3, 3) + 8 == kMotionConfigBytes);
 inline constexpr size_t kRailMoveBytes = 7;
 inline constexpr size_t kRailMoveAtSpeedBytes = 10;
 inline constexpr size_t kShutterFireBytes = 10;
-inline constexpr size_t kRailStackBytes = 48;        // table "Length: 48"
-inline constexpr size_t kRailStackListedBytes = 44;  // fields the table lists
-inline constexpr size_t kMotionStartBytes = 3;       // table "Length: 132" is a copy slip
+inline constexpr size_t kRailStackBytes = 48;           // table "Length: 48"
+inline constexpr size_t kRailStackListedBytes = 44;     // fields the table lists
+inline constexpr size_t kMotionStartBytes = 3;          // table "Length: 132" is a copy slip
+inline constexpr size_t kMotionStartListedBytes = 132;  // the header's Length, also accepted
 
 }  // namespace moco::stackshot
 

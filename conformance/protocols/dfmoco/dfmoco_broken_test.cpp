@@ -14,6 +14,7 @@
 #include <set>
 
 #include "conformance/core/report.h"
+#include "conformance/core/rule_proof_testing.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/faulty_sink.h"
@@ -55,23 +56,7 @@ RunReport RunFaulty(devices::DfmocoFaults faults, RunOptions options = {}) {
   return RunDevice(devices::DfmocoProfile{}, std::move(faults), std::move(options));
 }
 
-void ExpectCaught(const RunReport& r, const std::string& rule, Status want = Status::kFail) {
-  // MOCOCHECK_PRINT=1 shows what a user of mococheck would see.
-  if (std::getenv("MOCOCHECK_PRINT") != nullptr) {
-    std::printf("%s\n", ConsoleReport(r, false).c_str());
-  }
-  ASSERT_TRUE(r.rules.count(rule)) << rule;
-  EXPECT_EQ(r.rules.at(rule).status, want) << rule << "\n" << ConsoleReport(r, false);
-  // The failing case explains itself: expected and observed.
-  bool explained = false;
-  for (const CaseResult& c : r.cases) {
-    auto it = c.outcomes.find(rule);
-    if (it == c.outcomes.end() || it->second.evidence.empty()) continue;
-    const Evidence& e = it->second.evidence.front();
-    explained = explained || (!e.expected.empty() && !e.observed.empty());
-  }
-  EXPECT_TRUE(explained) << rule;
-}
+using proof::ExpectCaught;
 
 // Every MUST rule that applies passes, none is left unexercised, and the
 // rules of the brief are judged.

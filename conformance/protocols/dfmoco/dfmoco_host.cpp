@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "wire/dfmoco_sketch_reader.h"
 
 namespace moco::conformance {
 namespace {
@@ -127,7 +128,21 @@ DfmCommand DfmHost::MakeCommand(std::string_view line, std::string_view error_ru
   c.line = std::string(line);
   c.sent_ns = Now();
   const dfmoco::Dialect d = dialect();
-  const auto parsed = dfmoco::ParseHostLine(line, d);
+  // A real sketch reads the line byte by byte (wire/dfmoco_sketch_reader.h):
+  // "mm 1 --5" is a move to -5, "mm 1 99999999999" wraps, "ms 1" is `ms`;
+  // only what it then reads is judged for counts and motors (FACTS DFMoco).
+  const dfmoco::SketchReading sketch = dfmoco::ReadLineAsSketch(line);
+  if (sketch.kind == dfmoco::SketchReading::Kind::kTooManyArgs) {
+    c.expect = DfmExpect::kTooMany;
+    c.error_rule = "DFM-ERR-003";
+    return c;
+  }
+  if (sketch.kind == dfmoco::SketchReading::Kind::kNothing) {
+    c.parsed = dfmoco::HostCommand{dfmoco::UnknownCommand{std::string(line)}};
+    c.expect = DfmExpect::kSilence;
+    return c;
+  }
+  const auto parsed = dfmoco::ParseHostLine(sketch.CanonicalLine(), d);
   if (!parsed.ok()) {
     c.expect = dfmoco::IsTooManyArgs(parsed.error()) ? DfmExpect::kTooMany : DfmExpect::kError;
     c.error_rule = c.expect == DfmExpect::kTooMany ? "DFM-ERR-003" : "DFM-ERR-001";

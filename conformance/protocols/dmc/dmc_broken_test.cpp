@@ -11,6 +11,8 @@
 #include <set>
 
 #include "conformance/core/report.h"
+#include "conformance/core/rule_proof_testing.h"
+#include "conformance/protocols/dmc/dmc_broken_device_testing.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
 #include "devices/faulty_sink.h"
 #include "devices/registry.h"
@@ -19,86 +21,7 @@
 namespace moco::conformance {
 namespace {
 
-using dmc::MsgType;
-using dmc::ToWire;
-
-// Decides what becomes of one frame the device wrote: `out` is the real link.
-using Breakage = std::function<void(const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
-                                    devices::ByteSink& out)>;
-
-// What becomes of the host's bytes before the device reads them (a device
-// that acts wrongly on a request); empty: read as sent.
-using InputBreakage = std::function<wire::Bytes(wire::ByteView host_bytes)>;
-
-// The real DMC-16 with a broken output stage (and, optionally, input stage).
-class BrokenDmc16 final : public devices::Device {
- public:
-  BrokenDmc16(sim::Scheduler& s, devices::ByteSink& out, Breakage b, const std::string& profile,
-              InputBreakage in = {})
-      : in_(std::move(in)),
-        sink_(out,
-              [&s, b = std::move(b)](const dmc::FrameRef& f, devices::ByteSink& o) {
-                b(f, wire::Bytes(f.raw.begin(), f.raw.end()), s, o);
-              }),
-        inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
-  std::string_view Model() const override { return "dmc16-broken"; }
-  devices::LineSettings Line() const override { return inner_->Line(); }
-  void PowerOn() override { inner_->PowerOn(); }
-  void PowerOff() override { inner_->PowerOff(); }
-  bool Powered() const override { return inner_->Powered(); }
-  void OnHostBytes(wire::ByteView bytes) override {
-    if (!in_) {
-      inner_->OnHostBytes(bytes);
-      return;
-    }
-    const wire::Bytes changed = in_(bytes);
-    inner_->OnHostBytes(changed);
-  }
-  void OnHostLink(bool open) override { inner_->OnHostLink(open); }
-
- private:
-  InputBreakage in_;
-  devices::FaultySink sink_;  // hands each frame the device writes to the breakage
-  std::unique_ptr<devices::Device> inner_;
-};
-
-RunReport RunBroken(Breakage b, RunOptions options = {}, const std::string& profile = "",
-                    InputBreakage in = {}) {
-  InProcessTarget target("dmc16-broken",
-                         [b, profile, in](sim::Scheduler& s, devices::ByteSink& out) {
-                           return std::make_unique<BrokenDmc16>(s, out, b, profile, in);
-                         });
-  EXPECT_FALSE(target.Open().has_value());
-  return RunDmc(target, options);
-}
-
-// Re-encodes `f` with a new ID or data.
-wire::Bytes Reencode(const dmc::FrameRef& f, uint32_t id, wire::ByteView data) {
-  wire::Bytes out;
-  dmc::EncodeFrame(id, f.type, data, out);
-  return out;
-}
-
-void ExpectCaught(const RunReport& r, const std::string& rule, Status want = Status::kFail) {
-  // MOCOCHECK_PRINT=1 shows what a user of mococheck would see.
-  if (std::getenv("MOCOCHECK_PRINT") != nullptr)
-    std::printf("%s\n", ConsoleReport(r, false).c_str());
-  ASSERT_TRUE(r.rules.count(rule)) << rule;
-  EXPECT_EQ(r.rules.at(rule).status, want) << rule << "\n" << ConsoleReport(r, false);
-  // The failing case explains itself: expected, observed, the time.
-  bool explained = false;
-  for (const CaseResult& c : r.cases) {
-    auto it = c.outcomes.find(rule);
-    if (it == c.outcomes.end() || it->second.evidence.empty()) continue;
-    const Evidence& e = it->second.evidence.front();
-    explained = !e.expected.empty() && !e.observed.empty();
-  }
-  EXPECT_TRUE(explained) << rule;
-}
-
-void PassThrough(const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
-  out.Write(raw);
-}
+using namespace dmc_testing;  // BrokenDmc16, RunBroken, Reencode, PassThrough
 
 TEST(BrokenDevice, UnbrokenWrapperPassesEverything) {
   const RunReport r = RunBroken(PassThrough);

@@ -622,6 +622,80 @@ void SoftLimits(DmcCaseContext& c) {
   MoveAndRest(c, 1, s);
 }
 
+// A hardware limit switch closing under a moving motor (in-process: the
+// runner closes the switch): MSG_MOTOR_HARD_STOP "can send this when a limit
+// has been hit", REASON 1 = upper, 2 = lower, with the MOTOR; the motor halts.
+void HardLimit(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t s = At(*p0, 0);
+  // Motor 1 bound to hardware set 1, soft limits off (MSG_MOTOR_SET_LIMITS HW SET).
+  ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, 0, 0, 0, 1}));
+  struct End {
+    bool high;
+    int32_t towards;
+    uint8_t reason;
+    const char* name;
+  };
+  const End ends[] = {{true, s + 50000, 1, "upper"}, {false, s - 50000, 2, "lower"}};
+  for (const End& e : ends) {
+    h.Call(dmc::MotorMove{1, e.towards});
+    h.Idle(300 * kMs);
+    const size_t mark = h.records().size();
+    if (!c.target.SetLimitInput(1, e.high, true)) {
+      c.log.push_back(
+          "the target has no limit switch the runner can close: hardware limits not exercised");
+      h.Call(dmc::MotorStopAll{});
+      WaitRest(h, kRestTimeout);
+      break;
+    }
+    const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+      return IsUnsolicited(r, MsgType::kMotorHardStop);
+    });
+    const DeviceRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+    const auto* m = As<dmc::MotorHardStop>(hs);
+    Expect(c, "DMC-LIM-007", m != nullptr && m->reason == e.reason && m->motor == uint8_t{1},
+           std::string("MOTOR_HARD_STOP reason=") + std::to_string(e.reason) + " motor=1 within " +
+               "500 ms of the " + e.name + " switch closing",
+           Show(hs));
+    const bool halted = WaitRest(h, 200 * kMs);
+    Expect(c, "DMC-LIM-007", halted,
+           std::string("motor 1 at rest within 200 ms of the ") + e.name + " switch closing",
+           "still moving");
+    c.target.SetLimitInput(1, e.high, false);
+    if (!halted) {
+      h.Call(dmc::MotorStopAll{});
+      WaitRest(h, kRestTimeout);
+    }
+  }
+  ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, 0, 0, 0, 0}));
+  MoveAndRest(c, 1, s);
+}
+
+// A general I/O input changing (in-process: the runner drives it): "The
+// device should also send this message, unsolicited, any time the inputs
+// change" (MSG_GIO_IN), after its debounce.
+void GioInputChange(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  for (const bool level : {true, false}) {
+    const size_t mark = h.records().size();
+    if (!c.target.SetGioInput(0, level)) {
+      c.log.push_back(
+          "the target has no input the runner can drive: GIO_IN on change not exercised");
+      return;
+    }
+    const int i = h.WaitFor(
+        mark, 1000 * kMs, [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kGioIn); });
+    const DeviceRecord* g = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+    const auto* in = As<dmc::GioInReport>(g);
+    Expect(c, "DMC-GIO-005", in != nullptr && ((in->triggers & 1u) != 0) == level,
+           std::string("an unsolicited GIO_IN with input 1 ") + (level ? "set" : "clear") +
+               " within 1 s of the change",
+           Show(g));
+  }
+}
+
 std::vector<DmcCase> MakeCases() {
   using N = Needs;
   return {
@@ -650,8 +724,13 @@ std::vector<DmcCase> MakeCases() {
        Unadvertised},
       {"io", "gio", N::kNothing, "GIO_IN, GIO_OUT, GIO_CAM", Io},
       {"io", "dmx", N::kDmx, "DMX set and channel 0", Dmx},
+      {"io", "gio-in-change", N::kGioIn, "an input changing (in-process): GIO_IN sent unsolicited",
+       GioInputChange},
       {"limits", "soft", N::kMotors, "moves and a jog against enabled and disabled soft limits",
        SoftLimits},
+      {"limits", "hard", N::kHwLimits,
+       "hardware limit switches closing under a moving motor (in-process): MOTOR_HARD_STOP",
+       HardLimit},
       {"rt", "upload-position", N::kRealTime, "upload, POSITION_FRAME, last-set repeat, range",
        UploadPosition},
       {"rt", "live-run", N::kRealTime, "RUN_MOVE (short form), GO, frame reports, RT_END", LiveRun},

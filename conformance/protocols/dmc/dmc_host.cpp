@@ -229,7 +229,10 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
   if (req_index >= 0) rec.request = req_index;
   records_.push_back(std::move(rec));
   const DeviceRecord& r = records_.back();
-  if (const auto* hi = As<dmc::HiResponse>(&r)) hi_ = *hi;
+  if (const auto* hi = As<dmc::HiResponse>(&r)) {
+    previous_hi_ = hi_;
+    hi_ = *hi;
+  }
 
   if (req_index >= 0) {
     Request& req = requests_[static_cast<size_t>(req_index)];
@@ -415,20 +418,9 @@ void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
     case MsgType::kMotorGetPosition:
       CheckUnsolicited(rec);  // same layout as the update
       break;
-    case MsgType::kGioIn: {
-      const auto* g = As<dmc::GioInReport>(&rec);
-      verdicts_.Check("DMC-GIO-001", g != nullptr && len == 4,
-                      [&] { return Ev(rec, "4 data bytes", std::to_string(len) + " data bytes"); });
-      if (g != nullptr && hi_ && hi_->gio_in_count >= 1) {
-        const uint32_t allowed =
-            hi_->gio_in_count >= 32 ? 0xffffffffu : ((1u << hi_->gio_in_count) - 1u);
-        verdicts_.Check("DMC-GIO-002", (g->triggers & ~allowed) == 0, [&] {
-          return Ev(rec, "bits only for inputs 1-" + std::to_string(hi_->gio_in_count),
-                    base::Hex(g->triggers, 4));
-        });
-      }
+    case MsgType::kGioIn:
+      CheckGioIn(rec);
       break;
-    }
     case MsgType::kVirtGetPosition:
       verdicts_.Check("DMC-VIRT-001", len == 24 || len == 37, [&] {
         return Ev(rec, "24 or 37 data bytes", std::to_string(len) + " data bytes");
@@ -436,6 +428,24 @@ void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
       break;
     default:
       break;
+  }
+}
+
+// MSG_GIO_IN, answered or sent on an input change (ERRATA 1.6: the same
+// layout both ways): TRIGGERS is a DWORD with bits only for the inputs the
+// device advertises.
+void DmcHost::CheckGioIn(const DeviceRecord& rec) {
+  const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;
+  const auto* g = As<dmc::GioInReport>(&rec);
+  verdicts_.Check("DMC-GIO-001", g != nullptr && len == 4,
+                  [&] { return Ev(rec, "4 data bytes", std::to_string(len) + " data bytes"); });
+  if (g != nullptr && hi_ && hi_->gio_in_count >= 1) {
+    const uint32_t allowed =
+        hi_->gio_in_count >= 32 ? 0xffffffffu : ((1u << hi_->gio_in_count) - 1u);
+    verdicts_.Check("DMC-GIO-002", (g->triggers & ~allowed) == 0, [&] {
+      return Ev(rec, "bits only for inputs 1-" + std::to_string(hi_->gio_in_count),
+                base::Hex(g->triggers, 4));
+    });
   }
 }
 
@@ -463,6 +473,8 @@ void DmcHost::CheckUnsolicited(const DeviceRecord& rec) {
     verdicts_.Check("DMC-UNS-003", ok, [&] {
       return Ev(rec, "REASON 0/1/2/100, MOTOR with 1 or 2 only", Show(&rec));
     });
+  } else if (rec.type == ToWire(MsgType::kGioIn)) {
+    CheckGioIn(rec);
   } else if (rec.type == ToWire(MsgType::kRtEnd)) {
     verdicts_.Check("DMC-RT-006", len == 0, [&] {
       return Ev(rec, "RT_END without data", std::to_string(len) + " data bytes");
@@ -526,8 +538,9 @@ void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
         return Ev(rec, "real-time (0x0001) with " + base::Hex(hi.capabilities & needs_rt, 4),
                   "capabilities " + base::Hex(hi.capabilities, 4));
       });
-  if (hi_ && rec.request >= 0) {
-    dmc::HiResponse a = *hi_, b = hi;
+  // Against the HI before this one (hi_ is this one already).
+  if (previous_hi_ && rec.request >= 0) {
+    dmc::HiResponse a = *previous_hi_, b = hi;
     verdicts_.Check("DMC-HI-012", a == b,
                     [&] { return Ev(rec, "the same HI as before", Show(&rec)); });
   }

@@ -88,6 +88,7 @@ class DmcHost : public HostBase {
   void OnBytes(wire::ByteView bytes);
   void OnFrame(const dmc::FrameRef& f);
   void CheckAnswer(Request& req, const DeviceRecord& rec);
+  void CheckGioIn(const DeviceRecord& rec);
   void CheckUnsolicited(const DeviceRecord& rec);
   void CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi);
   void CheckSpecific(const Request& req, const DeviceRecord& rec);
@@ -98,7 +99,8 @@ class DmcHost : public HostBase {
   std::deque<DeviceRecord> records_;
   std::vector<Request> requests_;
   std::optional<dmc::HiResponse> hi_;
-  std::set<uint32_t> acked_ids_;  // device IDs the host ACKed
+  std::optional<dmc::HiResponse> previous_hi_;  // the one before hi_ (DMC-HI-012)
+  std::set<uint32_t> acked_ids_;                // device IDs the host ACKed
   uint32_t next_id_ = kFirstHostId;
   bool ack_unsolicited_ = true;
   bool closed_ = false;

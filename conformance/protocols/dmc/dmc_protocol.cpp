@@ -26,6 +26,8 @@ bool Applies(Needs needs, const dmc::HiResponse& hi) {
       return hi.gio_out_count >= 1;
     case Needs::kGioIn:
       return hi.gio_in_count >= 1;
+    case Needs::kHwLimits:
+      return hi.hw_limit_count >= 1 && hi.motor_count >= 1;
     case Needs::kRealTime:
       return (hi.capabilities & dmc::kCapRealTime) != 0 && hi.motor_count >= 1;
     case Needs::kGoMotion:

@@ -63,8 +63,6 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       {"DMC-RT-016", Status::kNoted},
       // Not exercised: no soft-limit refusal, so nothing to leave in place.
       {"DMC-LIM-003", Status::kNotExercised},
-      // Not exercised: its GIO_IN is refused, and no input changes in the run.
-      {"DMC-GIO-002", Status::kNotExercised},
   };
   const RunReport r = RunInProcess({}, SourceDir() + "/fixtures/profiles/dmc-lite.json");
   for (const auto& [id, s] : r.rules) {

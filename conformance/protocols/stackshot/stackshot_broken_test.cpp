@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "conformance/core/report.h"
+#include "conformance/core/rule_proof_testing.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
 #include "devices/stackshot3x/stackshot3x.h"
 #include "session/session.h"
@@ -31,22 +32,7 @@ RunReport RunFaulty(const devices::Stackshot3xFaults& faults, RunOptions options
   return RunStackshot(target, options);
 }
 
-void ExpectCaught(const RunReport& r, const std::string& rule, Status want = Status::kFail) {
-  // MOCOCHECK_PRINT=1 shows what a user of mococheck would see.
-  if (std::getenv("MOCOCHECK_PRINT") != nullptr) {
-    std::printf("%s\n", ConsoleReport(r, false).c_str());
-  }
-  ASSERT_TRUE(r.rules.count(rule)) << rule;
-  EXPECT_EQ(r.rules.at(rule).status, want) << rule << "\n" << ConsoleReport(r, false);
-  bool explained = false;
-  for (const CaseResult& c : r.cases) {
-    auto it = c.outcomes.find(rule);
-    if (it == c.outcomes.end() || it->second.evidence.empty()) continue;
-    const Evidence& e = it->second.evidence.front();
-    explained = explained || (!e.expected.empty() && !e.observed.empty());
-  }
-  EXPECT_TRUE(explained) << rule << " explains no failure";
-}
+using proof::ExpectCaught;
 
 // Each fault against its rule, on the cases that exercise it; the same run
 // with the fault off passes that rule.

@@ -430,6 +430,13 @@ void CurveCase(SsCaseContext& c) {
   two.curves[1].p = {
       stackshot::BezierPoint{1.0f, *y0 + 0.5f}, {1.2f, *y0 + 0.5f}, {1.8f, *y0}, {2.0f, *y0}};
   ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, two, 0)));
+  // Requirements the list does not make: position continuity (only P0.x =
+  // previous P3.x is required) and a speed within the axis ("Limits should be
+  // applied": advice, no refusal). 2 mm in 10 ms outruns any rail.
+  stackshot::MotionConfig jump = two;
+  jump.curves[1].p[0].y = *y0 + 0.25f;
+  ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, jump, 0)));
+  ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, Curve(*y0, 2.0f, 0.01f), 0)));
   ReturnTo(c, 0, *p0);
 }
 

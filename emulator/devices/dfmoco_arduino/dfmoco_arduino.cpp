@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "sim/planner_dfmoco.h"
+#include "wire/dfmoco_sketch_reader.h"
 
 namespace moco::devices {
 namespace {
@@ -38,6 +39,44 @@ bool FitsInt32(double v) {
 TimeNs NextTick(TimeNs t) {
   return FloorDiv(t + sim::kDfmocoTickNs - 1, sim::kDfmocoTickNs) * sim::kDfmocoTickNs;
 }
+
+// Drives a motor through the sketch's chunks: `positions[i]` is the absolute
+// step position at chunk boundary first_boundary_ns + i * 50 ms; each chunk
+// moves at the constant velocity between two of them, and the time up to the
+// first boundary continues the chunk in progress. kStop requests (only a
+// go-motion's stop asks for them) are planned as DfmocoPlanner does.
+class SketchChunkPlanner final : public sim::Planner {
+ public:
+  SketchChunkPlanner(TimeNs first_boundary_ns, std::vector<int64_t> positions)
+      : first_boundary_ns_(first_boundary_ns), positions_(std::move(positions)) {}
+
+  std::vector<sim::Segment> Plan(const sim::PlanRequest& req) override {
+    if (req.kind != sim::PlanRequest::Kind::kMoveTo) return fallback_.Plan(req);
+    std::vector<sim::Segment> out;
+    const int64_t origin = positions_.back() - req.target_steps;
+    double x = req.start.x_steps;
+    TimeNs t = req.now_ns;
+    TimeNs b = first_boundary_ns_;
+    for (const int64_t p : positions_) {
+      if (b > t) {
+        sim::Segment s;
+        s.duration_s = static_cast<double>(b - t) / 1e9;
+        s.v0_steps_per_s = (static_cast<double>(p - origin) - x) / s.duration_s;
+        out.push_back(s);
+        x = static_cast<double>(p - origin);
+        t = b;
+      }
+      b += sim::kDfmocoChunkNs;
+    }
+    return out;
+  }
+  TimeNs StepQuantumNs() const override { return sim::kDfmocoTickNs; }
+
+ private:
+  TimeNs first_boundary_ns_;
+  std::vector<int64_t> positions_;
+  sim::DfmocoPlanner fallback_;
+};
 
 }  // namespace
 
@@ -96,6 +135,10 @@ void DfmocoArduino::CancelTimers() {
     scheduler_.Cancel(*t);
     *t = sim::Scheduler::kNoTimer;
   }
+  for (MotorState& s : motors_) {
+    scheduler_.Cancel(s.extend_timer);
+    s.extend_timer = sim::Scheduler::kNoTimer;
+  }
 }
 
 void DfmocoArduino::ResetVolatileState() {
@@ -106,6 +149,7 @@ void DfmocoArduino::ResetVolatileState() {
     motor.EmergencyHalt();
     motor.SetPlanner(MakeDfmocoPlanner());
     (void)motor.ResetPosition(0);
+    scheduler_.Cancel(motors_[Index(m)].extend_timer);
     motors_[Index(m)] = MotorState{};
     SetPulseRate(m, profile_.pulse_rate_steps_per_s);
   }
@@ -131,8 +175,95 @@ void DfmocoArduino::OnHostLink(bool open) {
 // --- state ----------------------------------------------------------------------------
 
 bool DfmocoArduino::MotorMoving(int motor) const {
+  if (!motors_[Index(motor)].in_go_motion) {
+    // The sketch's motorMoving bit.
+    return SketchAt(motor, FloorDiv(scheduler_.Now(), sim::kDfmocoChunkNs)).moving();
+  }
   const sim::StepperMotor& m = Motor(motor);
   return m.IsMoving() && m.CurrentPlan().EndNs() > scheduler_.Now();
+}
+
+int32_t DfmocoArduino::TargetOf(int motor) const {
+  if (motors_[Index(motor)].in_go_motion) return Saturate32(Motor(motor).Target());
+  return SketchAt(motor, FloorDiv(scheduler_.Now(), sim::kDfmocoChunkNs)).destination();
+}
+
+const SketchAxis& DfmocoArduino::SketchAt(int motor, int64_t k) const {
+  const MotorState& s = motors_[Index(motor)];
+  if (k <= s.base_k || s.window.empty()) return s.base;
+  const auto i = static_cast<size_t>(k - s.base_k - 1);
+  return i < s.window.size() ? s.window[i] : s.window.back();
+}
+
+int32_t DfmocoArduino::SketchPositionAfter(int motor, int64_t k) const {
+  const MotorState& s = motors_[Index(motor)];
+  if (k == s.base_k - 1) return s.position_before_base;
+  return SketchAt(motor, k).position();
+}
+
+SketchAxis& DfmocoArduino::Begin(int motor) {
+  MotorState& s = motors_[Index(motor)];
+  const int64_t k = FloorDiv(scheduler_.Now(), sim::kDfmocoChunkNs);
+  if (k != s.base_k || !s.window.empty()) {
+    const SketchAxis now = SketchAt(motor, k);
+    const int32_t before = SketchPositionAfter(motor, k - 1);
+    s.base = now;
+    s.position_before_base = before;
+    s.base_k = k;
+    s.window.clear();
+  }
+  scheduler_.Cancel(s.extend_timer);
+  s.extend_timer = sim::Scheduler::kNoTimer;
+  return s.base;
+}
+
+bool DfmocoArduino::Commit(int motor) {
+  MotorState& s = motors_[Index(motor)];
+  SketchAxis a = s.base;
+  for (size_t i = 0; i < kWindowChunks && a.moving(); ++i) {
+    (void)a.Update();
+    s.window.push_back(a);
+  }
+  // Update k's chunk steps during [k + 1, k + 2): the motor is at
+  // position_before_base at boundary base_k + 1, then follows the window.
+  std::vector<int64_t> positions;
+  positions.reserve(s.window.size() + 2);
+  positions.push_back(s.position_before_base);
+  positions.push_back(s.base.position());
+  for (const SketchAxis& w : s.window) positions.push_back(w.position());
+  while (positions.size() > 1 && positions.back() == positions[positions.size() - 2]) {
+    positions.pop_back();
+  }
+  sim::StepperMotor& mo = Motor(motor);
+  const int64_t target = positions.back();
+  const bool still = positions.size() == 1 && target == mo.Position();
+  if (!(still && !mo.IsMoving())) {
+    mo.SetPlanner(std::make_unique<SketchChunkPlanner>((s.base_k + 1) * sim::kDfmocoChunkNs,
+                                                       std::move(positions)));
+    const sim::MoveStatus status = mo.MoveTo(target);
+    mo.SetPlanner(MakeDfmocoPlanner());
+    if (status != sim::MoveStatus::kOk) {
+      mo.EmergencyHalt();
+      s.base.Rest(Saturate32(mo.Position()));
+      s.position_before_base = s.base.position();
+      s.window.clear();
+      return false;
+    }
+  }
+  ArmExtendTimer(motor);
+  return true;
+}
+
+void DfmocoArduino::ArmExtendTimer(int motor) {
+  MotorState& s = motors_[Index(motor)];
+  if (s.window.empty() || !s.window.back().moving()) return;
+  // At the boundary of the window's last update, plan the next window.
+  const TimeNs at = (s.base_k + static_cast<int64_t>(s.window.size())) * sim::kDfmocoChunkNs;
+  s.extend_timer = scheduler_.At(at, [this, motor] {
+    motors_[Index(motor)].extend_timer = sim::Scheduler::kNoTimer;
+    (void)Begin(motor);
+    (void)Commit(motor);
+  });
 }
 
 bool DfmocoArduino::AnyMoving() const {
@@ -143,6 +274,10 @@ bool DfmocoArduino::AnyMoving() const {
 }
 
 int64_t DfmocoArduino::ReportedPosition(int motor) const {
+  if (!motors_[Index(motor)].in_go_motion) {
+    // The sketch's position counter: the end of the chunk it planned last.
+    return SketchAt(motor, FloorDiv(scheduler_.Now(), sim::kDfmocoChunkNs)).position();
+  }
   const sim::StepperMotor& m = Motor(motor);
   if (!m.IsMoving()) return m.Position();
   // The sketch's position counter runs one chunk ahead of the steps: it holds
@@ -170,7 +305,7 @@ nlohmann::json DfmocoArduino::State() const {
     motors.push_back({{"motor", m},
                       {"position_steps", motor.Position()},
                       {"reported_position_steps", ReportedPosition(m)},
-                      {"target_steps", motor.Target()},
+                      {"target_steps", TargetOf(m)},
                       {"moving", MotorMoving(m)},
                       {"pulse_rate_steps_per_s", motors_[Index(m)].pulse_rate_steps_per_s}});
   }
@@ -222,13 +357,25 @@ void DfmocoArduino::OnHostBytes(wire::ByteView bytes) {
     }
     // A line longer than any well-formed one: the sketch parses as it reads,
     // so only the 40-argument limit can still answer.
-    const wire::Result<dfmoco::HostCommand> r = dfmoco::ParseHostLine(e.text, dialect_);
-    if (!r.ok() && dfmoco::IsTooManyArgs(r.error())) SendDirect(dfmoco::TooManyArgsReply{});
+    if (dfmoco::ReadLineAsSketch(e.text).kind == dfmoco::SketchReading::Kind::kTooManyArgs) {
+      SendDirect(dfmoco::TooManyArgsReply{});
+    }
   });
 }
 
 void DfmocoArduino::OnLine(std::string_view line) {
-  const wire::Result<dfmoco::HostCommand> r = dfmoco::ParseHostLine(line, dialect_);
+  // The sketch's own byte-at-a-time reading (wire/dfmoco_sketch_reader.h):
+  // "mm 1 --5" is -5, "mm 1 99999999999" wraps, "mm 1 x" has one argument.
+  // What it reads is then judged as a canonical line (argument counts,
+  // motors), which ParseHostLine reads the same way.
+  const dfmoco::SketchReading sketch = dfmoco::ReadLineAsSketch(line);
+  if (sketch.kind == dfmoco::SketchReading::Kind::kTooManyArgs) {
+    SendDirect(dfmoco::TooManyArgsReply{});
+    return;
+  }
+  if (sketch.kind == dfmoco::SketchReading::Kind::kNothing) return;  // no reply (FACTS)
+  const wire::Result<dfmoco::HostCommand> r =
+      dfmoco::ParseHostLine(sketch.CanonicalLine(), dialect_);
   if (!r.ok()) {
     SendDirect(dfmoco::ErrorReply(r.error()));
     return;
@@ -259,15 +406,13 @@ void DfmocoArduino::Handle(const dfmoco::HostCommand& command) {
                  [&](const dfmoco::PositionQuery&) { Send(Msg::kMp, idx); },
                  [&](const dfmoco::PositionQueryAll&) { SendDirect(dfmoco::ParseErrorReply{}); },
                  [&](const dfmoco::StopMotor&) {
-                   LeaveGoMotion(m);
-                   Motor(m).Stop();
+                   StopSketchMotor(m);
                    Send(Msg::kSm, idx);
                    Send(Msg::kMp, idx);
                  },
                  [&](const dfmoco::StopAll&) {
                    for (int i = 1; i <= rig_.motor_count(); ++i) {
-                     LeaveGoMotion(i);
-                     Motor(i).Stop();
+                     StopSketchMotor(i);
                    }
                    Send(Msg::kSa);
                  },
@@ -301,29 +446,56 @@ void DfmocoArduino::SetPulseRate(int motor, int32_t rate_steps_per_s) {
   p.max_velocity_steps_per_s = rate;
   p.max_accel_steps_per_s2 = rate / 2.0;  // FACTS: acceleration is half the pulse rate
   (void)Motor(motor).SetProfile(p);
+  // setPulsesPerSecond: later plans and stops use the new maxima; the
+  // segments already planned stay.
+  Begin(motor).SetPulseRate(rate);
+  (void)Commit(motor);
 }
 
 void DfmocoArduino::SetPosition(int motor, int64_t steps) {
   LeaveGoMotion(motor);
-  Motor(motor).EmergencyHalt();  // no-op at rest
-  (void)Motor(motor).ResetPosition(steps);
+  sim::StepperMotor& mo = Motor(motor);
+  SketchAxis& axis = Begin(motor);
+  if (axis.moving() || mo.IsMoving()) {
+    // Reading: a moving motor stops dead where it is first.
+    mo.EmergencyHalt();
+    axis.Rest(Saturate32(mo.Position()));
+  }
+  (void)mo.ResetPosition(steps);
+  motors_[Index(motor)].position_before_base = Saturate32(steps);
+  axis.SetPosition(Saturate32(steps));  // `np`: the destination stays
 }
 
 void DfmocoArduino::LeaveGoMotion(int motor) {
   MotorState& s = motors_[Index(motor)];
-  s.in_go_motion = false;
+  if (s.in_go_motion) {
+    Motor(motor).EmergencyHalt();
+    s.in_go_motion = false;
+    Begin(motor).Rest(Saturate32(Motor(motor).Position()));
+    s.position_before_base = s.base.position();
+  }
   s.chunk_phase_ns = 0;
+}
+
+void DfmocoArduino::StopSketchMotor(int motor) {
+  if (motors_[Index(motor)].in_go_motion) {
+    Motor(motor).Stop();  // a go-motion decelerates on its own chunk clock
+    return;
+  }
+  Begin(motor).Stop();
+  (void)Commit(motor);
 }
 
 void DfmocoArduino::HandleMove(int motor, int32_t position_steps) {
   const auto idx = static_cast<int>(motor - 1);
-  sim::StepperMotor& mo = Motor(motor);
-  if (!mo.IsMoving() && mo.Position() == position_steps) {
-    Send(Msg::kMp, idx);  // already there
+  LeaveGoMotion(motor);
+  SketchAxis& axis = Begin(motor);
+  if (axis.position() == position_steps) {
+    Send(Msg::kMp, idx);  // processGoPosition: already there
     return;
   }
-  LeaveGoMotion(motor);
-  if (mo.MoveTo(position_steps) != sim::MoveStatus::kOk || !mo.IsMoving()) {
+  axis.MoveTo(position_steps);
+  if (!Commit(motor)) {
     Send(Msg::kMp, idx);  // the rig refused (e.g. an e-stop): the motor stays
     return;
   }
@@ -332,71 +504,22 @@ void DfmocoArduino::HandleMove(int motor, int32_t position_steps) {
 
 void DfmocoArduino::HandleJog(const dfmoco::JogMotor& jog) {
   const int motor = jog.motor;
-  const auto idx = static_cast<int>(motor - 1);
-  sim::StepperMotor& mo = Motor(motor);
   LeaveGoMotion(motor);
-  const int speed = jog.velocity ? *jog.velocity : dfmoco::kMaxJogVelocity;
-  if (speed == 0) {
-    mo.Stop();  // 0 % of the pulse rate
-    Send(Msg::kJm, idx);
-    return;
-  }
-  // The sketch jogs a short way at a time: to where braking would start after
-  // half a second of speeding up or cruising, clamped to the destination.
-  // The host repeats `jm` while the jog lasts.
-  const int64_t pos = ReportedPosition(motor);
-  const double vi = mo.Velocity();
-  const int dir = jog.destination_steps > pos ? 1 : -1;
-  if (mo.IsMoving() && vi * dir < 0) {
-    mo.Stop();  // reversing: stop first
-    Send(Msg::kJm, idx);
-    return;
-  }
-  if (jog.destination_steps != pos) {
-    const double scale = static_cast<double>(speed) / dfmoco::kMaxJogVelocity;
-    const double rate = motors_[Index(motor)].pulse_rate_steps_per_s;
-    const double vmax = rate * scale;
-    const double accel = rate / 2 * scale;
-    const double brake = rate / 2;  // StepperMotor::Jog brakes at the full deceleration
-    const double horizon_s = 0.5;
-    const double v0 = std::fabs(vi);
-    double accel_s = 0;
-    double cruise_s = horizon_s;
-    if (v0 < vmax) {
-      accel_s = std::min((vmax - v0) / accel, horizon_s);
-      cruise_s = horizon_s - accel_s;
-    }
-    const double v_reached = v0 + accel * accel_s;
-    const double distance = v0 * accel_s + 0.5 * accel * accel_s * accel_s + v_reached * cruise_s +
-                            v_reached * v_reached / (2 * brake);
-    int64_t target = pos + dir * static_cast<int64_t>(std::min(distance, 4.3e9));
-    if ((dir > 0 && target > jog.destination_steps) ||
-        (dir < 0 && target < jog.destination_steps)) {
-      target = jog.destination_steps;
-    }
-    if (target != pos || mo.IsMoving()) (void)mo.Jog(target, speed);
-  }
-  Send(Msg::kJm, idx);
+  // jogMotor (FACTS): the destination is the position plus the distance of
+  // at most 0.5 s of acceleration, the rest of the 0.5 s cruising, and the
+  // braking, at vel/10000 of the pulse rate and its acceleration.
+  Begin(motor).Jog(jog.destination_steps, jog.velocity ? *jog.velocity : dfmoco::kMaxJogVelocity);
+  (void)Commit(motor);
+  Send(Msg::kJm, static_cast<int>(motor - 1));
 }
 
 void DfmocoArduino::HandleInch(int motor, int32_t destination_steps) {
-  const auto idx = static_cast<int>(motor - 1);
-  sim::StepperMotor& mo = Motor(motor);
   LeaveGoMotion(motor);
-  if (mo.IsMoving()) {
-    mo.Stop();  // an inch while moving only stops
-    Send(Msg::kIm, idx);
-    return;
-  }
-  // Creep two steps towards the destination (FACTS).
-  const int64_t pos = mo.Position();
-  const int dir = destination_steps > pos ? 1 : -1;
-  int64_t target = pos + 2 * dir;
-  if ((dir > 0 && target > destination_steps) || (dir < 0 && target < destination_steps)) {
-    target = destination_steps;
-  }
-  if (target != pos) (void)mo.MoveTo(target);
-  Send(Msg::kIm, idx);
+  // inchMotor (FACTS): direction against the destination, 2 steps in 10 ms;
+  // a motor whose loaded chunk steps is stopped instead.
+  Begin(motor).Inch(destination_steps);
+  (void)Commit(motor);
+  Send(Msg::kIm, static_cast<int>(motor - 1));
 }
 
 void DfmocoArduino::HandleBlur(const dfmoco::BlurFrame& bf) {
@@ -437,7 +560,11 @@ void DfmocoArduino::HandleBlur(const dfmoco::BlurFrame& bf) {
     if (!moves[Index(m)]) continue;
     const int64_t start = std::llround(moves[Index(m)]->start_steps);
     LeaveGoMotion(m);
-    if (Motor(m).Position() != start) (void)Motor(m).MoveTo(start);  // pre-position
+    SketchAxis& axis = Begin(m);
+    if (axis.position() != start) {  // pre-position
+      axis.MoveTo(Saturate32(start));
+      (void)Commit(m);
+    }
   }
   Send(Msg::kBf);
 }
@@ -512,7 +639,7 @@ std::string DfmocoArduino::Format(const TxMsg& m) const {
       reply = dfmoco::HelloFor(dialect_);
       break;
     case Msg::kMm:
-      reply = dfmoco::MoveReply{motor, Saturate32(Motor(motor).Target())};
+      reply = dfmoco::MoveReply{motor, TargetOf(motor)};
       break;
     case Msg::kMp:
       reply = dfmoco::PositionReply{motor, Saturate32(ReportedPosition(motor) + m.offset_steps)};
@@ -589,7 +716,7 @@ void DfmocoArduino::ArmReportTimer() {
   if (!running_ || report_timer_ != sim::Scheduler::kNoTimer) return;
   bool needed = false;
   for (int m = 1; m <= rig_.motor_count(); ++m) {
-    needed = needed || Motor(m).IsMoving() || motors_[Index(m)].report_pending;
+    needed = needed || MotorMoving(m) || Motor(m).IsMoving() || motors_[Index(m)].report_pending;
   }
   if (!needed) return;
   report_timer_ = scheduler_.At(NextReportTick(scheduler_.Now()), [this] { OnReportTick(); });
@@ -600,18 +727,26 @@ void DfmocoArduino::OnReportTick() {
   const TimeNs now = scheduler_.Now();
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     MotorState& s = motors_[Index(m)];
-    if (!Motor(m).IsMoving() && !s.report_pending) continue;
-    Send(Msg::kMp, m - 1, Motor(m).IsMoving() ? 0 : faults_.stop_report_offset_steps);
+    const bool moving = MotorMoving(m);
+    if (!moving && !s.report_pending) continue;
+    Send(Msg::kMp, m - 1, moving ? 0 : faults_.stop_report_offset_steps);
     s.report_pending = false;
     s.last_report_ns = now;
   }
   ArmReportTimer();
 }
 
-void DfmocoArduino::OnMotionFinished(int motor_id, TimeNs time_ns, int64_t /*steps*/) {
+void DfmocoArduino::OnMotionFinished(int motor_id, TimeNs time_ns, int64_t steps) {
   if (!running_ || !rig_.ValidMotor(motor_id)) return;
   MotorState& s = motors_[Index(motor_id)];
-  s.in_go_motion = false;
+  const SketchAxis& last = s.window.empty() ? s.base : s.window.back();
+  if (s.in_go_motion || last.moving() || last.position() != steps) {
+    // A go-motion ended, or the rig stopped the motor (e-stop, limit): the
+    // sketch rests where the motor is.
+    s.in_go_motion = false;
+    Begin(motor_id).Rest(Saturate32(steps));
+    s.position_before_base = s.base.position();
+  }
   s.chunk_phase_ns = 0;
   // One report after the stop, unless this instant's report already gave it.
   if (s.last_report_ns != time_ns) s.report_pending = true;

@@ -3,8 +3,10 @@
 // "DFMoco"; where FACTS and the protocol text disagree, FACTS wins).
 //
 // Model (docs/devices/dfmoco.md has the full account):
-//  - Input: LineFramer kSketch (only "\r\n" ends a line) and ParseHostLine with
-//    the profile's dialect. Unknown words get no reply. Codec errors, invalid
+//  - Input: LineFramer kSketch (only "\r\n" ends a line), read byte by byte as
+//    the sketch does (wire/dfmoco_sketch_reader.h: lenient numbers, wrapping
+//    int32), then judged by ParseHostLine with the profile's dialect. Unknown
+//    words get no reply. Codec errors, invalid
 //    motors, `bf` / `go` while a motor moves, `go` before a `bf`, `bf` without
 //    channels or with an exposure <= 0 answer `parse error`; 40 or more
 //    arguments answer `error: too many args`. Both bypass the outgoing queue.
@@ -14,10 +16,12 @@
 //    message reaches the transmit buffer (so `mp` carries the position then).
 //    The UART sends 57600/10 bytes per second; a message is written to the
 //    ByteSink whole at the moment its first byte starts.
-//  - Motion: one sim::Rig, DfmocoPlanner on every motor (50 ms chunks, 20 kHz,
-//    25 us steps); `pr v` sets max velocity v (clamped 100..20000) and max
-//    acceleration v/2. Reported positions are the planned position at the end
-//    of the 50 ms chunk in progress.
+//  - Motion: one sim::Rig; every motor follows the sketch's own planner
+//    (SketchAxis: 50 ms chunks planned one chunk ahead of their steps, 20 kHz,
+//    25 us steps), computed 2 s ahead and extended window by window; `pr v`
+//    sets max velocity v (clamped 100..20000) and max acceleration v/2.
+//    Reported positions are the sketch's position counter: the end of the
+//    chunk it planned last. Go-motion runs on GoMotionPlanner (go_motion.h).
 //  - Position reports: once per second (chunk-clock ticks 0.5 s + k s after the
 //    sketch starts) every moving motor and every motor that stopped, or was
 //    zeroed, since the previous tick gets `mp m pos`.
@@ -37,6 +41,7 @@
 #include "devices/device.h"
 #include "devices/dfmoco_arduino/dfmoco_profile.h"
 #include "devices/dfmoco_arduino/go_motion.h"
+#include "devices/dfmoco_arduino/sketch_motion.h"
 #include "sim/rig.h"
 #include "sim/scheduler.h"
 #include "wire/dfmoco.h"
@@ -127,8 +132,19 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
     sim::TimeNs last_report_ns = -1;  // time of the last periodic report
     sim::TimeNs chunk_phase_ns = 0;   // chunk clock of the motion in progress
     std::optional<BlurMove> blur;     // set by the last accepted `bf`
-    bool in_go_motion = false;        // running the blur move
+    bool in_go_motion = false;        // running the blur move (or its stop)
+    // The sketch's plan (sketch_motion.h): `base` is the state after the
+    // update at chunk boundary base_k (and any command since); window[i] the
+    // state after update base_k + 1 + i, computed ahead.
+    SketchAxis base;
+    int64_t base_k = 0;
+    int32_t position_before_base = 0;  // position after update base_k - 1
+    std::vector<SketchAxis> window;
+    sim::Scheduler::TimerId extend_timer = sim::Scheduler::kNoTimer;
   };
+  // Chunks of the sketch's plan computed ahead of time (2 s); a longer move
+  // is extended when its window runs out, so planning costs O(window).
+  static constexpr size_t kWindowChunks = 40;
 
   static size_t Index(int motor) { return static_cast<size_t>(motor - 1); }
   sim::StepperMotor& Motor(int motor) { return rig_.motor(motor); }
@@ -151,8 +167,21 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   void SetPulseRate(int motor, int32_t rate_steps_per_s);
   // Halts (if moving) and sets the position without motion (`zm`, `np`).
   void SetPosition(int motor, int64_t steps);
-  // Any new motion command ends a go-motion for that motor.
+  // Any new motion command ends a go-motion for that motor (it stops dead).
   void LeaveGoMotion(int motor);
+  // stopMotor (`sm`, `sa`).
+  void StopSketchMotor(int motor);
+  // The sketch state of `motor` after the update at chunk boundary k.
+  const SketchAxis& SketchAt(int motor, int64_t k) const;
+  int32_t SketchPositionAfter(int motor, int64_t k) const;
+  // The destination the sketch reports in `mm`.
+  int32_t TargetOf(int motor) const;
+  // Takes the sketch state at the latest chunk boundary as the base for a
+  // command; Commit plans ahead from it and drives the motor. Commit returns
+  // false when the rig refuses the motion (the motor then rests where it is).
+  SketchAxis& Begin(int motor);
+  bool Commit(int motor);
+  void ArmExtendTimer(int motor);
 
   // Output.
   void Send(Msg msg, int motor_index = 0, int32_t offset_steps = 0);

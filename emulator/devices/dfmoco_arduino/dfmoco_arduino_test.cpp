@@ -14,6 +14,8 @@
 
 #include "devices/dfmoco_arduino/dfmoco_test_support.h"
 #include "sim/planner_dfmoco.h"
+#include "sim/step_trace.h"
+#include "wire/dfmoco_sketch_reader.h"
 
 namespace moco::devices {
 namespace {
@@ -214,8 +216,8 @@ TEST(DfmocoArduino, EveryLineOutEndsInCrLf) {
 TEST(DfmocoArduino, UnknownCommandsGetNoReply) {
   Bench b;
   Settled(b);
-  for (const char* line :
-       {"xx", "xx 1 2", "", "m", "MS", "MM 1 2", " mm 1 2", "hello", "mz 1", "ms\t", "\x01\x02"}) {
+  for (const char* line : {"xx", "xx 1 2", "", "m", "MS", "MM 1 2", " mm 1 2", "xmm 1 2", "hello",
+                           "mz 1", "\x01\x02"}) {
     EXPECT_EQ(Ask(b, line), Texts{}) << "line \"" << line << "\"";
   }
 }
@@ -292,31 +294,36 @@ TEST(DfmocoArduino, ZeroWhileMovingStopsDeadOnZero) {
   EXPECT_EQ(b.dev.rig()->motor(1).Position(), 0);
 }
 
-TEST(DfmocoArduino, StopMotorDeceleratesAndReportsChunkEnd) {
+TEST(DfmocoArduino, StopMotorDeceleratesFromTheLoadedChunkSpeedAndReportsTheChunkEnd) {
   Bench b;
   Settled(b);
-  // pr 5000: accel 2500 steps/s^2. From t = 1 s (a chunk boundary), the motor
-  // reaches 5000 steps/s at t = 3 s, 5000 steps out, and cruises.
+  // pr 5000: accel 2500 steps/s^2. `mm` at t = 1 s is planned by the update
+  // at 1.05 s, whose chunk steps during 1.10 .. 1.15 s: the position counter
+  // after the update at t holds x(t - 1 s), the steps trail it by two chunks.
   b.Line("mm 1 100000");
   b.RunUntil(3010 * kMs);
   b.TakeLines();
   b.Line("sm 1");
   b.RunFor(5 * kMs);
-  // The chunk in progress (3.00 .. 3.05 s) ends 0.05 s * 5000 = 250 steps further.
+  // The counter after the update at 3.00 s: x(2.0) = 5000, 4999 in the
+  // sketch's single precision; `mp` reports it at once.
   const Texts replies = b.TakeTexts();
   ASSERT_EQ(replies.size(), 2u);
   EXPECT_EQ(replies[0], "sm 1");
-  ASSERT_EQ(replies[1].rfind("mp 1 ", 0), 0u) << replies[1];
-  EXPECT_NEAR(std::stod(replies[1].substr(5)), 5250, 1.0);
-  // Then it decelerates over 2 s and 5000 more steps, not at once.
+  EXPECT_EQ(replies[1], "mp 1 4999");
+  // stopMotor: the loaded chunk is 4999 - 4753 = 246 steps, speed 246 * 65.6,
+  // v = 20 * speed / 65.536 = 4924.8 steps/s; braking at 2500 steps/s^2 covers
+  // int(v^2 / 5000) more: the destination 9849 is computed once.
+  EXPECT_EQ(b.dev.State()["motors"][0]["target_steps"], 9849);
+  // It decelerates over about 2 s, not at once.
   const int64_t at_stop = b.dev.rig()->motor(1).Position();
   b.RunUntil(3500 * kMs);
   EXPECT_GT(b.dev.rig()->motor(1).Position(), at_stop + 2000);
-  b.RunUntil(4950 * kMs);
+  b.RunUntil(4900 * kMs);
   EXPECT_TRUE(b.dev.MotorMoving(1));
-  b.RunUntil(5250 * kMs);  // at rest within a chunk or two of 5.05 s
+  b.RunUntil(5300 * kMs);
   EXPECT_FALSE(b.dev.MotorMoving(1));
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10250, 2.0);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 9849);
 }
 
 TEST(DfmocoArduino, StopOnAMotorAtRest) {
@@ -325,12 +332,12 @@ TEST(DfmocoArduino, StopOnAMotorAtRest) {
   EXPECT_EQ(Ask(b, "sm 3"), (Texts{"sm 3", "mp 3 0"}));
 }
 
-TEST(DfmocoArduino, StopAllDeceleratesEveryMotor) {
+TEST(DfmocoArduino, StopAllDeceleratesEveryMotorFromItsLoadedChunk) {
   Bench b;
   Settled(b);
   b.Line("mm 1 100000");
   b.Line("mm 3 -100000");
-  b.RunUntil(3010 * kMs);  // both cruise at 5000 steps/s, 5000 steps out
+  b.RunUntil(3010 * kMs);
   b.TakeLines();
   EXPECT_EQ(Ask(b, "sa", 0), Texts{"sa"});
   EXPECT_TRUE(b.dev.MotorMoving(1));
@@ -338,9 +345,12 @@ TEST(DfmocoArduino, StopAllDeceleratesEveryMotor) {
   b.RunUntil(6 * kSec);
   b.TakeLines();
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"});
-  // The chunk in progress runs out (250 steps), then 5000 steps of braking.
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 10250, 2.0);
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(3).Position()), -10250, 2.0);
+  // Motor 1 as in the `sm` case: 4999 + int(4924.8^2 / 5000) = 9849. The
+  // direction pins start forward, so motor 3's first chunk only turns its pin
+  // and its ramp runs one chunk behind: counter -4753, loaded chunk 241 steps
+  // (v = 4824.7), -4753 - 4655 = -9408.
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 9849);
+  EXPECT_EQ(b.dev.rig()->motor(3).Position(), -9408);
 }
 
 TEST(DfmocoArduino, PulseRateIsClampedTo100Through20000) {
@@ -354,41 +364,48 @@ TEST(DfmocoArduino, PulseRateIsClampedTo100Through20000) {
   EXPECT_EQ(b.dev.PulseRate(4), 5000) << "default";
 }
 
-TEST(DfmocoArduino, PulseRateSetsSpeedAndHalfAsMuchAcceleration) {
+TEST(DfmocoArduino, PulseRateSetsSpeedAndHalfAsMuchAccelerationStepsTrailingThePlanByTwoChunks) {
   Bench b;
   Settled(b);
   // pr 1000: 1000 steps/s, 500 steps/s^2. 4000 steps: 2 s up (1000 steps),
-  // 2 s cruise (2000 steps), 2 s down: 6 s from the chunk boundary at 1 s.
+  // 2 s cruise (2000 steps), 2 s down. Planned from the update at 1.05 s, the
+  // steps follow x(t - 1.1 s) (the chunk an update plans steps one chunk later).
   b.Line("pr 1 1000");
   b.Line("mm 1 4000");
   b.RunUntil(2 * kSec);
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 250, 2.0);  // 500/2 * 1^2
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 202);  // int(250 * 0.9^2)
   b.RunUntil(5 * kSec);
-  EXPECT_NEAR(static_cast<double>(b.dev.rig()->motor(1).Position()), 1000 + 2000, 2.0);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 2899);  // 1000 + 1000 * 1.9, single precision
   b.RunUntil(6950 * kMs);
   EXPECT_TRUE(b.dev.MotorMoving(1));
-  b.RunUntil(7050 * kMs);
+  b.RunUntil(7150 * kMs);  // the sketch plans a chunk ahead of the steps
   EXPECT_FALSE(b.dev.MotorMoving(1));
   EXPECT_EQ(b.dev.rig()->motor(1).Position(), 4000);
 }
 
-TEST(DfmocoArduino, StepsNeverExceed20kHzAndFallOn25usTicks) {
+TEST(DfmocoArduino, StepsNeverExceed20kHzAndFallOn25usTicksAcrossEveryPlanningWindow) {
   Bench b;
   Settled(b);
   Ask(b, "pr 1 20000");
-  Ask(b, "mm 1 30000");
-  const sim::Plan& plan = b.dev.rig()->motor(1).CurrentPlan();
+  // 30000 steps at 20000 steps/s take about 2.5 s: longer than one planning
+  // window (2 s), so the steps must run on seamlessly when it is extended.
   TimeNs last = -1;
   int64_t edges = 0;
-  plan.ForEachEdge(plan.origin_ns(), plan.EndNs(), [&](const sim::StepEdge& e) {
+  int64_t gaps_over_a_chunk = 0;
+  sim::StepTrace trace(b.dev.rig()->motor(1), 16, 0, sim::kTimeNever, [&](const sim::StepEdge& e) {
     EXPECT_EQ(e.time_ns % sim::kDfmocoTickNs, 0);
     if (last >= 0) {
       EXPECT_GE(e.time_ns - last, 2 * sim::kDfmocoTickNs);
+      if (e.time_ns - last > sim::kDfmocoChunkNs) ++gaps_over_a_chunk;
     }
     last = e.time_ns;
     ++edges;
   });
+  Ask(b, "mm 1 30000", 6 * kSec);
+  trace.Sync();
   EXPECT_EQ(edges, 30000);
+  EXPECT_EQ(gaps_over_a_chunk, 0) << "no pause where a window ends";
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 30000);
 }
 
 // jm: toward the destination a short way at a time (the host repeats it).
@@ -399,9 +416,9 @@ TEST(DfmocoArduino, JogMovesTowardTheDestinationAndStopsIfNotRepeated) {
   EXPECT_TRUE(b.dev.MotorMoving(1));
   b.RunFor(5 * kSec);
   // pr 5000 (2500 steps/s^2): half a second of speeding up reaches 1250 steps/s
-  // after 312.5 steps; braking from there takes another 312.5.
+  // after int(312.5) = 312 steps; braking from there: int(312 + 312.5) = 624.
   EXPECT_FALSE(b.dev.MotorMoving(1));
-  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 625);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 624);
 }
 
 TEST(DfmocoArduino, RepeatedJogKeepsGoingAndStopsAtTheDestination) {
@@ -418,10 +435,11 @@ TEST(DfmocoArduino, JogVelocityScalesSpeedOnProtocol2) {
   Bench b;
   Settled(b);
   // 50 %: 2500 steps/s max, 1250 steps/s^2; half a second reaches 625 steps/s
-  // after 156.25 steps; braking at the full 2500 steps/s^2 takes 78.125.
+  // after int(156.25) = 156 steps; braking at the same 1250 steps/s^2 takes
+  // 156.25 more (jogMotor): int(156 + 156.25) = 312.
   EXPECT_EQ(Ask(b, "jm 1 100000 5000"), Texts{"jm 1"});
   b.RunFor(5 * kSec);
-  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 234);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 312);
 }
 
 TEST(DfmocoArduino, JogVelocityZeroStops) {
@@ -471,19 +489,23 @@ INSTANTIATE_TEST_SUITE_P(Versions, DfmocoDialects,
                          ::testing::Values(DfmocoFirmware::k1_2_7, DfmocoFirmware::k1_3_0,
                                            DfmocoFirmware::k1_3_1, DfmocoFirmware::k2_0_0));
 
-TEST(DfmocoArduino, InchCreepsTwoStepsAtATime) {
+TEST(DfmocoArduino, InchMovesTwoStepsFromThePositionAndClampsOnlyTheDestination) {
   Bench b;
   Settled(b);
+  // inchMotor: direction = sign(target - destination); the motion is always
+  // position +- 2 (movePosition[1]); only the destination is clamped to the target.
   EXPECT_EQ(Ask(b, "im 1 5", 200 * kMs), Texts{"im 1"});
   EXPECT_EQ(b.dev.rig()->motor(1).Position(), 2);
   Ask(b, "im 1 5", 200 * kMs);
   EXPECT_EQ(b.dev.rig()->motor(1).Position(), 4);
   Ask(b, "im 1 5", 200 * kMs);
-  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 5) << "clamped to the destination";
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 6) << "two steps, past the target";
+  EXPECT_EQ(b.dev.State()["motors"][0]["target_steps"], 5) << "the destination is clamped";
+  // The target is not above the destination (5): the inch goes down.
   Ask(b, "im 1 5", 200 * kMs);
-  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 5);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 4);
   Ask(b, "im 1 -100", 200 * kMs);
-  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 3);
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 2);
 }
 
 TEST(DfmocoArduino, InchWhileMovingStops) {
@@ -510,9 +532,6 @@ TEST_P(DfmocoDialects, ParseErrors) {
                            "mp",
                            "mp 1 2",
                            "mp 5",
-                           "ms 1",
-                           "hi 1",
-                           "sa 1",
                            "sm",
                            "sm 0",
                            "pr 1",
@@ -521,8 +540,6 @@ TEST_P(DfmocoDialects, ParseErrors) {
                            "zm 5",
                            "np 1",
                            "np 1 x",
-                           "mm 1 99999999999",
-                           "mm 1 1.5",
                            "im 1",
                            "im 5 1",
                            "jm 1",
@@ -538,6 +555,63 @@ TEST_P(DfmocoDialects, ParseErrors) {
     EXPECT_EQ(Ask(b, line), Texts{"parse error"}) << "line \"" << line << "\"";
   }
   EXPECT_EQ(Ask(b, "ms"), Texts{"ms 0000"}) << "nothing moved";
+}
+
+// processUserMessage, byte by byte (wire/dfmoco_sketch_reader.h): an argument
+// starts at a digit or '-' after a space, later digits append with 32-bit
+// wrap-around, other bytes are skipped, the sign applies at a space or the
+// line end right after a digit.
+TEST(DfmocoArduino, NumbersAreReadAsTheSketchReadsThemByteByByte) {
+  Bench b;
+  Settled(b);
+  EXPECT_EQ(Ask(b, "mm 1 --5"), Texts{"mm 1 -5"}) << "the second '-' is skipped";
+  b.RunFor(3 * kSec);
+  b.TakeLines();
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), -5);
+  EXPECT_EQ(Ask(b, "np 2 99999999999"), Texts{"mp 2 1215752191"}) << "wraps in 32 bits";
+  EXPECT_EQ(Ask(b, "np 2 4294967295"), Texts{"mp 2 -1"});
+  EXPECT_EQ(Ask(b, "np 2 1.5"), Texts{"mp 2 15"}) << "the '.' is skipped";
+  EXPECT_EQ(Ask(b, "np 2 -7x"), Texts{"mp 2 7"}) << "no digit before the end: no sign";
+  EXPECT_EQ(Ask(b, "np 2 -7 "), Texts{"mp 2 -7"});
+  EXPECT_EQ(Ask(b, "np 2 -"), Texts{"mp 2 0"});
+  EXPECT_EQ(Ask(b, "np  2   30"), Texts{"mp 2 30"}) << "any run of spaces";
+  EXPECT_EQ(Ask(b, "np 2 30\rxyz"), Texts{"mp 2 30"}) << "a bare '\\r' ends the arguments";
+}
+
+TEST(DfmocoArduino, ANonNumberIsNoArgumentAtAll) {
+  Bench b;
+  Settled(b);
+  // "x" does not start an argument: `mm 1 x` has one argument, a parse error.
+  EXPECT_EQ(Ask(b, "mm 1 x"), Texts{"parse error"});
+  EXPECT_EQ(Ask(b, "np 1 x"), Texts{"parse error"});
+  EXPECT_EQ(Ask(b, "mm 1 x 40"), Texts{"mm 1 40"});
+  b.RunFor(3 * kSec);
+  b.TakeLines();
+  EXPECT_EQ(b.dev.rig()->motor(1).Position(), 40);
+}
+
+TEST(DfmocoArduino, WordsWithoutArgumentsIgnoreTheRestOfTheLine) {
+  Bench b;
+  Settled(b);
+  // hi, ms, sa and go take no arguments: the sketch skips to the line end.
+  EXPECT_EQ(Ask(b, "ms 1"), Texts{"ms 0000"});
+  EXPECT_EQ(Ask(b, "ms\t"), Texts{"ms 0000"});
+  EXPECT_EQ(Ask(b, "msx 1 2 3"), Texts{"ms 0000"});
+  EXPECT_EQ(Ask(b, "hi 7"), Texts{"hi 2 4 2.0.0"});
+  EXPECT_EQ(Ask(b, "sa 1"), Texts{"sa"});
+}
+
+TEST(DfmocoArduino, SketchReaderDropsADigitBeforeTheFirstArgument) {
+  // Reading: the sketch would write in front of its argument array.
+  EXPECT_EQ(dfmoco::ReadLineAsSketch("mm5 1").kind, dfmoco::SketchReading::Kind::kNothing);
+  const dfmoco::SketchReading r = dfmoco::ReadLineAsSketch("jm 3 -100 2500");
+  ASSERT_EQ(r.kind, dfmoco::SketchReading::Kind::kCommand);
+  EXPECT_EQ(r.CanonicalLine(), "jm 3 -100 2500");
+  std::string forty = "mm";
+  for (int i = 0; i < 40; ++i) forty += " -1";
+  EXPECT_EQ(dfmoco::ReadLineAsSketch(forty).kind, dfmoco::SketchReading::Kind::kTooManyArgs);
+  forty.resize(forty.size() - 3);
+  EXPECT_EQ(dfmoco::ReadLineAsSketch(forty).args.size(), 39u) << "39 arguments fit";
 }
 
 TEST_P(DfmocoDialects, FortyArgumentsAreTooMany) {
@@ -561,27 +635,26 @@ TEST_P(DfmocoDialects, FortyArgumentsAreTooMany) {
 TEST(DfmocoArduino, MpEverySecondWhileMovingAndOnceAfterTheStop) {
   Bench b;
   Settled(b);
-  // From the chunk boundary at 1 s: 2 s up to 5000 steps/s (5000 steps), 2 s
-  // cruise (10000), 2 s down (5000): at rest on 20000 at t = 7 s.
+  // Planned from the update at 1.05 s: 2 s up to 5000 steps/s (5000 steps),
+  // 2 s cruise (10000), 2 s down (5000), 20000 in the counter at t = 7 s.
   EXPECT_EQ(Ask(b, "mm 1 20000", 0), Texts{"mm 1 20000"});
   b.RunUntil(10 * kSec);
   const std::vector<TimedLine> lines = b.TakeLines();
-  // Reports fall 0.5 s + k s after boot and carry the position at the end of
-  // the 50 ms chunk in progress, x(tau) with tau = t + 0.05 s - 1 s:
-  //   tau 0.55: 1250 tau^2 = 378.1     tau 1.55: 3003.1
-  //   tau 2.55: 5000 + 5000 (tau - 2) = 7750     tau 3.55: 12750
-  //   tau 4.55: 15000 + 5000 (tau - 4) - 1250 (tau - 4)^2 = 17371.9
-  //   tau 5.55: 19746.9, and after the stop at 7 s: 20000 at 7.5 s.
-  const std::vector<std::pair<TimeNs, double>> want = {
-      {1500 * kMs, 378.1},   {2500 * kMs, 3003.1},  {3500 * kMs, 7750}, {4500 * kMs, 12750},
-      {5500 * kMs, 17371.9}, {6500 * kMs, 19746.9}, {7500 * kMs, 20000}};
+  // Reports fall 0.5 s + k s after boot and carry the position counter: after
+  // the update at t it holds x(tau), tau = t - 1 s, in single precision:
+  //   tau 0.5: 1250 tau^2 = 312.5     tau 1.5: 2812.5
+  //   tau 2.5: 5000 + 5000 (tau - 2) = 7500     tau 3.5: 12500
+  //   tau 4.5: 15000 + 5000 (tau - 4) - 1250 (tau - 4)^2 = 17187.5
+  //   tau 5.5: 19687.5, and after the stop at 7 s: 20000 at 7.5 s.
+  const std::vector<std::pair<TimeNs, std::string>> want = {
+      {1500 * kMs, "mp 1 312"},   {2500 * kMs, "mp 1 2812"},  {3500 * kMs, "mp 1 7499"},
+      {4500 * kMs, "mp 1 12499"}, {5500 * kMs, "mp 1 17187"}, {6500 * kMs, "mp 1 19687"},
+      {7500 * kMs, "mp 1 20000"}};
   ASSERT_EQ(lines.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) {
     EXPECT_EQ(lines[i].t_ns, want[i].first) << i;
-    ASSERT_EQ(lines[i].text.rfind("mp 1 ", 0), 0u) << lines[i].text;
-    EXPECT_NEAR(std::stod(lines[i].text.substr(5)), want[i].second, 1.0) << lines[i].text;
+    EXPECT_EQ(lines[i].text, want[i].second) << i;
   }
-  EXPECT_EQ(lines.back().text, "mp 1 20000");
   EXPECT_EQ(b.sched.PendingCount(), 0u) << "quiet once everything is reported";
 }
 
@@ -618,7 +691,9 @@ TEST(DfmocoArduino, ReportedPositionLeadsTheSteps) {
   Ask(b, "mm 1 -20000", 2 * kSec + 10 * kMs);
   const int64_t now = b.dev.rig()->motor(1).Position();
   const int64_t reported = b.dev.ReportedPosition(1);
-  EXPECT_EQ(reported, b.dev.rig()->motor(1).PositionAt(3050 * kMs));
+  // The counter holds the end of the chunk planned at 3.00 s, which steps
+  // during 3.05 .. 3.10 s: two chunks ahead of the steps.
+  EXPECT_EQ(reported, b.dev.rig()->motor(1).PositionAt(3100 * kMs));
   EXPECT_LT(reported, now);
   EXPECT_EQ(Ask(b, "mp 1", 0), Texts{"mp 1 " + std::to_string(reported)});
 }
@@ -684,20 +759,23 @@ TEST(DfmocoArduino, MpTextIsTakenWhenTransmitted) {
   Bench b;
   Settled(b);
   // Queue behind a long burst: the mp reports where the motor is when it
-  // finally leaves, not when it was asked for.
+  // finally leaves, not when it was asked for. Asked at 1.03 s (counter 0),
+  // it leaves after 137 bytes, past the update at 1.05 s that plans the first
+  // chunk: int(1250 * 0.05^2) = 3.
+  b.RunUntil(1030 * kMs);
   std::string burst;
   for (int i = 0; i < 14; ++i) burst += "ms\r\n";
   burst += "mm 1 1000\r\nmp 1\r\n";
   b.Host(burst);
-  b.RunFor(100 * kMs);  // before the first periodic report
+  EXPECT_EQ(b.dev.ReportedPosition(1), 0);
+  b.RunUntil(1400 * kMs);  // before the first periodic report
   const std::vector<TimedLine> lines = b.TakeLines();
   ASSERT_EQ(lines.size(), 16u);
   EXPECT_EQ(lines[14].text, "mm 1 1000");
   const TimedLine& mp = lines[15];
-  EXPECT_GT(mp.t_ns, kSec);
-  const TimeNs chunk_end = (mp.t_ns / sim::kDfmocoChunkNs + 1) * sim::kDfmocoChunkNs;
-  EXPECT_EQ(mp.text, "mp 1 " + std::to_string(b.dev.rig()->motor(1).PositionAt(chunk_end)));
-  EXPECT_NE(mp.text, "mp 1 0");
+  EXPECT_EQ(mp.t_ns, 1030 * kMs + BytesTime(14 * 9 + 11));
+  EXPECT_GT(mp.t_ns, 1050 * kMs);
+  EXPECT_EQ(mp.text, "mp 1 3");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -885,6 +963,126 @@ bool LegalDeviceLine(const std::string& line, const dfmoco::Dialect& dialect) {
   return !motor || dfmoco::MotorInRange(*motor, dialect);
 }
 
+// ---------------------------------------------------------------------------------------
+// Motion as the DFMoco 2.0.0 sketch plans it (FACTS "Jog", "Inch", "Stop";
+// measured on the real Uno sketch under simavr: 312, 79, 2385)
+
+// The motor's steps and the sketch's position counter agree once at rest.
+int64_t RestingPosition(Bench& b, int motor) {
+  b.RunFor(10 * kSec);
+  EXPECT_FALSE(b.dev.MotorMoving(motor));
+  EXPECT_EQ(b.dev.State()["motors"][motor - 1]["position_steps"].get<int64_t>(),
+            b.dev.ReportedPosition(motor));
+  return b.dev.ReportedPosition(motor);
+}
+
+TEST(DfmocoSketchMotion, JogDestinationIsHalfASecondOfAccelAndCruisePlusBrakingThenSmStopsThere) {
+  for (const TimeNs phase : {0 * kMs, 10 * kMs, 49 * kMs}) {
+    Bench b;
+    Settled(b);
+    b.RunFor(phase);
+    // jm at 50 %: 2500 steps/s, 1250 steps/s^2 from rest: 0.5 s of
+    // acceleration covers int(156.25) = 156, braking from 625 steps/s 156.25
+    // more: destination int(156 + 156.25) = 312.
+    EXPECT_EQ(Ask(b, "jm 2 100000 5000"), (Texts{"jm 2"}));
+    b.RunFor(kSec - 20 * kMs);
+    const Texts sm = Ask(b, "sm 2");
+    EXPECT_NE(std::find(sm.begin(), sm.end(), "sm 2"), sm.end());
+    EXPECT_EQ(RestingPosition(b, 2), 312) << "phase " << phase;
+  }
+}
+
+TEST(DfmocoSketchMotion, RepeatedJogExtendsTheDestinationFromTheLoadedChunkSpeed) {
+  Bench b;
+  Settled(b);
+  (void)Ask(b, "jm 1 100000");  // 100 %: int(312.5) = 312, int(312 + 312.5) = 624
+  const int32_t first = b.dev.State()["motors"][0]["target_steps"].get<int32_t>();
+  EXPECT_EQ(first, 624);
+  b.RunFor(300 * kMs);
+  (void)Ask(b, "jm 1 100000");
+  const int32_t second = b.dev.State()["motors"][0]["target_steps"].get<int32_t>();
+  EXPECT_GT(second, first);
+  EXPECT_EQ(RestingPosition(b, 1), second);
+}
+
+TEST(DfmocoSketchMotion, InchDirectionIsAgainstTheDestinationNotThePositionAfterNp) {
+  Bench b;
+  Settled(b);
+  EXPECT_EQ(Ask(b, "np 3 77"), (Texts{"mp 3 77"}));
+  // Destination still 0: 50 > 0 inches up, two steps from the position.
+  EXPECT_EQ(Ask(b, "im 3 50"), (Texts{"im 3"}));
+  EXPECT_EQ(RestingPosition(b, 3), 79);
+}
+
+TEST(DfmocoSketchMotion, InchMovesTwoStepsWithinOneChunk) {
+  Bench b;
+  Settled(b);
+  (void)Ask(b, "im 1 10", 0);
+  // Planned after the next boundary, stepped in the chunk after it.
+  b.RunFor(160 * kMs);
+  EXPECT_EQ(b.dev.State()["motors"][0]["position_steps"].get<int64_t>(), 2);
+  EXPECT_EQ(RestingPosition(b, 1), 2);
+}
+
+TEST(DfmocoSketchMotion, InchWhileTheLoadedChunkStepsStopsInstead) {
+  Bench b;
+  Settled(b);
+  (void)Ask(b, "mm 1 100000");
+  b.RunFor(kSec);
+  (void)Ask(b, "im 1 200000");
+  const int64_t end = RestingPosition(b, 1);
+  EXPECT_GT(end, 0);
+  EXPECT_LT(end, 100000);
+}
+
+TEST(DfmocoSketchMotion, StopDeceleratesFromTheLoadedChunkSpeedAndEndsOnTheIntegerComputedOnce) {
+  for (const TimeNs phase : {0 * kMs, 25 * kMs, 49 * kMs}) {
+    Bench b;
+    Settled(b);
+    b.RunFor(phase);
+    EXPECT_EQ(Ask(b, "pr 4 20000", 0), (Texts{"pr 4 20000"}));
+    EXPECT_EQ(Ask(b, "mm 4 30000"), (Texts{"mm 4 30000"}));
+    b.RunFor(500 * kMs - 20 * kMs);
+    // Loaded chunk: 238 steps, speed 238 * 65.6 = 15612.8, v = 4764.6
+    // steps/s from position 1250: int(1250 + v^2 / 20000) = 2385.
+    const Texts sa = Ask(b, "sa");
+    EXPECT_NE(std::find(sa.begin(), sa.end(), "sa"), sa.end());
+    EXPECT_EQ(b.dev.State()["motors"][3]["target_steps"].get<int32_t>(), 2385);
+    EXPECT_EQ(RestingPosition(b, 4), 2385) << "phase " << phase;
+  }
+}
+
+TEST(DfmocoSketchMotion, SecondZmAnswerComesWithTheNextReportTickCarryingThePositionThen) {
+  Bench b;
+  Settled(b);  // t = 1 s; report ticks at 0.5 s + k s
+  b.RunFor(100 * kMs);
+  EXPECT_EQ(Ask(b, "zm 1"), (Texts{"mp 1 0"}));
+  (void)Ask(b, "mm 1 400");
+  const std::vector<TimedLine> lines = [&] {
+    b.RunUntil(1500 * kMs + kMs);
+    return b.TakeLines();
+  }();
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.front().t_ns, 1500 * kMs);
+  EXPECT_NE(lines.front().text, "mp 1 0");  // the motor moved meanwhile
+  EXPECT_EQ(lines.front().text.rfind("mp 1 ", 0), 0u);
+}
+
+TEST(DfmocoSketchMotion, LongMovePlansAWindowAheadAndStillArrives) {
+  Bench b;
+  Settled(b);
+  (void)Ask(b, "pr 1 20000", 0);
+  (void)Ask(b, "mm 1 2147483647");
+  EXPECT_LT(b.dev.rig()->motor(1).HeapBytes(), 64u * 1024);
+  b.RunFor(60 * kSec);
+  EXPECT_TRUE(b.dev.MotorMoving(1));
+  const int64_t p = b.dev.ReportedPosition(1);
+  EXPECT_NEAR(static_cast<double>(p), 20000.0 * 60, 20000.0 * 2);
+  (void)Ask(b, "mm 1 0");
+  b.RunFor(80 * kSec);
+  EXPECT_EQ(RestingPosition(b, 1), 0);
+}
+
 RC_GTEST_PROP(DfmocoArduinoProps, AnyChunkingGivesTheSameReplies, ()) {
   const auto lines = *rc::gen::container<std::vector<std::string>>(HostLine(4));
   std::string bytes;
@@ -1008,6 +1206,27 @@ RC_GTEST_PROP(DfmocoArduinoProps, EveryAnswerableRequestIsAnswered, ()) {
     RC_ASSERT(answered);
     b.RunFor(static_cast<TimeNs>(*rc::gen::inRange(0, 3000)) * kMs);
   }
+}
+
+// What the sketch reads from any line, written back as a canonical line, reads
+// the same again; and at most 39 arguments are ever read.
+RC_GTEST_PROP(DfmocoArduinoProps, SketchReadingOfItsCanonicalLineIsTheSame, ()) {
+  const auto token = rc::gen::oneOf(
+      rc::gen::element<std::string>("\r", " ", "  ", "-", "--", "mm", "np", "ms", "jm", "bf", "x",
+                                    "1", "9", "0", "99999999999", "2147483648", "4294967296", "."),
+      rc::gen::map(rc::gen::arbitrary<char>(), [](char c) { return std::string(1, c); }));
+  std::string line;
+  for (const std::string& t : *rc::gen::container<std::vector<std::string>>(token)) line += t;
+  const dfmoco::SketchReading r = dfmoco::ReadLineAsSketch(line);
+  RC_ASSERT(r.args.size() < dfmoco::kMaxArgs);
+  if (r.kind != dfmoco::SketchReading::Kind::kCommand) {
+    RC_ASSERT(r.CanonicalLine().empty());
+    return;
+  }
+  const dfmoco::SketchReading again = dfmoco::ReadLineAsSketch(r.CanonicalLine());
+  RC_ASSERT(again.kind == dfmoco::SketchReading::Kind::kCommand);
+  RC_ASSERT(again.word == r.word);
+  RC_ASSERT(again.args == r.args);
 }
 
 // Random bytes never crash the device and never make it say anything but

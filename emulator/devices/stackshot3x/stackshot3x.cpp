@@ -18,6 +18,8 @@ using stackshot::Units;
 
 constexpr uint16_t Cmd(Command c) { return static_cast<uint16_t>(c); }
 
+int64_t Abs64(int64_t v) { return v < 0 ? -v : v; }
+
 sim::TimeNs SecondsToNs(double s) {
   if (!(s > 0)) return 0;
   // Timers run on whole microseconds (0.1f s is 100000 us, not 100000001 ns).
@@ -35,7 +37,8 @@ Stackshot3x::Stackshot3x(sim::Scheduler& scheduler, ByteSink& sink, Stackshot3xP
     : scheduler_(scheduler),
       sink_(sink),
       profile_(std::move(profile)),
-      store_(store),
+      own_store_(store == nullptr ? std::make_unique<MemoryStateStore>() : nullptr),
+      store_(store != nullptr ? store : own_store_.get()),
       rig_(scheduler, kAxes, 0, this, &MakeStackshotPlanner),
       decoder_(/*from_device=*/false, profile_.checksum),
       framer_(dfmoco::FramerOptions{dfmoco::LineTermination::kLenient, dfmoco::kMaxLineBytes}),
@@ -57,12 +60,29 @@ Stackshot3x::~Stackshot3x() {
 }
 
 LineSettings Stackshot3x::Line() const {
-  return LineSettings{InDfmocoMode() ? stackshot::kDfMocoBaudRate : stackshot::kBaudRate, 8, 1,
+  return LineSettings{SpeaksDfmoco() ? stackshot::kDfMocoBaudRate : stackshot::kBaudRate, 8, 1,
                       'N'};
 }
 
 bool Stackshot3x::InDfmocoMode() const {
   return config_.global_mode == stackshot::GlobalMode::kMotionDfMoco;
+}
+
+// Section 3: "To enable the DfMoco interface (which runs over USB)". Over
+// Wi-Fi the unit keeps the binary API of section 4.2 ("The commands are
+// identical when sent over WiFi") whatever the mode.
+bool Stackshot3x::SpeaksDfmoco() const { return InDfmocoMode() && host_link_ == HostLink::kSerial; }
+
+void Stackshot3x::SetHostLink(HostLink link) {
+  if (link == host_link_) return;
+  const bool was = SpeaksDfmoco();
+  host_link_ = link;
+  scheduler_.Cancel(gap_timer_);
+  gap_timer_ = sim::Scheduler::kNoTimer;
+  if (was != SpeaksDfmoco()) {
+    decoder_.Flush();
+    framer_.Reset();
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -131,6 +151,7 @@ void Stackshot3x::ResetVolatile() {
 
 void Stackshot3x::LoadNvm() {
   serial_number_ = profile_.serial_number;
+  // store_ is never null (own_store_ stands in for a missing one).
   nvm_.assign(static_cast<size_t>(profile_.nvm_registers), stackshot::kUnprogrammed);
   slots_ = {};
   log_.clear();
@@ -254,9 +275,12 @@ void Stackshot3x::OnHostBytes(wire::ByteView bytes) {
 void Stackshot3x::ArmGapTimer() {
   scheduler_.Cancel(gap_timer_);
   gap_timer_ = sim::Scheduler::kNoTimer;
-  if (InDfmocoMode() || decoder_.pending_bytes() == 0) return;
   // "Mandatory 2ms inter-frame delay for re-syncing to recover from partial
-  // packet transmission": silence that long drops a partial packet.
+  // packet transmission": silence that long drops a partial packet. That is
+  // the serial line's framing; TCP delivers a packet in segments whose gaps
+  // say nothing about the packet (section 4.2: large commands are "broken
+  // into smaller packet transmissions"), so on Wi-Fi no gap applies.
+  if (host_link_ != HostLink::kSerial || SpeaksDfmoco() || decoder_.pending_bytes() == 0) return;
   gap_timer_ = scheduler_.After(stackshot::kInterFrameGapMs * sim::kNsPerMs, [this] {
     gap_timer_ = sim::Scheduler::kNoTimer;
     decoder_.Flush();
@@ -264,7 +288,7 @@ void Stackshot3x::ArmGapTimer() {
 }
 
 void Stackshot3x::OnByte(uint8_t byte) {
-  if (InDfmocoMode()) {
+  if (SpeaksDfmoco()) {
     const char c = static_cast<char>(byte);
     framer_.Feed(std::string_view(&c, 1), [this](const dfmoco::FrameEvent& e) {
       if (e.kind == dfmoco::FrameEvent::Kind::kLine) OnDfmocoLine(e.text);
@@ -294,7 +318,7 @@ void Stackshot3x::OnPacket(const stackshot::Packet& packet) {
 
 void Stackshot3x::DrainQueue() {
   const uint64_t gen = generation_;
-  while (!busy_ && !queue_.empty() && generation_ == gen && !InDfmocoMode()) {
+  while (!busy_ && !queue_.empty() && generation_ == gen && !SpeaksDfmoco()) {
     stackshot::Packet p = std::move(queue_.front());
     queue_.pop_front();
     OnPacket(p);
@@ -414,8 +438,8 @@ int64_t Stackshot3x::RailPosition(int axis) const {
 bool Stackshot3x::AxisMoving(int axis) const {
   if (Motor(axis).IsMoving()) return true;
   if (faults_.busy_never_clears && axes_[Index(axis)].last_dir != 0) return true;
-  if (stack_.active && stack_.used[Index(axis)]) return true;
-  return motion_.pending && motion_.axes[Index(axis)];
+  if (stack_.active && (stack_.used[Index(axis)] || stack_.pano_axis == axis)) return true;
+  return (motion_.pending && motion_.axes[Index(axis)]) || motion_.playing[Index(axis)];
 }
 
 void Stackshot3x::FinishTakeup(int axis) {
@@ -464,10 +488,14 @@ void Stackshot3x::OnMotionFinished(int motor_id, sim::TimeNs /*time_ns*/, int64_
   axes_[Index(axis)].target_rail_steps = RailPosition(axis);
   if (stack_.active && StackAxesAtRest() &&
       (stack_.phase == StackPhase::kToStart || stack_.phase == StackPhase::kMoving ||
-       stack_.phase == StackPhase::kReturning)) {
+       stack_.phase == StackPhase::kReturning || stack_.phase == StackPhase::kPanoNext)) {
     StackAdvance();
   }
-  if (motion_.pending) MotionAdvance();
+  if (motion_.pending) {
+    MotionAdvance();
+  } else if (motion_.playing[Index(axis)]) {
+    MotionAxisNext(axis);
+  }
 }
 
 void Stackshot3x::OnEStop(bool engaged, sim::TimeNs /*time_ns*/) {
@@ -559,19 +587,127 @@ void Stackshot3x::AbortShutters() {
 
 bool Stackshot3x::StackAxesAtRest() const {
   for (int a = 0; a < kAxes; ++a) {
-    if (stack_.used[Index(a)] && Motor(a).IsMoving()) return false;
+    if ((stack_.used[Index(a)] || stack_.pano_axis == a) && Motor(a).IsMoving()) return false;
   }
   return true;
 }
 
+int64_t Stackshot3x::StackFramePosition(int axis, uint32_t frame) const {
+  const size_t a = Index(axis);
+  const int64_t span = stack_.end[a] - stack_.start[a];
+  if (stack_.fixed_step) {
+    const int64_t along =
+        std::min<int64_t>(Abs64(stack_.step[a]) * static_cast<int64_t>(frame), Abs64(span));
+    return stack_.start[a] + (span < 0 ? -along : along);
+  }
+  if (stack_.frames <= 1) return stack_.start[a];
+  return stack_.start[a] + std::llround(static_cast<double>(span) * frame / (stack_.frames - 1));
+}
+
+std::optional<Stackshot3x::StackRun> Stackshot3x::PlanStack(const stackshot::RailStack& s,
+                                                            int axis) const {
+  using stackshot::RailMode;
+  StackRun run;
+  run.active = true;
+  run.phase = StackPhase::kToStart;
+  run.request = s;
+  // Positions, distances and pano frames are signed motor steps in u32 fields.
+  auto steps = [](uint32_t v) { return static_cast<int64_t>(static_cast<int32_t>(v)); };
+  const std::array<std::pair<uint32_t, uint32_t>, 3> ends = {
+      {{s.x_start, s.x_end}, {s.y_start, s.y_end}, {s.z_start, s.z_end}}};
+  const int64_t distance = steps(s.distance);
+  switch (static_cast<RailMode>(s.mode)) {
+    case RailMode::kAutoStep:
+      // Start and end per axis, "Number of steps" frames between them.
+      if (s.num_steps == 0) return std::nullopt;
+      run.frames = s.num_steps;
+      for (size_t a = 0; a < 3; ++a) {
+        run.start[a] = steps(ends[a].first);
+        run.end[a] = steps(ends[a].second);
+        run.used[a] = run.start[a] != run.end[a];
+      }
+      break;
+    case RailMode::kAutoDist: {
+      // Start and end per axis, a frame every `distance` steps along the
+      // longest span (the other axes in proportion), the last on the end.
+      if (distance <= 0) return std::nullopt;
+      int64_t longest = 0;
+      for (size_t a = 0; a < 3; ++a) {
+        run.start[a] = steps(ends[a].first);
+        run.end[a] = steps(ends[a].second);
+        run.used[a] = run.start[a] != run.end[a];
+        longest = std::max(longest, Abs64(run.end[a] - run.start[a]));
+      }
+      const int64_t intervals = (longest + distance - 1) / distance;
+      if (intervals + 1 > int64_t{UINT32_MAX}) return std::nullopt;
+      run.frames = static_cast<uint32_t>(intervals + 1);
+      run.fixed_step = true;
+      for (size_t a = 0; a < 3; ++a) {
+        const int64_t span = Abs64(run.end[a] - run.start[a]);
+        run.step[a] = longest == 0
+                          ? 0
+                          : std::llround(static_cast<double>(span) * static_cast<double>(distance) /
+                                         static_cast<double>(longest));
+      }
+      break;
+    }
+    case RailMode::kTotalDistance:
+    case RailMode::kDistancePerStep:
+    case RailMode::kRotary: {
+      // The addressed axis from where it stands: TOTAL_DISTANCE covers
+      // `distance` in "Number of steps" frames (both ends shot); DISTANCE_PER_STEP
+      // (and ROTARY, steps of the table) moves `distance` between frames.
+      if (s.num_steps == 0 || distance == 0 || axis >= kAxes) return std::nullopt;
+      const auto a = Index(axis);
+      // In double first: distance x (num_steps - 1) can pass int64.
+      const double total = static_cast<RailMode>(s.mode) == RailMode::kTotalDistance
+                               ? static_cast<double>(distance)
+                               : static_cast<double>(distance) * (s.num_steps - 1.0);
+      run.frames = s.num_steps;
+      run.start[a] = axes_[a].target_rail_steps;
+      const double end = static_cast<double>(run.start[a]) + total;
+      if (!(std::fabs(end) <= kMaxTravelSteps)) return std::nullopt;
+      run.end[a] = static_cast<int64_t>(end);
+      run.used[a] = run.start[a] != run.end[a];
+      break;
+    }
+    case RailMode::kManual:
+    case RailMode::kContinuous:
+    case RailMode::kManualDistance:
+    default:
+      // Manual modes step on the panel's buttons; continuous mode runs on
+      // the panel's timing: no stack a host describes by frames.
+      return std::nullopt;
+  }
+  if (s.pano_start_steps != 0 || s.pano_stop_steps != 0) {
+    // The pano frame: the first axis the stack leaves alone stands at
+    // pano_start for the stack and goes on to pano_stop after it.
+    for (int a = 0; a < kAxes; ++a) {
+      if (!run.used[Index(a)]) {
+        run.pano_axis = a;
+        break;
+      }
+    }
+    if (run.pano_axis < 0) return std::nullopt;  // every axis is stacking
+    run.pano_start = steps(s.pano_start_steps);
+    run.pano_stop = steps(s.pano_stop_steps);
+  }
+  return run;
+}
+
 void Stackshot3x::StackMoveTo(uint32_t frame) {
+  if (stack_.phase == StackPhase::kToStart && stack_.pano_axis >= 0) {
+    const int a = stack_.pano_axis;
+    if (MoveAxisTo(a, stack_.pano_start,
+                   SpeedStepsPerS(a, config_.axes[Index(a)].move_speed_mm_per_s),
+                   /*backlash=*/true) != sim::MoveStatus::kOk) {
+      AbortStack("stack aborted: pano axis refused to move");
+      return;
+    }
+  }
   for (int a = 0; a < kAxes; ++a) {
     if (!stack_.used[Index(a)]) continue;
-    const int64_t span = stack_.end[Index(a)] - stack_.start[Index(a)];
-    const int64_t target = stack_.frames <= 1
-                               ? stack_.start[Index(a)]
-                               : stack_.start[Index(a)] + std::llround(static_cast<double>(span) *
-                                                                       frame / (stack_.frames - 1));
+    const int64_t target = StackFramePosition(a, frame);
     const double v = stack_.phase == StackPhase::kMoving
                          ? SpeedStepsPerS(a, config_.axes[Index(a)].speed_mm_per_s)
                          : SpeedStepsPerS(a, config_.axes[Index(a)].move_speed_mm_per_s);
@@ -650,6 +786,20 @@ void Stackshot3x::StackAdvance() {
       break;
     case StackPhase::kReturning:
       break;
+    case StackPhase::kPanoNext:
+      stack_.pano_axis = -1;
+      break;
+  }
+  if (stack_.pano_axis >= 0 && stack_.pano_stop != stack_.pano_start) {
+    // On to the next pano frame.
+    stack_.phase = StackPhase::kPanoNext;
+    const int a = stack_.pano_axis;
+    if (MoveAxisTo(a, stack_.pano_stop,
+                   SpeedStepsPerS(a, config_.axes[Index(a)].move_speed_mm_per_s),
+                   /*backlash=*/true) == sim::MoveStatus::kOk &&
+        Motor(a).IsMoving()) {
+      return;
+    }
   }
   stack_.active = false;
   AddLog("stack done, " + std::to_string(stack_.frames_shot) + " frames");
@@ -674,18 +824,111 @@ void Stackshot3x::MotionAdvance() {
   motion_.pending = false;
   for (int a = 0; a < kAxes; ++a) {
     if (!motion_.axes[Index(a)]) continue;
-    AxisState& s = axes_[Index(a)];
     sim::StepperMotor& m = Motor(a);
     m.SetProfile(sim::RampProfile(profile_.axes[Index(a)].max_speed_steps_per_s,
                                   config_.axes[Index(a)].ramp_time_s));
-    const sim::MoveStatus st = sim::PlaySpline(m, *planners_[Index(a)], *s.spline);
-    if (st == sim::MoveStatus::kOk) {
-      s.target_rail_steps = s.spline->FinalStep();
-    } else {
+    motion_.stage[Index(a)] = 0;
+    motion_.playing[Index(a)] = true;
+    const AxisState& s = axes_[Index(a)];
+    const sim::MoveStatus st = sim::PlaySpline(m, *planners_[Index(a)], s.runs.front());
+    if (st != sim::MoveStatus::kOk) {
+      motion_.playing[Index(a)] = false;
       AddLog("motion start refused on axis " + stackshot::AxisName(static_cast<uint8_t>(a)) + ": " +
              std::string(sim::MoveStatusName(st)));
+      continue;
+    }
+    axes_[Index(a)].target_rail_steps = s.runs.back().FinalStep();
+    if (!m.IsMoving()) MotionAxisNext(a);  // a run shorter than a step
+  }
+}
+
+void Stackshot3x::MotionAxisNext(int axis) {
+  const size_t ax = Index(axis);
+  const std::vector<sim::BezierSpline>& runs = axes_[ax].runs;
+  sim::StepperMotor& m = Motor(axis);
+  // Each stage either starts a motion (and waits for OnMotionFinished) or,
+  // when there is nothing to move, goes straight on to the next one.
+  while (motion_.playing[ax] && !m.IsMoving()) {
+    const size_t stage = ++motion_.stage[ax];
+    const size_t run = (stage + 1) / 2;  // the run played or travelled to
+    if (run >= runs.size()) {
+      motion_.playing[ax] = false;
+      axes_[ax].target_rail_steps = RailPosition(axis);
+      return;
+    }
+    sim::MoveStatus st = sim::MoveStatus::kOk;
+    if (stage % 2 == 1) {
+      // A position jump between curves: the rail cannot jump, so it travels
+      // to the next curve's start at the axis's maximum speed.
+      m.SetProfile(
+          sim::RampProfile(profile_.axes[ax].max_speed_steps_per_s, config_.axes[ax].ramp_time_s));
+      planners_[ax]->SetRampTime(config_.axes[ax].ramp_time_s);
+      if (m.Position() != runs[run].StartStep()) st = m.MoveTo(runs[run].StartStep());
+    } else {
+      st = sim::PlaySpline(m, *planners_[ax], runs[run]);
+    }
+    if (st != sim::MoveStatus::kOk) {
+      motion_.playing[ax] = false;
+      axes_[ax].target_rail_steps = RailPosition(axis);
+      AddLog("motion on axis " + stackshot::AxisName(static_cast<uint8_t>(axis)) +
+             " ended early: " + std::string(sim::MoveStatusName(st)));
+      return;
     }
   }
+}
+
+std::optional<std::vector<sim::BezierSpline>> Stackshot3x::MakeRuns(const sim::MotionCurves& curves,
+                                                                    double steps_per_unit,
+                                                                    int axis) const {
+  const double vmax = profile_.axes[Index(axis)].max_speed_steps_per_s;
+  int used = 1;
+  while (used < sim::kMotionCurves && curves[static_cast<size_t>(used)].p[0].t_s != 0) ++used;
+  std::vector<sim::BezierSpline> runs;
+  int first = 0;
+  while (first < used) {
+    // A run: curves whose positions join (P0.y = previous P3.y).
+    int last = first;
+    while (last + 1 < used && curves[static_cast<size_t>(last + 1)].p[0].position ==
+                                  curves[static_cast<size_t>(last)].p[3].position) {
+      ++last;
+    }
+    const double t0 = curves[static_cast<size_t>(first)].p[0].t_s;
+    // "Limits should be applied to prevent sudden velocity changes which may
+    // result in loss of steps": a run asking for more than the axis's
+    // maximum speed is played slowed down as a whole (every time stretched by
+    // one factor, the fewest that brings its fastest point to the maximum),
+    // so it keeps its shape and keyframes. Found by bisection on the factor.
+    auto run_at = [&](double scale) {
+      sim::MotionCurves run{};
+      for (int c = first; c <= last; ++c) {
+        sim::BezierCurve k = curves[static_cast<size_t>(c)];
+        for (sim::BezierPoint& pt : k.p) pt.t_s = (pt.t_s - t0) * scale;
+        run[static_cast<size_t>(c - first)] = k;
+      }
+      return sim::MakeSpline(run, steps_per_unit, vmax);
+    };
+    sim::SplineOrFault made = run_at(1.0);
+    if (!made.ok()) {
+      if (made.fault.error != sim::SplineError::kTooFast) return std::nullopt;
+      double lo = 1.0;
+      double hi = 2.0;
+      constexpr double kMaxScale = 1e9;  // beyond: the speed is unbounded (a vertical tangent)
+      while (!run_at(hi).ok()) {
+        lo = hi;
+        hi *= 2;
+        if (hi > kMaxScale) return std::nullopt;
+      }
+      for (int i = 0; i < 40 && hi - lo > 1e-9 * hi; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (run_at(mid).ok() ? hi : lo) = mid;
+      }
+      made = run_at(hi);
+      if (!made.ok()) return std::nullopt;
+    }
+    runs.push_back(std::move(*made.spline));
+    first = last + 1;
+  }
+  return runs;
 }
 
 }  // namespace moco::devices

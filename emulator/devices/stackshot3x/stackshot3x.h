@@ -5,9 +5,10 @@
 //
 // Model in brief:
 //  - Input: PacketDecoder (host sync 0x55), fed one byte at a time so that a
-//    mode switch or a reset inside a chunk takes effect at the right byte. A
-//    partial packet is dropped after the spec's 2 ms inter-frame gap. The
-//    checksum byte is never verified (ERRATA 3.2, FACTS).
+//    mode switch or a reset inside a chunk takes effect at the right byte. On
+//    the serial (USB) link a partial packet is dropped after the spec's 2 ms
+//    inter-frame gap; on Wi-Fi (TCP) a packet may arrive in segments any time
+//    apart. The checksum byte is never verified (ERRATA 3.2, FACTS).
 //  - Every packet gets exactly one reply with the packet's command id and
 //    upper nibble, the status in the low nibble (ERRATA 3.3). Decode errors
 //    answer ErrorReplyStatus(): UNSUPPORTED_CMD, UNSUPPORTED_ACTION or
@@ -19,13 +20,16 @@
 //  - NVM (serial number, NVM registers with register 0 = axis id, the saved
 //    configuration slots 0-10, the log) lives in a StateStore and is re-read
 //    at every power-on; the active configuration is volatile and starts as
-//    slot 0 (the power-on configuration) or the factory defaults.
+//    slot 0 (the power-on configuration) or the factory defaults. Without a
+//    store the device keeps its NVM in memory of its own, so a power cycle
+//    or CC_RESET loses nothing of it while the device object lives.
 #ifndef MOCO_DEVICES_STACKSHOT3X_STACKSHOT3X_H_
 #define MOCO_DEVICES_STACKSHOT3X_STACKSHOT3X_H_
 
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -115,6 +119,12 @@ struct Stackshot3xFaults {
 
 class Stackshot3x : public Device, private sim::RigObserver {
  public:
+  // What carries the host's bytes (stackshot-protocol.txt sections 3 and 4).
+  // kSerial: the USB serial port (binary protocol, or the DfMoco dialect in
+  // GLOBAL_MODE_MOTION_DFMOCO; the 2 ms inter-frame gap). kWifi: a TCP
+  // connection (binary protocol only: DfMoco "runs over USB"; no gap).
+  enum class HostLink : uint8_t { kSerial, kWifi };
+
   static constexpr int kAxes = 3;
   static constexpr int kShutters = 2;
   static constexpr size_t kMaxLogEntries = 64;
@@ -135,8 +145,10 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // `im` crawls at this fraction of the axis's maximum speed.
   static constexpr double kInchFraction = 0.02;
 
-  // `scheduler`, `sink` and `store` (may be null: nothing survives a power
-  // cycle) must outlive the device. Constructed powered off.
+  // `scheduler`, `sink` and `store` must outlive the device. `store` may be
+  // null (embedded use): the NVM then lives in the device's own memory and
+  // survives power cycles and CC_RESET, but not the device object.
+  // Constructed powered off, on the serial link.
   Stackshot3x(sim::Scheduler& scheduler, ByteSink& sink, Stackshot3xProfile profile = {},
               StateStore* store = nullptr);
   ~Stackshot3x() override;
@@ -171,13 +183,21 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // factory defaults when empty). The way out of DfMoco mode.
   void SetGlobalModeFromPanel(stackshot::GlobalMode mode);
 
+  // Which link the host's bytes arrive on (default kSerial); the serving
+  // layer sets it before PowerOn().
+  void SetHostLink(HostLink link);
+  HostLink host_link() const { return host_link_; }
+
   // Test-only: makes the device misbehave as `faults` says, from now on.
   void SetFaults(const Stackshot3xFaults& faults) { faults_ = faults; }
 
   // --- observation ---
   const Stackshot3xProfile& profile() const { return profile_; }
   const Stackshot3xConfig& config() const { return config_; }
+  // GLOBAL_MODE_MOTION_DFMOCO is the active mode (whatever the link).
   bool InDfmocoMode() const;
+  // The host's bytes are read as DfMoco lines: DfMoco mode on the serial link.
+  bool SpeaksDfmoco() const;
   bool Ready() const { return ready_; }
   // Rail position of `axis` (0..2) in steps: motor steps less the backlash
   // take-up (the first steps after a compensated reversal move only the
@@ -215,7 +235,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
     int last_dir = 0;  // +1 / -1: direction of the last move, 0: none yet
     Takeup takeup;
     bool user_aborted = false;
-    std::optional<sim::BezierSpline> spline;  // from the last valid CC_MOTION_CONFIG
+    // From the last valid CC_MOTION_CONFIG: the spline cut at each position
+    // jump into runs that are continuous (empty: no curve configured).
+    std::vector<sim::BezierSpline> runs;
     sim::Scheduler::TimerId dfmoco_timer = sim::Scheduler::kNoTimer;
   };
   struct ShutterRun {
@@ -228,7 +250,14 @@ class Stackshot3x : public Device, private sim::RigObserver {
     sim::TimeNs on_since_ns = 0;
     sim::Scheduler::TimerId timer = sim::Scheduler::kNoTimer;
   };
-  enum class StackPhase : uint8_t { kToStart, kMoving, kSettling, kShooting, kReturning };
+  enum class StackPhase : uint8_t {
+    kToStart,
+    kMoving,
+    kSettling,
+    kShooting,
+    kReturning,
+    kPanoNext,  // the pano axis goes on to the pano-frame stop
+  };
   struct StackRun {
     bool active = false;
     StackPhase phase = StackPhase::kToStart;
@@ -237,12 +266,25 @@ class Stackshot3x : public Device, private sim::RigObserver {
     std::array<bool, 3> used{};
     std::array<int64_t, 3> start{};
     std::array<int64_t, 3> end{};
+    // AUTO_DIST: a frame every `step` steps from the start, the last on the
+    // end; otherwise frames evenly spaced from start to end.
+    bool fixed_step = false;
+    std::array<int64_t, 3> step{};
+    // The pano fields: the axis standing at pano_start for the stack and
+    // moving on to pano_stop after it (-1: no pano frame).
+    int pano_axis = -1;
+    int64_t pano_start = 0;
+    int64_t pano_stop = 0;
     stackshot::RailStack request;
     sim::Scheduler::TimerId timer = sim::Scheduler::kNoTimer;
   };
   struct MotionRun {
     bool pending = false;  // positioning to the splines' start steps
     std::array<bool, 3> axes{};
+    // Per axis once started: 2i = playing run i, 2i + 1 = travelling from
+    // the end of run i to the start of run i + 1 (a position jump).
+    std::array<size_t, 3> stage{};
+    std::array<bool, 3> playing{};
   };
 
   static size_t Index(int axis) { return static_cast<size_t>(axis); }
@@ -300,12 +342,25 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // Stack run (CC_RAIL_STACK).
   void StackAdvance();
   void StackMoveTo(uint32_t frame);
+  int64_t StackFramePosition(int axis, uint32_t frame) const;
+  // Builds the run a CC_RAIL_STACK asks for (section 2, comm_rail_mode_t);
+  // nullopt for a request the mode cannot run (BAD_PARAM).
+  std::optional<StackRun> PlanStack(const stackshot::RailStack& request, int axis) const;
   void StackShoot();
   void AbortStack(std::string_view why);
   bool StackAxesAtRest() const;
 
   // Motion start (CC_MOTION_START).
   void MotionAdvance();
+  // The next stage of `axis`'s runs once it rests (see MotionRun::stage).
+  void MotionAxisNext(int axis);
+  bool MotionPlaying() const {
+    return motion_.playing[0] || motion_.playing[1] || motion_.playing[2];
+  }
+  // The runs of a CC_MOTION_CONFIG in steps; nullopt when a run's speed is
+  // unbounded (no time scale brings it within the axis's maximum).
+  std::optional<std::vector<sim::BezierSpline>> MakeRuns(const sim::MotionCurves& curves,
+                                                         double steps_per_unit, int axis) const;
 
   // DfMoco dialect.
   void OnDfmocoLine(std::string_view line);
@@ -316,7 +371,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
   sim::Scheduler& scheduler_;
   ByteSink& sink_;
   Stackshot3xProfile profile_;
+  std::unique_ptr<MemoryStateStore> own_store_;  // the NVM when no store is given
   StateStore* store_;
+  HostLink host_link_ = HostLink::kSerial;
   sim::Rig rig_;
   std::array<sim::StackshotPlanner*, 3> planners_{};
   stackshot::PacketDecoder decoder_;

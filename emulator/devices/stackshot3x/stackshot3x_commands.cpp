@@ -69,7 +69,7 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
       }
       // A running stack or motion owns the axis; a plain move is re-aimed.
       if ((stack_.active && stack_.used[Index(axis)]) ||
-          (motion_.pending && motion_.axes[Index(axis)])) {
+          (motion_.pending && motion_.axes[Index(axis)]) || motion_.playing[Index(axis)]) {
         return Reply(p, Action::kBusy);
       }
       const double steps_d = m->distance.value() * StepsPerUnit(axis, m->units);
@@ -131,6 +131,7 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
       if (!axis_ok) return Reply(p, Action::kBadParam);
       if (stack_.active && stack_.used[Index(axis)]) AbortStack("stack stopped by the host");
       if (motion_.pending && motion_.axes[Index(axis)]) motion_ = MotionRun{};
+      motion_.playing[Index(axis)] = false;  // before the halt: no next run starts
       if (c.command == Cmd(Command::kRailStop)) {
         Motor(axis).EmergencyHalt();
       } else {
@@ -141,28 +142,18 @@ void Stackshot3x::HandleRail(const stackshot::Packet& p, const stackshot::HostCo
     }
     case Command::kRailStack: {
       const auto* s = As<stackshot::RailStack>(c);
-      if (s->mode > static_cast<uint32_t>(stackshot::RailMode::kRotary) || s->num_steps == 0) {
+      if (s->mode > static_cast<uint32_t>(stackshot::RailMode::kRotary)) {
         return Reply(p, Action::kBadParam);
       }
-      if (stack_.active || motion_.pending || ShutterFiring() || rig_.AnyMoving()) {
+      if (stack_.active || motion_.pending || MotionPlaying() || ShutterFiring() ||
+          rig_.AnyMoving()) {
         return Reply(p, Action::kBusy);
       }
-      StackRun run;
-      run.active = true;
-      run.phase = StackPhase::kToStart;
-      run.frames = s->num_steps;
-      run.request = *s;
-      const std::array<std::pair<uint32_t, uint32_t>, 3> ends = {
-          {{s->x_start, s->x_end}, {s->y_start, s->y_end}, {s->z_start, s->z_end}}};
-      for (size_t a = 0; a < 3; ++a) {
-        // Positions are signed motor steps carried in a u32.
-        run.start[a] = static_cast<int32_t>(ends[a].first);
-        run.end[a] = static_cast<int32_t>(ends[a].second);
-        run.used[a] = run.start[a] != run.end[a];
-      }
-      stack_ = run;
+      std::optional<StackRun> run = PlanStack(*s, axis);
+      if (!run) return Reply(p, Action::kBadParam);
+      stack_ = *run;
       Reply(p, Action::kRspOk);
-      AddLog("stack start, " + std::to_string(run.frames) + " frames");
+      AddLog("stack start, " + std::to_string(stack_.frames) + " frames");
       StackMoveTo(0);
       return;
     }
@@ -336,7 +327,19 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
     }
     case C::kRailConfigDistancePerRev: {
       // Steps per revolution do not depend on this setting: mils and mm only.
-      if (read) return units_f32(a.distance_per_rev_mm, true, false, true);
+      if (read) {
+        // The read table sends no units byte: the answer is in
+        // CC_RAIL_CONFIG_UNITS, or in mm while those are steps (a distance
+        // per revolution in steps per revolution would be 3200 whatever the
+        // rail). An explicit steps byte is still BAD_PARAM.
+        const std::optional<Units> asked = As<stackshot::UnitsQuery>(c)->units;
+        const Units u = asked.value_or(cfg.units == Units::kSteps ? Units::kMm : cfg.units);
+        if (!stackshot::IsValid(u) || u == Units::kSteps) return bad();
+        return Reply(
+            p, Action::kRspOk,
+            stackshot::UnitsF32{u, ToUnits(p.axis, a.distance_per_rev_mm * StepsPerMm(p.axis), u)},
+            true);
+      }
       const auto* w = As<stackshot::UnitsF32>(c);
       if (!stackshot::IsValid(w->units) || w->units == Units::kSteps ||
           !std::isfinite(w->value.value()) || !(w->value.value() > 0)) {
@@ -367,11 +370,16 @@ void Stackshot3x::HandleConfig(const stackshot::Packet& p, const stackshot::Host
     case C::kRailConfigLoad: {
       const uint8_t slot = As<stackshot::U8Value>(c)->value;
       if (slot > stackshot::kConfigSlotMax) return bad();
-      // "If the slot is empty, an error will be returned and the load will not complete."
-      if (!slots_[slot]) return Reply(p, Action::kFailed);
-      if (rig_.AnyMoving() || stack_.active || motion_.pending) return Reply(p, Action::kBusy);
-      const stackshot::GlobalMode mode = slots_[slot]->global_mode;
-      Stackshot3xConfig loaded = *slots_[slot];
+      // "If the slot is empty, an error will be returned and the load will not
+      // complete": the user slots 1-10. Slot 0 is the "power on"
+      // configuration, which always exists: the factory defaults until a
+      // CC_RAIL_CONFIG_SAVE to slot 0 replaces them (the unit powers on with it).
+      if (slot != 0 && !slots_[slot]) return Reply(p, Action::kFailed);
+      if (rig_.AnyMoving() || stack_.active || motion_.pending || MotionPlaying()) {
+        return Reply(p, Action::kBusy);
+      }
+      Stackshot3xConfig loaded = slots_[slot].value_or(Stackshot3xConfig::Defaults(profile_));
+      const stackshot::GlobalMode mode = loaded.global_mode;
       loaded.global_mode = cfg.global_mode;
       cfg = loaded;
       for (int i = 0; i < kAxes; ++i)
@@ -559,10 +567,13 @@ void Stackshot3x::HandleMotion(const stackshot::Packet& p, const stackshot::Host
         }
       }
     }
-    sim::SplineOrFault s =
-        sim::MakeSpline(curves, steps_per_unit, profile_.axes[Index(axis)].max_speed_steps_per_s);
-    if (!s.ok()) return Reply(p, Action::kBadParam);
-    axes_[Index(axis)].spline = std::move(s.spline);
+    // The document requires time continuity only ("A curve's initial P0.x
+    // must match the previous curves P3.x"): a position jump between curves
+    // is accepted (the rail travels it at full speed, see MotionAxisNext), as
+    // is a curve faster than the axis allows (played slowed, see MakeRuns).
+    std::optional<std::vector<sim::BezierSpline>> runs = MakeRuns(curves, steps_per_unit, axis);
+    if (!runs) return Reply(p, Action::kBadParam);
+    axes_[Index(axis)].runs = std::move(*runs);
     return Reply(p, Action::kRspOk);
   }
   const auto* start = As<stackshot::MotionStart>(c);
@@ -571,7 +582,7 @@ void Stackshot3x::HandleMotion(const stackshot::Packet& p, const stackshot::Host
   for (int a = 0; a < kAxes; ++a) {
     if (!want[Index(a)]) continue;
     if (AxisMoving(a) || stack_.active) return Reply(p, Action::kBusy);
-    if (!axes_[Index(a)].spline) return Reply(p, Action::kFailed);  // no curve configured
+    if (axes_[Index(a)].runs.empty()) return Reply(p, Action::kFailed);  // no curve configured
   }
   motion_ = MotionRun{true, want};
   for (int a = 0; a < kAxes; ++a) {
@@ -582,8 +593,8 @@ void Stackshot3x::HandleMotion(const stackshot::Packet& p, const stackshot::Host
     const int64_t rail = RailPosition(a);
     Motor(a).ResetPosition(rail);
     s.offset_steps = 0;
-    if (rail != s.spline->StartStep()) {
-      MoveAxisTo(a, s.spline->StartStep(),
+    if (rail != s.runs.front().StartStep()) {
+      MoveAxisTo(a, s.runs.front().StartStep(),
                  SpeedStepsPerS(a, config_.axes[Index(a)].move_speed_mm_per_s), false);
     }
   }
@@ -607,10 +618,18 @@ void Stackshot3x::SetGlobalModeFromPanel(stackshot::GlobalMode mode) {
 }
 
 void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {
-  const bool was = InDfmocoMode();
+  const bool was = SpeaksDfmoco();
+  const bool was_mode = InDfmocoMode();
   config_.global_mode = mode;
-  const bool now = InDfmocoMode();
-  if (was == now) return;
+  const bool now = SpeaksDfmoco();
+  if (was == now) {
+    // Wi-Fi: the mode is taken (it reads back, and the USB port speaks DfMoco)
+    // but this link keeps the binary protocol (section 3, "runs over USB").
+    if (was_mode != InDfmocoMode()) {
+      AddLog(InDfmocoMode() ? "DfMoco mode: on USB only, Wi-Fi stays binary" : "DfMoco mode left");
+    }
+    return;
+  }
   decoder_.Flush();
   framer_.Reset();
   queue_.clear();
@@ -634,7 +653,7 @@ void Stackshot3x::ArmDfmocoReport(int axis) {
   scheduler_.Cancel(s.dfmoco_timer);
   s.dfmoco_timer = scheduler_.After(profile_.dfmoco_report_ms * sim::kNsPerMs, [this, axis] {
     axes_[Index(axis)].dfmoco_timer = sim::Scheduler::kNoTimer;
-    if (!InDfmocoMode() || !Motor(axis).IsMoving()) return;
+    if (!SpeaksDfmoco() || !Motor(axis).IsMoving()) return;
     SendLine(dfmoco::MoveReply{axis + 1, ClampI32(RailPosition(axis))});
     ArmDfmocoReport(axis);
   });
@@ -734,13 +753,14 @@ nlohmann::json Stackshot3x::State() const {
                     {"target_steps", s.target_rail_steps},
                     {"moving", AxisMoving(a)},
                     {"user_aborted", s.user_aborted},
-                    {"spline", s.spline.has_value()}});
+                    {"spline", !s.runs.empty()}});
   }
   nlohmann::json j = {
       {"model", "stackshot3x"},
       {"powered", powered_},
       {"ready", ready_},
-      {"mode", InDfmocoMode() ? "dfmoco" : "binary"},
+      {"mode", SpeaksDfmoco() ? "dfmoco" : "binary"},
+      {"link", host_link_ == HostLink::kWifi ? "wifi" : "serial"},
       {"serial_number", serial_number_},
       {"axes", axes},
       {"shutter_firing", ShutterFiring()},

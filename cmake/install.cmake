@@ -1,0 +1,65 @@
+# Installation and the Debian package (README "Packages"):
+#   cmake --install build/release --prefix /usr/local
+#   (cd build/release && cpack -G DEB)
+# installs mocosim, mococheck and dmc-host, their man pages (made at build
+# time from each program's --help by cmake/help_to_man.cmake), the device
+# and rig profiles and the Wireshark dissector. The programs need nothing
+# from the source tree at run time: every device model has its profile
+# built in; the installed profiles are for --profile.
+include(GNUInstallDirs)
+
+install(TARGETS mocosim mococheck dmc-host RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/profiles/
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/profiles FILES_MATCHING PATTERN "*.json")
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/rigs/
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/rigs FILES_MATCHING PATTERN "*.json")
+install(FILES ${PROJECT_SOURCE_DIR}/tools/wireshark/mocosim.lua
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/wireshark)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+set(moco_man_pages)
+foreach(program mocosim mococheck dmc-host)
+  set(page ${CMAKE_BINARY_DIR}/man/${program}.1)
+  add_custom_command(
+    OUTPUT ${page}
+    COMMAND ${CMAKE_COMMAND} -DPROGRAM=$<TARGET_FILE:${program}> -DNAME=${program}
+            -DVERSION=${PROJECT_VERSION} -DOUTPUT=${page}
+            -P ${PROJECT_SOURCE_DIR}/cmake/help_to_man.cmake
+    DEPENDS ${program} ${PROJECT_SOURCE_DIR}/cmake/help_to_man.cmake
+    COMMENT "Man page ${program}.1 from ${program} --help"
+    VERBATIM)
+  list(APPEND moco_man_pages ${page})
+endforeach()
+add_custom_target(man_pages ALL DEPENDS ${moco_man_pages})
+install(FILES ${moco_man_pages} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+
+# CPack: a .deb whose Depends are the Debian runtime packages the programs
+# link (dpkg-shlibdeps, from dpkg-dev), e.g. libc6, libstdc++6, libbullet3.24.
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME mocosim)
+set(CPACK_PACKAGE_VENDOR "mocosim")
+set(CPACK_PACKAGE_CONTACT "mocosim maintainers <mocosim@invalid>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
+    "emulated motion-control devices (DMC-16, DFMoco, StackShot 3X) and a conformance runner")
+set(CPACK_PACKAGE_DESCRIPTION
+    "mocosim emulates a DMC-16 (DMC v2 binary protocol), a DFMoco Arduino and a Cognisys "
+    "StackShot 3X on a PTY or a TCP port; mococheck checks a device's traffic against the "
+    "rules of its protocol. With man pages, device profiles and a Wireshark dissector.")
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_SECTION utils)
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "tshark | wireshark")
+set(CPACK_STRIP_FILES ON)
+set(CPACK_PACKAGE_DIRECTORY ${CMAKE_BINARY_DIR}/packages)
+include(CPack)
+
+# The package is built, unpacked into a scratch root with dpkg -x, and the
+# installed mococheck runs the DMC-16 suite in-process from there, away from
+# the source tree (ci/deb-check).
+if(MOCO_BUILD_TESTS)
+  add_test(NAME package_deb_unpacked_runs_mococheck_from_the_installed_tree
+           COMMAND bash ${PROJECT_SOURCE_DIR}/ci/deb-check ${CMAKE_BINARY_DIR}
+                   ${CMAKE_BINARY_DIR}/deb-check)
+  set_tests_properties(package_deb_unpacked_runs_mococheck_from_the_installed_tree
+                       PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 600)
+endif()

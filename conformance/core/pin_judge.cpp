@@ -1,0 +1,330 @@
+// The pin rules judged (conformance/rules/pin_rules.cpp; FACTS "Step drivers",
+// "DFMoco"): step counts against reported positions, driver timing, rate,
+// acceleration and reversals, from a case's pin trace and traffic.
+#include "conformance/core/pin_judge.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <sstream>
+
+namespace moco::conformance {
+namespace {
+
+using sim::TimeNs;
+
+constexpr TimeNs kMs = sim::kNsPerMs;
+// A motor with no rising STEP edge for this long after (or before) a report is at rest; its
+// position was taken at most this long before the report was complete (a full
+// 192-byte output queue at 57600 baud takes 33 ms).
+constexpr TimeNs kRestWindowNs = 50 * kMs;
+// The window the step rate is counted over for PIN-006 (the sketch's chunk).
+constexpr TimeNs kRateWindowNs = 50 * kMs;
+constexpr double kAccelTolerance = 1.5;  // the planner's acceleration plus 50 %
+constexpr double kQuantumPulses = 3;     // plus 3 pulses per window
+// PIN-005 measures the rate over this many STEP intervals, allowing its ends
+// this much interrupt latency (a step ISR entered late after a cli section).
+constexpr size_t kRatePulses = 8;
+constexpr double kLatencyAllowanceNs = 8000;
+
+std::string Seconds(TimeNs t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6f s", static_cast<double>(t) / 1e9);
+  return text;
+}
+
+std::vector<std::string_view> Words(std::string_view line) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && line[i] == ' ') ++i;
+    const size_t start = i;
+    while (i < line.size() && line[i] != ' ') ++i;
+    if (i > start) out.push_back(line.substr(start, i - start));
+  }
+  return out;
+}
+
+std::optional<int64_t> Number(std::string_view w) {
+  int64_t v = 0;
+  const auto r = std::from_chars(w.data(), w.data() + w.size(), v);
+  if (r.ec != std::errc() || r.ptr != w.data() + w.size()) return std::nullopt;
+  return v;
+}
+
+// One motor's STEP and DIR as the rules read them.
+struct MotorView {
+  int motor = 1;
+  const PinSignal* step = nullptr;
+  const PinSignal* dir = nullptr;
+  std::vector<TimeNs> rises;        // rising STEP edges
+  std::vector<int64_t> cumulative;  // signed count after each rise
+  TimeNs until = 0;                 // edges after this are not judged
+
+  // Signed count of rises at or before t.
+  int64_t CountAt(TimeNs t) const {
+    const auto it = std::upper_bound(rises.begin(), rises.end(), t);
+    return it == rises.begin() ? 0 : cumulative[static_cast<size_t>(it - rises.begin()) - 1];
+  }
+  // Smallest and largest signed count over [a, b].
+  std::pair<int64_t, int64_t> RangeOver(TimeNs a, TimeNs b) const {
+    int64_t lo = CountAt(a), hi = lo;
+    auto it = std::upper_bound(rises.begin(), rises.end(), a);
+    for (; it != rises.end() && *it <= b; ++it) {
+      const int64_t c = cumulative[static_cast<size_t>(it - rises.begin())];
+      lo = std::min(lo, c);
+      hi = std::max(hi, c);
+    }
+    return {lo, hi};
+  }
+  bool RiseWithin(TimeNs a, TimeNs b) const {
+    auto it = std::lower_bound(rises.begin(), rises.end(), a);
+    return it != rises.end() && *it <= b;
+  }
+};
+
+MotorView ViewOf(const PinTrace& trace, size_t i) {
+  MotorView m;
+  m.motor = static_cast<int>(i + 1);
+  m.step = &trace.signals[static_cast<size_t>(trace.motors[i].step)];
+  m.dir = &trace.signals[static_cast<size_t>(trace.motors[i].dir)];
+  m.until = trace.complete_until_ns;
+  int64_t count = 0;
+  for (const PinEdge& e : m.step->edges) {
+    if (e.t_ns > m.until) break;
+    if (!e.level) continue;
+    count += m.dir->LevelAt(e.t_ns) ? 1 : -1;
+    m.rises.push_back(e.t_ns);
+    m.cumulative.push_back(count);
+  }
+  return m;
+}
+
+std::string Id(std::string_view prefix, const char* n) { return std::string(prefix) + n; }
+
+}  // namespace
+
+std::vector<PinPositionEvent> DfmocoPinEvents(const std::vector<Chunk>& traffic) {
+  std::vector<PinPositionEvent> out;
+  std::string host_line, device_line;
+  std::map<int, int64_t> pending;  // motor -> position an np / zm asked for
+  for (const Chunk& c : traffic) {
+    std::string& line = c.from_host ? host_line : device_line;
+    for (const uint8_t b : c.bytes) {
+      if (b != '\r' && b != '\n') {
+        if (line.size() < 256) line.push_back(static_cast<char>(b));
+        continue;
+      }
+      if (line.empty()) continue;
+      const std::vector<std::string_view> w = Words(line);
+      const auto arg = [&](size_t k) { return k < w.size() ? Number(w[k]) : std::nullopt; };
+      const auto motor = arg(1);
+      if (!w.empty() && motor && *motor >= 1 && *motor <= 64) {
+        const int m = static_cast<int>(*motor);
+        if (c.from_host) {
+          if (w[0] == "np" && w.size() == 3 && arg(2)) pending[m] = *arg(2);
+          if (w[0] == "zm" && w.size() == 2) pending[m] = 0;
+        } else if ((w[0] == "np" && w.size() == 3 && arg(2)) || (w[0] == "zm" && w.size() == 2)) {
+          out.push_back({PinPositionEvent::Kind::kReset, c.t_ns, m, w[0] == "zm" ? 0 : *arg(2)});
+          pending.erase(m);
+        } else if (w[0] == "mp" && w.size() == 3 && arg(2)) {
+          const auto p = pending.find(m);
+          const bool reset = p != pending.end() && p->second == *arg(2);
+          out.push_back({reset ? PinPositionEvent::Kind::kReset : PinPositionEvent::Kind::kReport,
+                         c.t_ns, m, *arg(2)});
+          if (reset) pending.erase(p);
+        } else if (w[0] == "pr" && w.size() == 3 && arg(2)) {
+          out.push_back({PinPositionEvent::Kind::kPulseRate, c.t_ns, m, *arg(2)});
+        }
+      } else if (!c.from_host && line == "parse error") {
+        pending.clear();
+      }
+      line.clear();
+    }
+  }
+  return out;
+}
+
+void JudgePins(std::string_view prefix, const PinTrace& trace,
+               const std::vector<PinPositionEvent>& events, const PinJudgeOptions& o, TimeNs end_ns,
+               Verdicts& v) {
+  const DriverProfile& d = o.driver;
+  const double cycle_ns = trace.frequency_hz ? 1e9 / trace.frequency_hz : 0;
+  const std::string p001 = Id(prefix, "PIN-001"), p002 = Id(prefix, "PIN-002"),
+                    p003 = Id(prefix, "PIN-003"), p004 = Id(prefix, "PIN-004"),
+                    p005 = Id(prefix, "PIN-005"), p006 = Id(prefix, "PIN-006"),
+                    p007 = Id(prefix, "PIN-007");
+  const TimeNs period_ns = o.board.report_period_ms * kMs;
+  const TimeNs end = std::min(end_ns, trace.complete_until_ns);
+
+  for (size_t i = 0; i < trace.motors.size(); ++i) {
+    const MotorView m = ViewOf(trace, i);
+    const std::string mn = "motor " + std::to_string(m.motor);
+
+    // PIN-001 / PIN-002: reported positions against the signed STEP count.
+    int64_t base_value = 0, base_count = 0;
+    double max_rate = o.default_pulse_rate;
+    for (const PinPositionEvent& e : events) {
+      if (e.motor != m.motor || e.t_ns > end) continue;
+      if (e.kind == PinPositionEvent::Kind::kPulseRate) {
+        max_rate = std::max(max_rate, static_cast<double>(e.position));
+        continue;
+      }
+      if (e.kind == PinPositionEvent::Kind::kReset) {
+        base_value = e.position;
+        base_count = m.CountAt(e.t_ns);
+        continue;
+      }
+      const int64_t offset = base_value - base_count;
+      // Moving: stepping on both sides of the report and not at a turning point
+      // (a stop, or a stop and a new move, within the reporting window).
+      const auto [lo, hi] = m.RangeOver(e.t_ns - period_ns, e.t_ns + period_ns);
+      const int64_t now = m.CountAt(e.t_ns);
+      const bool moving = m.RiseWithin(e.t_ns + 1, e.t_ns + kRestWindowNs) &&
+                          m.RiseWithin(e.t_ns - kRestWindowNs, e.t_ns) && lo < now && now < hi;
+      if (!moving) {
+        // Not stepping on both sides: the position was taken at most a queued line before t.
+        const auto [lo_rest, hi_rest] = m.RangeOver(e.t_ns - kRestWindowNs, e.t_ns);
+        v.Check(p001, e.position >= offset + lo_rest && e.position <= offset + hi_rest, [&] {
+          const int64_t expected = offset + m.CountAt(e.t_ns);
+          return Evidence{mn + " reported at rest as " + std::to_string(expected) +
+                              " (the STEP pulses counted since the last zero)",
+                          "reported " + std::to_string(e.position) + " at " + Seconds(e.t_ns) +
+                              " (" + std::to_string(e.position - expected) + " steps off)",
+                          "", e.t_ns};
+        });
+      } else {
+        // Within the steps taken one reporting period either side of the report.
+        const auto first = std::lower_bound(m.rises.begin(), m.rises.end(), e.t_ns - period_ns);
+        const auto last = std::upper_bound(m.rises.begin(), m.rises.end(), e.t_ns + period_ns);
+        const int64_t steps = last - first;
+        const int64_t off = e.position - (offset + now);
+        v.Check(p002, off >= -steps && off <= steps, [&] {
+          return Evidence{mn + " reported while moving within " + std::to_string(steps) +
+                              " steps (those one reporting period either side) of " +
+                              std::to_string(offset + now),
+                          "reported " + std::to_string(e.position) + " at " + Seconds(e.t_ns) +
+                              " (" + std::to_string(off) + " steps off)",
+                          "", e.t_ns};
+        });
+      }
+    }
+
+    // PIN-003: pulse widths; PIN-005: the step rate.
+    const std::vector<PinEdge>& se = m.step->edges;
+    for (size_t k = 0; k < se.size() && se[k].t_ns <= end; ++k) {
+      if (k + 1 >= se.size() || se[k + 1].t_ns > end) break;
+      const TimeNs width = se[k + 1].t_ns - se[k].t_ns;
+      const bool high = se[k].level;
+      const int64_t min_ns = high ? d.step_high_min_ns : d.step_low_min_ns;
+      v.Check(p003, width >= min_ns, [&] {
+        return Evidence{mn + " STEP " + (high ? "high" : "low") + " for at least " +
+                            std::to_string(min_ns) + " ns (" + d.name + ")",
+                        std::string(high ? "high" : "low") + " for " + std::to_string(width) +
+                            " ns from " + Seconds(se[k].t_ns),
+                        "", se[k].t_ns};
+      });
+    }
+    // Over kRatePulses intervals, so that one late interrupt (a few us) is not a rate.
+    const double min_span_ns =
+        kRatePulses * 1e9 / o.board.max_step_rate_hz - kLatencyAllowanceNs - cycle_ns;
+    for (size_t k = kRatePulses; k < m.rises.size(); ++k) {
+      const TimeNs span = m.rises[k] - m.rises[k - kRatePulses];
+      v.Check(p005, static_cast<double>(span) >= min_span_ns, [&] {
+        char text[200];
+        std::snprintf(text, sizeof text, "%s: %zu STEP pulses in %lld ns (%.0f steps/s) up to %s",
+                      mn.c_str(), kRatePulses, static_cast<long long>(span),
+                      kRatePulses * 1e9 / static_cast<double>(span), Seconds(m.rises[k]).c_str());
+        return Evidence{mn + " at most " +
+                            std::to_string(static_cast<int64_t>(o.board.max_step_rate_hz)) +
+                            " steps/s (board " + o.board.name + ")",
+                        text, "", m.rises[k]};
+      });
+    }
+
+    // PIN-004: DIR setup and hold around every rising STEP edge.
+    const std::vector<PinEdge>& de = m.dir->edges;
+    for (const TimeNs r : m.rises) {
+      auto next = std::upper_bound(de.begin(), de.end(), r,
+                                   [](TimeNs t, const PinEdge& e) { return t < e.t_ns; });
+      const TimeNs setup = next == de.begin() ? INT64_MAX : r - std::prev(next)->t_ns;
+      const TimeNs hold = next == de.end() ? INT64_MAX : next->t_ns - r;
+      v.Check(p004, setup >= d.dir_setup_min_ns && hold >= d.dir_hold_min_ns, [&] {
+        const bool bad_setup = setup < d.dir_setup_min_ns;
+        return Evidence{mn + " DIR stable " + std::to_string(d.dir_setup_min_ns) +
+                            " ns before and " + std::to_string(d.dir_hold_min_ns) +
+                            " ns after each rising STEP edge (" + d.name + ")",
+                        bad_setup ? "DIR changed " + std::to_string(setup) +
+                                        " ns before the STEP edge at " + Seconds(r)
+                                  : "DIR changed " + std::to_string(hold) +
+                                        " ns after the STEP edge at " + Seconds(r),
+                        "", r};
+      });
+    }
+
+    // PIN-006: the rate over 50 ms windows changes no faster than the planner allows.
+    if (!m.rises.empty()) {
+      const double w_s = static_cast<double>(kRateWindowNs) / 1e9;
+      const double limit =
+          kAccelTolerance * o.accel_per_rate * max_rate + kQuantumPulses / w_s / w_s;
+      const TimeNs last = std::min(end, m.rises.back() + kRateWindowNs);
+      size_t k = 0;
+      double prev_rate = 0;
+      for (TimeNs w0 = 0; w0 < last; w0 += kRateWindowNs) {
+        size_t n = 0;
+        while (k < m.rises.size() && m.rises[k] < w0 + kRateWindowNs) ++k, ++n;
+        const double rate = static_cast<double>(n) / w_s;
+        const double accel = std::fabs(rate - prev_rate) / w_s;
+        if (n > 0 || prev_rate > 0) {
+          v.Check(p006, accel <= limit, [&] {
+            char text[200];
+            std::snprintf(text, sizeof text,
+                          "%.0f steps/s then %.0f steps/s in the 50 ms windows from %s: %.0f "
+                          "steps/s^2",
+                          prev_rate, rate, Seconds(w0 - kRateWindowNs).c_str(), accel);
+            char want[160];
+            std::snprintf(want, sizeof want, "%s accelerating at most %.0f steps/s^2", mn.c_str(),
+                          limit);
+            return Evidence{want, text, "", w0};
+          });
+        }
+        prev_rate = rate;
+      }
+    }
+
+    // PIN-007: DIR changes only after the motor has slowed down.
+    const double slow_ns = 1e9 / o.board.reversal_max_rate_hz;
+    for (const PinEdge& e : de) {
+      if (e.t_ns > end) break;
+      auto it = std::upper_bound(m.rises.begin(), m.rises.end(), e.t_ns);
+      if (it == m.rises.begin() || std::prev(it) == m.rises.begin()) continue;  // from rest
+      const TimeNs r2 = *std::prev(it), r1 = *std::prev(it, 2);
+      // A motor whose last pulse is longer ago than a slow interval had stopped.
+      const bool fast =
+          static_cast<double>(r2 - r1) < slow_ns && static_cast<double>(e.t_ns - r2) < slow_ns;
+      v.Check(p007, !fast, [&] {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "DIR changed at %s, %lld ns after a STEP pulse, pulses %lld ns apart "
+                      "(%.0f steps/s)",
+                      Seconds(e.t_ns).c_str(), static_cast<long long>(e.t_ns - r2),
+                      static_cast<long long>(r2 - r1), 1e9 / static_cast<double>(r2 - r1));
+        return Evidence{mn + " reverses only below " +
+                            std::to_string(static_cast<int64_t>(o.board.reversal_max_rate_hz)) +
+                            " steps/s",
+                        text, "", e.t_ns};
+      });
+    }
+  }
+}
+
+void JudgePinsFor(Protocol protocol, const PinTrace& trace, const std::vector<Chunk>& traffic,
+                  const PinJudgeOptions& options, TimeNs end_ns, Verdicts& v) {
+  if (protocol != Protocol::kDfmoco) return;
+  JudgePins("DFM-", trace, DfmocoPinEvents(traffic), options, end_ns, v);
+}
+
+}  // namespace moco::conformance

@@ -1,0 +1,181 @@
+// The pin rules judged on hand-made traces (conformance/rules/pin_rules.cpp; FACTS
+// "Step drivers", "DFMoco"), the board and driver profiles (fixtures/boards,
+// fixtures/drivers), and the rules' applicability: only a target watching pins.
+#include "conformance/core/pin_judge.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "conformance/protocols/registry.h"
+
+namespace moco::conformance {
+namespace {
+
+constexpr sim::TimeNs kUs = 1000;
+
+std::string Root() {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  return root != nullptr ? root : ".";
+}
+
+Board OneMotorBoard() {
+  Board b;
+  b.name = "test";
+  b.motors.push_back({PinRef{'D', 4}, PinRef{'D', 5}, std::nullopt});
+  return b;
+}
+
+// Motor 1 steps `n` times forward, one pulse every `period`, high for `high`,
+// starting at `t0`; DIR goes high `setup` before the first rising edge.
+PinTrace Pulses(int n, sim::TimeNs t0, sim::TimeNs period, sim::TimeNs high,
+                sim::TimeNs setup = 10 * kUs) {
+  PinTrace t = PinTrace::For(OneMotorBoard());
+  t.frequency_hz = 16'000'000;
+  t.signals[1].edges.push_back({t0 - setup, 0, true});
+  for (int i = 0; i < n; ++i) {
+    const sim::TimeNs r = t0 + i * period;
+    t.signals[0].edges.push_back({r, 0, true});
+    t.signals[0].edges.push_back({r + high, 0, false});
+  }
+  return t;
+}
+
+PinJudgeOptions A4988() {
+  PinJudgeOptions o;
+  o.driver = std::get<DriverProfile>(LoadDriver("a4988"));
+  o.board = OneMotorBoard();
+  return o;
+}
+
+Status StatusOf(const Verdicts& v, const std::string& id) {
+  auto it = v.outcomes().find(id);
+  return it == v.outcomes().end() ? Status::kNotExercised : it->second.status;
+}
+
+TEST(PinJudge, APulseShorterThanTheDriversHighTimeFailsPin003ButNotForAFasterDriver) {
+  const PinTrace t = Pulses(10, 1000 * kUs, 200 * kUs, 187);  // 3 cycles at 16 MHz
+  Verdicts a4988, tmc;
+  JudgePins("DFM-", t, {}, A4988(), 10 * sim::kNsPerSecond, a4988);
+  EXPECT_EQ(StatusOf(a4988, "DFM-PIN-003"), Status::kFail);
+  PinJudgeOptions o = A4988();
+  o.driver = std::get<DriverProfile>(LoadDriver("tmc2209"));
+  JudgePins("DFM-", t, {}, o, 10 * sim::kNsPerSecond, tmc);
+  EXPECT_EQ(StatusOf(tmc, "DFM-PIN-003"), Status::kPass);
+  EXPECT_EQ(StatusOf(a4988, "DFM-PIN-004"), Status::kPass);
+}
+
+TEST(PinJudge, DirChangedAtTheStepEdgeFailsSetupAndOneJustOverTheSetupTimePasses) {
+  Verdicts late, ok;
+  JudgePins("DFM-", Pulses(3, 1000 * kUs, 200 * kUs, 25 * kUs, 0), {}, A4988(), sim::kNsPerSecond,
+            late);
+  EXPECT_EQ(StatusOf(late, "DFM-PIN-004"), Status::kFail);
+  JudgePins("DFM-", Pulses(3, 1000 * kUs, 200 * kUs, 25 * kUs, 200), {}, A4988(), sim::kNsPerSecond,
+            ok);
+  EXPECT_EQ(StatusOf(ok, "DFM-PIN-004"), Status::kPass);
+}
+
+TEST(PinJudge, AReportAtRestMustEqualTheSignedStepCountSinceTheLastReset) {
+  const PinTrace t = Pulses(100, 1000 * kUs, 200 * kUs, 25 * kUs);  // 100 steps by 21 ms
+  using K = PinPositionEvent::Kind;
+  const sim::TimeNs later = 500 * sim::kNsPerMs;
+  Verdicts right, lost;
+  JudgePins("DFM-", t, {{K::kReport, later, 1, 100}}, A4988(), sim::kNsPerSecond, right);
+  EXPECT_EQ(StatusOf(right, "DFM-PIN-001"), Status::kPass);
+  JudgePins("DFM-", t, {{K::kReport, later, 1, 101}}, A4988(), sim::kNsPerSecond, lost);
+  EXPECT_EQ(StatusOf(lost, "DFM-PIN-001"), Status::kFail);
+  // np 1 1000 before the pulses: 1100 afterwards.
+  Verdicts reset;
+  JudgePins("DFM-", t, {{K::kReset, 0, 1, 1000}, {K::kReport, later, 1, 1100}}, A4988(),
+            sim::kNsPerSecond, reset);
+  EXPECT_EQ(StatusOf(reset, "DFM-PIN-001"), Status::kPass);
+}
+
+TEST(PinJudge, StepsFasterThanTheBoardsTopRateFailPin005) {
+  Verdicts at_top, over;
+  JudgePins("DFM-", Pulses(40, 1000 * kUs, 50 * kUs, 25 * kUs), {}, A4988(), sim::kNsPerSecond,
+            at_top);
+  EXPECT_EQ(StatusOf(at_top, "DFM-PIN-005"), Status::kPass);
+  JudgePins("DFM-", Pulses(40, 1000 * kUs, 40 * kUs, 20 * kUs), {}, A4988(), sim::kNsPerSecond,
+            over);
+  EXPECT_EQ(StatusOf(over, "DFM-PIN-005"), Status::kFail);
+}
+
+TEST(PinJudge, DfmocoLinesBecomeReportsResetsAndPulseRates) {
+  std::vector<Chunk> traffic = {{0, true, {'n', 'p', ' ', '1', ' ', '7', '\r', '\n'}},
+                                {10, false, {'m', 'p', ' ', '1', ' ', '7', '\r', '\n'}},
+                                {20, false, {'m', 'p', ' ', '1', ' ', '9', '\r', '\n'}},
+                                {30, false, {'p', 'r', ' ', '2', ' ', '9', '9', '\r', '\n'}}};
+  const auto e = DfmocoPinEvents(traffic);
+  ASSERT_EQ(e.size(), 3u);
+  EXPECT_EQ(e[0].kind, PinPositionEvent::Kind::kReset);  // the sketch answers np with mp
+  EXPECT_EQ(e[1].kind, PinPositionEvent::Kind::kReport);
+  EXPECT_EQ(e[1].position, 9);
+  EXPECT_EQ(e[2].kind, PinPositionEvent::Kind::kPulseRate);
+  EXPECT_EQ(e[2].motor, 2);
+}
+
+TEST(PinProfiles, TheDriverFilesHoldTheBuiltInDatasheetFigures) {
+  for (const DriverProfile& d : BuiltInDrivers()) {
+    const auto read = LoadDriver(Root() + "/fixtures/drivers/" + d.name + ".json");
+    ASSERT_TRUE(std::holds_alternative<DriverProfile>(read)) << std::get<std::string>(read);
+    const DriverProfile& f = std::get<DriverProfile>(read);
+    EXPECT_EQ(f.step_high_min_ns, d.step_high_min_ns) << d.name;
+    EXPECT_EQ(f.step_low_min_ns, d.step_low_min_ns) << d.name;
+    EXPECT_EQ(f.dir_setup_min_ns, d.dir_setup_min_ns) << d.name;
+    EXPECT_EQ(f.dir_hold_min_ns, d.dir_hold_min_ns) << d.name;
+  }
+  const auto unknown = LoadDriver("l298");
+  ASSERT_TRUE(std::holds_alternative<std::string>(unknown));
+  EXPECT_NE(std::get<std::string>(unknown).find("a4988"), std::string::npos);
+}
+
+TEST(PinProfiles, TheBoardFilesReadAndTheOwnFirmwareDrivesTheUnoPins) {
+  for (const char* name : {"own-dfmoco", "dfmoco-uno", "dfmoco-mega"}) {
+    const auto b = LoadBoard(Root() + "/fixtures/boards/" + name + ".json");
+    ASSERT_TRUE(std::holds_alternative<Board>(b)) << std::get<std::string>(b);
+    EXPECT_EQ(std::get<Board>(b).motors.size(), 4u);
+  }
+  const Board own = std::get<Board>(LoadBoard(Root() + "/fixtures/boards/own-dfmoco.json"));
+  EXPECT_EQ(own.motors[2].step, (PinRef{'B', 0}));  // Arduino pin 8
+  EXPECT_EQ(own.motors[3].dir, (PinRef{'B', 3}));   // Arduino pin 11
+}
+
+TEST(PinProfiles, BadBoardsAreRefusedNamingTheProblem) {
+  auto error = [](std::string_view text) {
+    const auto b = ParseBoard(text, "b.json");
+    return std::holds_alternative<std::string>(b) ? std::get<std::string>(b) : std::string();
+  };
+  EXPECT_NE(error("").find("empty"), std::string::npos);
+  EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"D4","dir":"PD5"}]})").find("PD4"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"PD4","dir":"PD4"}]})").find("named twice"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[]})").find("1..16"), std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"PD4","dir":"PD5"}],"spead":1})").find("spead"),
+            std::string::npos);
+}
+
+TEST(PinRules, AreNotApplicableOnATargetThatWatchesNoPins) {
+  auto target = InProcessTarget::ForModel("dfmoco", "");
+  ASSERT_TRUE(target);
+  ASSERT_FALSE(target->Open());
+  RunOptions options;
+  options.cases = "connect/hi";
+  options.pins = A4988();  // even with a board given
+  const RunReport report = FindRunner(Protocol::kDfmoco)->run(*target, options);
+  size_t pin_rules = 0;
+  for (const auto& [id, s] : report.rules) {
+    if (id.find("-PIN-") == std::string::npos) continue;
+    ++pin_rules;
+    EXPECT_EQ(s.status, Status::kNotApplicable) << id;
+  }
+  EXPECT_EQ(pin_rules, DfmocoPinRules().size());
+  EXPECT_TRUE(target->WatchPins(OneMotorBoard()).has_value());  // in-process: refused
+}
+
+}  // namespace
+}  // namespace moco::conformance

@@ -1,0 +1,406 @@
+// `mocosim tap`: a recording proxy between a host and a real device (see tap.h).
+#include "serve/tap.h"
+
+#include <csignal>
+#include <cstdio>
+#include <stdexcept>
+#include <utility>
+
+#include "base/file_io.h"
+#include "devices/registry.h"
+
+namespace moco::serve {
+
+namespace asio = transport::asio;
+using transport::ErrorCode;
+
+// The host side's device: what the host writes goes on to the real device.
+class Tap::Forwarder final : public devices::Device {
+ public:
+  explicit Forwarder(Tap& tap) : tap_(tap) {}
+  std::string_view Model() const override { return tap_.config_.device_model; }
+  devices::LineSettings Line() const override { return {tap_.baud_, 8, 1, 'N'}; }
+  void PowerOn() override {}
+  void PowerOff() override {}
+  bool Powered() const override { return true; }
+  void OnHostBytes(wire::ByteView bytes) override { tap_.ToDevice(bytes); }
+
+ private:
+  Tap& tap_;
+};
+
+// Writes the host link's traffic and events into the session, each traffic
+// line with the messages it completed, decoded in the dialect on the line.
+class Tap::Recorder final : public transport::TrafficObserver {
+ public:
+  Recorder(session::SessionWriter* writer, wire::Protocol protocol)
+      : writer_(writer), decoder_(std::make_unique<wire::TranscriptDecoder>(protocol)) {}
+
+  void OnTraffic(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override {
+    if (writer_ == nullptr) return;
+    session::SessionEntry e;
+    e.t_ns = t_ns;
+    const bool host = dir == transport::Direction::kToDevice;
+    e.from = host ? session::Origin::kHost : session::Origin::kDevice;
+    e.bytes.assign(bytes.begin(), bytes.end());
+    for (const wire::TranscriptLine& l :
+         decoder_->Feed(host ? wire::Side::kHost : wire::Side::kDevice, bytes)) {
+      e.decoded.push_back(l.text);
+    }
+    writer_->Append(e);
+  }
+  void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override {
+    Event({{"t_ns", t_ns}, {"event", std::string(kind)}, {"detail", std::string(detail)}});
+  }
+  void Event(nlohmann::json line) {
+    if (writer_ != nullptr) writer_->Append(session::SessionEntry::Event(std::move(line)));
+  }
+  // Until set (the header names the host side, known once it is open),
+  // nothing is recorded: nothing crosses before Start().
+  void SetWriter(session::SessionWriter* writer) { writer_ = writer; }
+  void SetDialect(wire::Protocol dialect) {
+    decoder_ = std::make_unique<wire::TranscriptDecoder>(dialect);
+  }
+
+ private:
+  session::SessionWriter* writer_;
+  std::unique_ptr<wire::TranscriptDecoder> decoder_;
+};
+
+std::variant<DeviceSpec, std::string> ParseDeviceSpec(std::string_view spec) {
+  const std::string forms =
+      "give the device side as serial:PATH (e.g. serial:/dev/ttyUSB0) or tcp:HOST:PORT (e.g. "
+      "tcp:192.168.1.20:5000)";
+  DeviceSpec d;
+  if (spec.starts_with("tcp:")) {
+    const std::string_view rest = spec.substr(4);
+    const size_t colon = rest.rfind(':');
+    if (colon == std::string_view::npos || colon == 0 || colon + 1 == rest.size()) {
+      return "device \"" + std::string(spec) + "\" has no HOST:PORT; " + forms;
+    }
+    std::string host(rest.substr(0, colon));
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+      host = host.substr(1, host.size() - 2);
+    }
+    const std::string port_text(rest.substr(colon + 1));
+    unsigned long port = 0;
+    try {
+      size_t used = 0;
+      port = std::stoul(port_text, &used);
+      if (used != port_text.size()) port = 0;
+    } catch (const std::exception&) {
+      port = 0;
+    }
+    if (port == 0 || port > 65535) {
+      return "device \"" + std::string(spec) + "\": port \"" + port_text + "\" is not 1..65535; " +
+             forms;
+    }
+    d.tcp = true;
+    d.host = host;
+    d.port = static_cast<uint16_t>(port);
+    return d;
+  }
+  std::string_view path = spec;
+  if (path.starts_with("serial:")) path.remove_prefix(7);
+  if (path.starts_with("pty:")) path.remove_prefix(4);
+  if (path.empty()) return "the device side is empty; " + forms;
+  if (path.find(':') != std::string_view::npos && !path.starts_with("/") &&
+      !path.starts_with(".")) {
+    return "device \"" + std::string(spec) + "\" is neither serial:PATH nor tcp:HOST:PORT; " +
+           forms;
+  }
+  d.path = std::string(path);
+  return d;
+}
+
+std::string DefaultTapDevice(wire::Protocol protocol) {
+  const wire::Protocol base =
+      protocol == wire::Protocol::kStackshotDfmoco ? wire::Protocol::kStackshot : protocol;
+  for (const devices::DeviceModel& m : devices::DeviceModels()) {
+    if (m.protocol == base) return std::string(m.name);
+  }
+  return {};
+}
+
+Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn log)
+    : driver_(driver),
+      config_(std::move(config)),
+      log_(log ? std::move(log) : transport::LogToStderr),
+      follower_(config_.protocol) {
+  auto parsed = ParseDeviceSpec(config_.device);
+  if (const auto* e = std::get_if<std::string>(&parsed)) throw std::runtime_error(*e);
+  spec_ = std::get<DeviceSpec>(parsed);
+  if (config_.device_model.empty()) config_.device_model = DefaultTapDevice(config_.protocol);
+  baud_ = config_.baud != 0 ? config_.baud : wire::Info(config_.protocol).line.baud;
+  if (!spec_.tcp && !transport::IsStandardBaud(baud_)) {
+    throw std::runtime_error("--baud " + std::to_string(baud_) +
+                             " is not a standard rate; use e.g. 38400, 57600 or 115200");
+  }
+  if (!config_.record_path.empty()) {
+    if (auto error = base::CheckOutputPath(config_.record_path, "")) {
+      throw std::runtime_error("the recording " + *error);
+    }
+    if (!spec_.tcp && base::SameFile(config_.record_path, spec_.path)) {
+      throw std::runtime_error(config_.record_path +
+                               " is both the device's port and the recording: give the "
+                               "recording its own file");
+    }
+  }
+  // The device first: a host never finds a port with nothing behind it.
+  OpenDevice();
+  forwarder_ = std::make_unique<Forwarder>(*this);
+  recorder_ = std::make_unique<Recorder>(nullptr, config_.protocol);
+  transport::ServeOptions opts;
+  opts.no_pacing = true;  // the real line paces; the tap adds nothing
+  opts.observer = recorder_.get();
+  opts.log = [this](std::string_view line) { log_("host side: " + std::string(line)); };
+  server_ = std::make_unique<transport::DeviceServer>(driver_, config_.host, opts);
+  if (server_->spec().kind == transport::EndpointSpec::Kind::kWifi) {
+    throw std::runtime_error("the host side is a PTY (pty:PATH) or a TCP port (tcp:[HOST:]PORT)");
+  }
+  // Last, so that a tap that cannot start leaves no recording behind.
+  if (!config_.record_path.empty()) {
+    session::SessionHeader h;
+    h.protocol = config_.protocol;
+    h.device = config_.device_model;
+    h.clock = "real";
+    h.note = !config_.note.empty() ? config_.note
+                                   : "tapped by mocosim tap between host " + server_->Where() +
+                                         " and device " + config_.device;
+    h.tolerance_time_ms = config_.time_tolerance_ms;
+    if (!config_.profile.empty()) h.extra["profile"] = config_.profile;
+    h.extra["tap"] = {{"host", server_->Where()}, {"device", config_.device}, {"baud", baud_}};
+    writer_ = std::make_unique<session::SessionWriter>(config_.record_path, h);
+    recorder_->SetWriter(writer_.get());
+  }
+}
+
+Tap::~Tap() {
+  Stop(nullptr);
+  alive_.reset();
+}
+
+void Tap::OpenDevice() {
+  asio::io_context& io = driver_.io();
+  if (spec_.tcp) {
+    device_stream_ = transport::ConnectTcpStream(io, spec_.host, spec_.port);
+    serial_ = nullptr;
+  } else {
+    auto serial =
+        transport::SerialStream::Open(io, spec_.path, {.baud = baud_, .rtscts = config_.rtscts});
+    serial_ = serial.get();
+    device_stream_ = std::move(serial);
+  }
+  ++device_gen_;
+  writing_ = false;
+}
+
+void Tap::Start() {
+  if (started_ || stopped_) return;
+  started_ = true;
+  server_->Serve(*forwarder_);
+  ReadDevice();
+  if (transport::PtyPort* pty = server_->pty()) {
+    // The host's port reads back the device's speed until the host sets its own.
+    pty->SetLineBaud(baud_);
+    host_line_seen_ = pty->LineBaud();
+    poll_timer_ = driver_.scheduler().After(config_.poll_ns, [this] { PollHostLine(); });
+  }
+  driver_.Kick();
+}
+
+void Tap::ReadDevice() {
+  if (device_stream_ == nullptr || stopped_) return;
+  device_stream_->AsyncReadSome(
+      asio::buffer(read_buf_),
+      [this, weak = std::weak_ptr<bool>(alive_), gen = device_gen_](const ErrorCode& ec, size_t n) {
+        if (weak.expired() || gen != device_gen_ || stopped_) return;
+        OnDeviceRead(ec, n);
+      });
+}
+
+void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
+  if (ec) {
+    DeviceLost(ec == asio::error::eof ? std::string("the device closed the connection")
+                                      : ec.message());
+    return;
+  }
+  driver_.Sync();
+  const wire::ByteView bytes(read_buf_.data(), n);
+  stats_.device_bytes += n;
+  // Recorded by the host link's observer as it takes them.
+  server_->link().Write(bytes);
+  if (const auto change = follower_.OnDeviceBytes(bytes)) {
+    recorder_->SetDialect(change->dialect);
+    ChangeLine(change->baud, "the device acknowledged a switch to " +
+                                 std::string(wire::ProtocolName(change->dialect)));
+  }
+  ReadDevice();
+  driver_.Kick();
+}
+
+void Tap::ToDevice(wire::ByteView bytes) {
+  follower_.OnHostBytes(bytes);
+  if (device_stream_ == nullptr) {
+    stats_.dropped_bytes += bytes.size();
+    if (!drop_logged_) {
+      drop_logged_ = true;
+      log_("the device is away: dropping what the host sends until it is back");
+    }
+    return;
+  }
+  stats_.host_bytes += bytes.size();
+  pending_.insert(pending_.end(), bytes.begin(), bytes.end());
+  PumpDevice();
+}
+
+void Tap::PumpDevice() {
+  if (writing_ || pending_.empty() || device_stream_ == nullptr || stopped_) return;
+  in_write_.swap(pending_);
+  pending_.clear();
+  writing_ = true;
+  device_stream_->AsyncWriteAll(
+      asio::buffer(in_write_),
+      [this, weak = std::weak_ptr<bool>(alive_), gen = device_gen_](const ErrorCode& ec, size_t) {
+        if (weak.expired() || gen != device_gen_ || stopped_) return;
+        writing_ = false;
+        in_write_.clear();
+        if (ec) {
+          DeviceLost("write failed: " + ec.message());
+          return;
+        }
+        PumpDevice();
+      });
+}
+
+void Tap::DeviceLost(const std::string& why) {
+  if (device_stream_ == nullptr) return;
+  driver_.Sync();
+  ++stats_.device_losses;
+  stats_.dropped_bytes += pending_.size() + in_write_.size();
+  pending_.clear();
+  in_write_.clear();
+  writing_ = false;
+  device_stream_->Close();
+  device_stream_.reset();
+  serial_ = nullptr;
+  ++device_gen_;
+  drop_logged_ = false;
+  log_("the device " + config_.device + " went away (" + why +
+       "); the tap keeps running and looks for it again every " +
+       std::to_string(config_.reopen_ns / sim::kNsPerMs) + " ms");
+  Event({{"event", "device_link"}, {"detail", "lost: " + why}});
+  ScheduleReopen();
+  driver_.Kick();
+}
+
+void Tap::ScheduleReopen() {
+  reopen_timer_ = driver_.scheduler().After(config_.reopen_ns, [this] {
+    reopen_timer_ = sim::Scheduler::kNoTimer;
+    if (stopped_) return;
+    try {
+      OpenDevice();
+    } catch (const std::exception&) {
+      ScheduleReopen();
+      return;
+    }
+    log_("the device " + config_.device + " is back");
+    Event({{"event", "device_link"}, {"detail", "open"}});
+    ReadDevice();
+  });
+}
+
+void Tap::ChangeLine(uint32_t baud, std::string_view why) {
+  if (baud == baud_) return;
+  baud_ = baud;
+  ++stats_.line_changes;
+  std::string result = "followed";
+  if (serial_ != nullptr) {
+    if (auto error = serial_->SetBaud(baud)) {
+      result = "not followed: " + *error;
+      log_("cannot set the device's port to " + std::to_string(baud) + " baud: " + *error);
+    }
+  } else {
+    result = "nothing to set on a TCP device";
+  }
+  log_("line rate now " + std::to_string(baud) + " baud: " + std::string(why));
+  Event({{"event", "line_rate"}, {"baud", baud}, {"detail", std::string(why)}, {"serial", result}});
+}
+
+void Tap::PollHostLine() {
+  poll_timer_ = sim::Scheduler::kNoTimer;
+  transport::PtyPort* pty = server_ ? server_->pty() : nullptr;
+  if (stopped_ || pty == nullptr) return;
+  const uint32_t b = pty->LineBaud();
+  if (b != 0 && b != host_line_seen_) {
+    host_line_seen_ = b;
+    ChangeLine(b, "the host set its port to " + std::to_string(b) + " baud");
+  }
+  poll_timer_ = driver_.scheduler().After(config_.poll_ns, [this] { PollHostLine(); });
+}
+
+void Tap::Event(nlohmann::json event) {
+  event["t_ns"] = driver_.Sync();
+  recorder_->Event(std::move(event));
+}
+
+bool Tap::Stop(std::string* error) {
+  if (stopped_) return true;
+  stopped_ = true;
+  driver_.scheduler().Cancel(poll_timer_);
+  driver_.scheduler().Cancel(reopen_timer_);
+  if (server_) server_->Stop();
+  if (device_stream_) device_stream_->Close();
+  device_stream_.reset();
+  serial_ = nullptr;
+  if (!writer_) return true;
+  std::string e;
+  if (!writer_->Finish(&e)) {
+    if (error) *error = e;
+    return false;
+  }
+  return true;
+}
+
+int RunTap(TapConfig config, transport::LogFn log) {
+  if (!log) log = transport::LogToStderr;
+  asio::io_context io;
+  sim::Scheduler scheduler;
+  transport::RealtimeDriver driver(io, scheduler);
+  // Caught before the PTY link exists, so a signal sent as soon as it
+  // appears still completes the recording.
+  asio::signal_set signals(io, SIGINT, SIGTERM, SIGHUP);
+  std::unique_ptr<Tap> tap;
+  try {
+    tap = std::make_unique<Tap>(driver, config, log);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mocosim tap: %s\n", e.what());
+    return 2;
+  }
+  int code = 0;
+  signals.async_wait([&](const ErrorCode& ec, int sig) {
+    if (ec) return;
+    log(std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                       : sig == SIGHUP ? "SIGHUP"
+                                                       : "SIGTERM"));
+    std::string error;
+    if (!tap->Stop(&error)) {
+      log("recording not completed: " + error);
+      code = 1;
+    } else if (tap->writer() != nullptr) {
+      log("recorded " + tap->writer()->path().string());
+    }
+    driver.Stop();
+    io.stop();
+  });
+  tap->Start();
+  driver.Start();
+  log("tapping " + config.device + " (" + std::to_string(tap->baud()) + " baud) for host " +
+      tap->HostWhere() +
+      (config.record_path.empty() ? std::string() : "; recording to " + config.record_path) +
+      "; Ctrl-C stops");
+  io.run();
+  return code;
+}
+
+}  // namespace moco::serve

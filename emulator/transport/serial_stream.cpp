@@ -1,0 +1,176 @@
+// The device end of a recording tap: a serial port or a TCP connection (see serial_stream.h).
+#include "transport/serial_stream.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace moco::transport {
+namespace {
+
+std::optional<speed_t> SpeedOf(uint32_t baud) {
+  switch (baud) {
+    case 50:
+      return B50;
+    case 75:
+      return B75;
+    case 110:
+      return B110;
+    case 134:
+      return B134;
+    case 150:
+      return B150;
+    case 200:
+      return B200;
+    case 300:
+      return B300;
+    case 600:
+      return B600;
+    case 1200:
+      return B1200;
+    case 1800:
+      return B1800;
+    case 2400:
+      return B2400;
+    case 4800:
+      return B4800;
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 500000:
+      return B500000;
+    case 576000:
+      return B576000;
+    case 921600:
+      return B921600;
+    case 1000000:
+      return B1000000;
+    case 1152000:
+      return B1152000;
+    case 1500000:
+      return B1500000;
+    case 2000000:
+      return B2000000;
+    case 2500000:
+      return B2500000;
+    case 3000000:
+      return B3000000;
+    case 3500000:
+      return B3500000;
+    case 4000000:
+      return B4000000;
+    default:
+      return std::nullopt;
+  }
+}
+
+std::string BaudHint(uint32_t baud) {
+  return "baud rate " + std::to_string(baud) +
+         " is not one the serial driver can set; use a standard rate such as 38400, 57600 or "
+         "115200";
+}
+
+std::optional<std::string> Apply(int fd, uint32_t baud, bool rtscts) {
+  const std::optional<speed_t> speed = SpeedOf(baud);
+  if (!speed) return BaudHint(baud);
+  termios t{};
+  if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);
+  cfmakeraw(&t);
+  t.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | CSTOPB | CRTSCTS);
+  t.c_cflag |= CS8 | CLOCAL | CREAD;
+  if (rtscts) t.c_cflag |= CRTSCTS;
+  t.c_iflag &= ~static_cast<tcflag_t>(IXON | IXOFF | IXANY);
+  t.c_cc[VMIN] = 1;
+  t.c_cc[VTIME] = 0;
+  cfsetispeed(&t, *speed);
+  cfsetospeed(&t, *speed);
+  if (tcsetattr(fd, TCSANOW, &t) != 0) return std::string("tcsetattr: ") + std::strerror(errno);
+  return std::nullopt;
+}
+
+}  // namespace
+
+bool IsStandardBaud(uint32_t baud) { return SpeedOf(baud).has_value(); }
+
+std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std::string& path,
+                                                 const SerialSettings& settings) {
+  if (!IsStandardBaud(settings.baud)) {
+    throw std::runtime_error("serial port " + path + ": " + BaudHint(settings.baud));
+  }
+  const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    std::string hint;
+    if (err == ENOENT) hint = " (is the device plugged in? give its path, e.g. /dev/ttyUSB0)";
+    if (err == EACCES || err == EPERM) {
+      hint = " (add yourself to the group owning it, e.g. `sudo usermod -aG dialout $USER`)";
+    }
+    if (err == EBUSY) hint = " (another program has it open)";
+    throw std::runtime_error("cannot open serial port " + path + ": " + std::strerror(err) + hint);
+  }
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISCHR(st.st_mode) || !isatty(fd)) {
+    close(fd);
+    throw std::runtime_error(path +
+                             " is not a serial port (not a terminal device): give the device's "
+                             "port, e.g. serial:/dev/ttyUSB0, or tcp:HOST:PORT");
+  }
+  if (auto error = Apply(fd, settings.baud, settings.rtscts)) {
+    close(fd);
+    throw std::runtime_error("cannot set up serial port " + path + ": " + *error);
+  }
+  return std::unique_ptr<SerialStream>(
+      new SerialStream(asio::posix::stream_descriptor(io, fd), path, settings.baud));
+}
+
+std::optional<std::string> SerialStream::SetBaud(uint32_t baud) {
+  const std::optional<speed_t> speed = SpeedOf(baud);
+  if (!speed) return BaudHint(baud);
+  const int fd = stream().native_handle();
+  termios t{};
+  if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);
+  cfsetispeed(&t, *speed);
+  cfsetospeed(&t, *speed);
+  // TCSADRAIN: bytes already written leave at the old speed.
+  if (tcsetattr(fd, TCSADRAIN, &t) != 0) return std::string("tcsetattr: ") + std::strerror(errno);
+  baud_ = baud;
+  return std::nullopt;
+}
+
+std::unique_ptr<ByteStream> ConnectTcpStream(asio::io_context& io, const std::string& host,
+                                             uint16_t port) {
+  const std::string where = host + ":" + std::to_string(port);
+  ErrorCode ec;
+  asio::ip::tcp::resolver resolver(io);
+  const auto endpoints = resolver.resolve(host, std::to_string(port), ec);
+  if (ec) {
+    throw std::runtime_error("cannot resolve the device address " + where + ": " + ec.message() +
+                             " (give tcp:HOST:PORT, e.g. tcp:192.168.1.20:5000)");
+  }
+  asio::ip::tcp::socket socket(io);
+  asio::connect(socket, endpoints, ec);
+  if (ec) {
+    throw std::runtime_error("cannot connect to the device at " + where + ": " + ec.message() +
+                             " (is it listening there?)");
+  }
+  socket.set_option(asio::ip::tcp::no_delay(true), ec);
+  return std::make_unique<AsioByteStream<asio::ip::tcp::socket>>(std::move(socket), where);
+}
+
+}  // namespace moco::transport

@@ -1,0 +1,155 @@
+#!/usr/bin/env python3
+"""Checks the Wireshark dissector against `mocosim decode`.
+
+For every session given, in three chunkings (as recorded; every chunk cut
+into pieces of 1..7 bytes, so frames are split across packets; runs of
+chunks from one side joined, so packets hold several frames), this exports
+the session with `mocosim export --pcapng`, dissects it with tshark and
+tools/wireshark/mocosim.lua, and compares the messages, in order and per
+direction, with the transcript `mocosim decode` prints: for DMC v2 and
+DFMoco the whole text (type, ID, every field, checksum verdict); for the
+StackShot binary protocol the command, action, axis and checksum verdict.
+
+  compare_with_decode.py MOCOSIM WORKDIR SESSION...
+
+Exit 0 when every session matches, 1 on a difference (the first is printed),
+77 when tshark is not installed (CTest counts it as skipped; ci/setup-deps
+installs it).
+"""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DISSECTOR = os.path.join(HERE, "mocosim.lua")
+
+
+def decode_messages(mocosim, session):
+    out = subprocess.run([mocosim, "decode", "--no-time", session], check=True,
+                         capture_output=True, text=True).stdout
+    messages = []
+    for line in out.splitlines():
+        if line.startswith("host -> dev  "):
+            messages.append(("host", line[len("host -> dev  "):].lstrip(" ")))
+        elif line.startswith("dev  -> host  "):
+            messages.append(("device", line[len("dev  -> host  "):]))
+    return messages
+
+
+def tshark_messages(tshark, capture):
+    env = dict(os.environ, HOME=os.environ.get("HOME", "/tmp"))
+    out = subprocess.run(
+        [tshark, "-n", "-X", "lua_script:" + DISSECTOR, "-r", capture, "-T", "fields",
+         "-e", "mocosim.direction", "-e", "mocosim.message", "-E", "occurrence=a",
+         "-E", "aggregator=|"],
+        check=True, capture_output=True, text=True, env=env).stdout
+    messages = []
+    for line in out.splitlines():
+        direction, _, texts = line.partition("\t")
+        if not texts:
+            continue
+        side = "host" if direction == "host->device" else "device"
+        for text in texts.split("|"):
+            messages.append((side, text))
+    return messages
+
+
+def key(protocol, message):
+    side, text = message
+    if protocol == "stackshot":
+        problem = text.startswith("!! ")
+        body = text[3:] if problem else text
+        m = re.match(r"(\S+) (\S+) axis=(\S+)", body)
+        if m and not body.startswith("skipped "):
+            body = " ".join(m.groups())
+            if "[checksum byte differs from the default algorithm]" in text:
+                body += " [checksum differs]"
+        return (side, ("!! " if problem else "") + body)
+    if " malformed: " in text:
+        text = text[:text.index(" malformed: ")] + " malformed"
+    if protocol in ("dfmoco", "stackshot-dfmoco") and text.startswith("!! "):
+        text = "!! (does not parse)"
+    return (side, text)
+
+
+def rechunk(session_path, out_path, mode):
+    """Writes the session with its chunks cut ("split") or joined ("merged")."""
+    with open(session_path) as f:
+        lines = [l for l in f.read().splitlines() if l.strip()]
+    header, entries = lines[0], [json.loads(l) for l in lines[1:]]
+    result = []
+    if mode == "split":
+        sizes = [1, 3, 7, 2, 5, 4, 6]
+        n = 0
+        for e in entries:
+            if "hex" not in e:
+                result.append(e)
+                continue
+            data = bytes.fromhex(e["hex"])
+            at = 0
+            while at < len(data):
+                size = sizes[n % len(sizes)]
+                n += 1
+                result.append({"t_ns": e["t_ns"], "from": e["from"],
+                               "hex": data[at:at + size].hex()})
+                at += size
+    else:
+        for e in entries:
+            if ("hex" in e and result and "hex" in result[-1]
+                    and result[-1]["from"] == e["from"]):
+                result[-1] = dict(result[-1], hex=result[-1]["hex"] + e["hex"])
+            elif "hex" in e:
+                result.append({"t_ns": e["t_ns"], "from": e["from"], "hex": e["hex"]})
+            else:
+                result.append(e)
+    with open(out_path, "w") as f:
+        f.write(header + "\n")
+        for e in result:
+            f.write(json.dumps(e) + "\n")
+
+
+def compare(mocosim, tshark, workdir, session, label):
+    with open(session) as f:
+        protocol = json.loads(f.readline())["protocol"]
+    capture = os.path.join(workdir, label + ".pcapng")
+    subprocess.run([mocosim, "export", "--pcapng", session, "-o", capture], check=True,
+                   capture_output=True)
+    want = [key(protocol, m) for m in decode_messages(mocosim, session)]
+    got = [key(protocol, m) for m in tshark_messages(tshark, capture)]
+    for i, (w, g) in enumerate(zip(want, got)):
+        if w != g:
+            print(f"{label}: message {i + 1} differs\n  mocosim decode: {w}\n  tshark:         {g}")
+            return False
+    if len(want) != len(got):
+        print(f"{label}: mocosim decode gives {len(want)} messages, tshark {len(got)}")
+        return False
+    print(f"{label}: {len(want)} messages match ({protocol})")
+    return True
+
+
+def main(argv):
+    if len(argv) < 4:
+        print(__doc__)
+        return 2
+    mocosim, workdir, sessions = argv[1], argv[2], argv[3:]
+    tshark = shutil.which("tshark")
+    if not tshark:
+        print("tshark is not installed (Debian package tshark; ci/setup-deps installs it)")
+        return 77
+    os.makedirs(workdir, exist_ok=True)
+    ok = True
+    for session in sessions:
+        name = os.path.splitext(os.path.basename(session))[0]
+        ok &= compare(mocosim, tshark, workdir, session, name)
+        for mode in ("split", "merged"):
+            variant = os.path.join(workdir, f"{name}-{mode}.jsonl")
+            rechunk(session, variant, mode)
+            ok &= compare(mocosim, tshark, workdir, variant, f"{name}-{mode}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
