@@ -5,6 +5,8 @@
 #define MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
 
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -41,6 +43,13 @@ bool IsUnsolicited(const DeviceRecord& r, dmc::MsgType type);
 std::string Vec(const std::vector<int32_t>& v);
 // v[i], or 0 past its end.
 int32_t At(const std::vector<int32_t>& v, size_t i);
+// Whether the device puts `motor` (index) where `ok` wants it by its own
+// account: its answer to MOTOR_GET_POSITION, or its last position update from
+// record `from` on. A fault in one of the two reports then fails that report's
+// rule (DMC-POS-006, DMC-POS-004) instead of every rule judged on where a
+// motor rests.
+bool ReportsAt(const DmcHost& h, size_t from, const std::optional<std::vector<int32_t>>& answer,
+               size_t motor, const std::function<bool(int32_t)>& ok);
 
 // Whether `r` accepts a MOTOR_MOVE: the MOTOR_MOVE response, or an ACK OK
 // from a device that answers moves that way (the reference firmware does;

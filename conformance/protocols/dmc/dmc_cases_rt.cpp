@@ -69,7 +69,7 @@ bool OnFramePositions(DmcCaseContext& c, std::string_view rule,
 
 bool AtFrame(DmcCaseContext& c, const Uploaded& u, uint32_t frame, std::string_view rule) {
   ExpectOk(c, rule, c.host.Call(dmc::RtPositionFrame{frame}));
-  WaitRest(c.host, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const auto p = GetPositions(c.host);
   std::vector<int32_t> want;
   for (const auto& path : u.path) want.push_back(path[frame]);
@@ -102,7 +102,7 @@ void LiveRun(DmcCaseContext& c) {
   AtFrame(c, *u, 0, "DMC-RT-002");
   const uint32_t end = std::min<uint32_t>(10, u->end);
   ExpectOk(c, "DMC-RT-009", h.Call(ShortRun(end)));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-RT-009", Go(c));
   const int e = h.WaitFor(mark, 20'000 * kMs,
@@ -169,7 +169,7 @@ void LiveRun(DmcCaseContext& c) {
       });
     }
   }
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
 }
 
 void StopRun(DmcCaseContext& c) {
@@ -178,7 +178,7 @@ void StopRun(DmcCaseContext& c) {
   if (!u) return;
   AtFrame(c, *u, 0, "DMC-RT-002");
   h.Call(ShortRun(10));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const size_t mark = h.records().size();
   Go(c);
   h.WaitFor(mark, 10'000 * kMs, [](const DeviceRecord& r) {
@@ -190,7 +190,7 @@ void StopRun(DmcCaseContext& c) {
   const int e = h.WaitFor(stop_mark, 5000 * kMs,
                           [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-012", e >= 0, "RT_END after STOP_ALL ends the run", "none within 5 s");
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
 }
 
 void GoUnarmed(DmcCaseContext& c) { ExpectRefused(c, "DMC-RT-011", c.host.Call(dmc::RtGo{})); }
@@ -203,7 +203,7 @@ void JogAll(DmcCaseContext& c) {
   const uint32_t to = std::min<uint32_t>(5, u->end);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-RT-013", h.Call(dmc::RtJogAll{24000, to}));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   h.Idle(200 * kMs);
   const std::vector<Update> ups = UpdatesSince(h, mark);
   for (uint32_t k = 1; k <= to; ++k) {
@@ -237,7 +237,7 @@ void Shoot(DmcCaseContext& c, bool second) {
   } else {
     ExpectOk(c, rule, h.Call(dmc::RtShootFrame{frame, dmc::kDirectionForward, 200, 500, blur}));
   }
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const auto before = GetPositions(h);
   const size_t mark = h.records().size();
   const DeviceRecord* go = Go(c);
@@ -251,7 +251,7 @@ void Shoot(DmcCaseContext& c, bool second) {
     Expect(c, rule, took >= 200 * kMs, "RT_END at least 200 ms (the exposure) after GO",
            "RT_END " + std::to_string(took / kMs) + " ms after GO");
   }
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   // The blurred motor sweeps its 40-step blur range while the shutter is open.
   const auto after = GetPositions(h);
   if (before && after) {
@@ -277,7 +277,7 @@ void StopLoop(DmcCaseContext& c) {
   dmc::RtRunMove run = ShortRun(end);
   run.flags = dmc::kPlayPingPong;
   ExpectOk(c, "DMC-LOOP-001", h.Call(run));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-LOOP-001", Go(c));
   const auto frame_report = [](const DeviceRecord& r, auto pred) {
@@ -298,7 +298,7 @@ void StopLoop(DmcCaseContext& c) {
               at_end < 0 ? "frame " + std::to_string(end) + " never reported"
                          : "no frame reported on the way back")) {
     h.Call(dmc::MotorStopAll{});
-    WaitRest(h, kRestTimeout);
+    WaitRest(c, kRestTimeout);
     return;
   }
   const size_t stop_mark = h.records().size();
@@ -308,7 +308,7 @@ void StopLoop(DmcCaseContext& c) {
   if (!Expect(c, "DMC-LOOP-001", e >= 0, "RT_END once the run reaches frame 0",
               "no RT_END within 10 s of STOP_LOOP (the loop went on)")) {
     h.Call(dmc::MotorStopAll{});
-    WaitRest(h, kRestTimeout);
+    WaitRest(c, kRestTimeout);
     return;
   }
   // The end point it stopped at: the last frame reported before RT_END.
@@ -321,7 +321,7 @@ void StopLoop(DmcCaseContext& c) {
   }
   Expect(c, "DMC-LOOP-001", last && *last == 0, "the run ends at frame 0, its next end point",
          last ? "last frame reported " + std::to_string(*last) : "no frame reported");
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
 }
 
 void VirtPosition(DmcCaseContext& c) {
@@ -420,12 +420,12 @@ void VirtMoveReadBack(DmcCaseContext& c) {
   if (!p0) return;
   // 0.1 units along the track, then 0.1 units up.
   ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{1, p0->track_x100000 + 10000}));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const auto p1 = VirtPositions(h);
   if (!p1) return;
   ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p1->track_x100000, p0->track_x100000 + 10000);
   ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{3, p1->ns_x100000 + 10000}));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   const auto p2 = VirtPositions(h);
   if (!p2) return;
   ExpectVirtAt(c, "DMC-VIRT-003", "vNS", p2->ns_x100000, p1->ns_x100000 + 10000);
@@ -456,14 +456,14 @@ void VirtStopShort(DmcCaseContext& c) {
   ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtMove{1, far}));
   h.Idle(200 * kMs);
   ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtStop{1}));
-  Expect(c, "DMC-VIRT-007", WaitRest(h, 10'000 * kMs), "the rig at rest within 10 s of VIRT_STOP",
+  Expect(c, "DMC-VIRT-007", WaitRest(c, 10'000 * kMs), "the rig at rest within 10 s of VIRT_STOP",
          "still moving");
   const auto p1 = VirtPositions(h);
   if (!p1) return;
   Expect(c, "DMC-VIRT-007", p1->track_x100000 < far - kVirtTolerance,
          "vTrack short of " + std::to_string(far), std::to_string(p1->track_x100000));
   h.Call(dmc::VirtMove{1, p0->track_x100000});
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   Unconfigure(c);
 }
 
@@ -473,7 +473,7 @@ void VirtJogs(DmcCaseContext& c) {
   const auto p0 = VirtPositions(h);
   if (!p0) return;
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJog{1, dmc::kJogSpeedMax, p0->track_x100000 + 5000}));
-  WaitRest(h, kRestTimeout);
+  WaitRest(c, kRestTimeout);
   if (const auto p1 = VirtPositions(h)) {
     ExpectVirtAt(c, "DMC-VIRT-008", "vTrack", p1->track_x100000, p0->track_x100000 + 5000);
   }
@@ -481,12 +481,12 @@ void VirtJogs(DmcCaseContext& c) {
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 5000}));
   h.Idle(300 * kMs);
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 0}));
-  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of speed 0",
+  Expect(c, "DMC-VIRT-008", WaitRest(c, 10'000 * kMs), "at rest within 10 s of speed 0",
          "still moving");
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{3, -3000}));
   h.Idle(300 * kMs);
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtStop{4}));
-  Expect(c, "DMC-VIRT-008", WaitRest(h, 10'000 * kMs), "at rest within 10 s of VIRT_STOP",
+  Expect(c, "DMC-VIRT-008", WaitRest(c, 10'000 * kMs), "at rest within 10 s of VIRT_STOP",
          "still moving");
   Unconfigure(c);
 }

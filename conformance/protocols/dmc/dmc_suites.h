@@ -31,7 +31,19 @@ const std::vector<DmcCase>& DmcCases();
 // Positions from MOTOR_GET_POSITION, or nullopt when the answer is missing.
 std::optional<std::vector<int32_t>> GetPositions(DmcHost& host);
 // Polls MOTOR_STATUS every 50 ms until nothing moves or `timeout_ns` passes.
+// A status of rest is believed when the unsolicited position updates agree:
+// when they changed just before it, the host waits one more update period,
+// and an update that still moves makes the status stale (recorded, and the
+// host goes on waiting until the updates stop changing too).
+struct RestWait {
+  bool rested = false;
+  const DeviceRecord* stale_status = nullptr;  // the first status of rest while moving
+  const DeviceRecord* moved_after = nullptr;   // the update that showed it
+};
+RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns);
 bool WaitRest(DmcHost& host, TimeNs timeout_ns);
+// As above, and a stale status fails DMC-STAT-004 in the case.
+bool WaitRest(DmcCaseContext& c, TimeNs timeout_ns);
 // The random suite's case: a sequence of valid motor requests drawn from
 // `random.seed`, checked against a model of where each motor must end; a
 // failing sequence is shrunk (on a restartable target), printed and saved.
