@@ -238,10 +238,12 @@ const std::vector<Rule> kRules = {
      "At this point the rig should immediately start the go-motion move as described above.",
      "Go-Motion (Blur); FACTS DFMoco"},
     {"DFM-GO-006", L::kShould, N::kDfmGoMotion,
-     "The go-motion move lasts the 1 s ramp, the exposure and the 1 s slow-down (within 150 ms)",
+     "The go-motion move runs the 1 s ramp, the exposure (half its time on each half) and the 1 s "
+     "slow-down: it lasts their sum, and the motors are where that plan puts them, both within "
+     "150 ms",
      "The ramp up to speed should take exactly 1 second, even if the device does not need to "
      "move.",
-     "Go-Motion (Blur); ERRATA 2.5"},
+     "Go-Motion (Blur); ERRATA 2.5; FACTS DFMoco"},
     {"DFM-GO-007", L::kShould, N::kDfmGoMotion,
      "`bf` while a motor moves is refused with `parse error`",
      "`bf exp blur {ch p0 p1 p2}...` is refused while moving.", "FACTS DFMoco"},

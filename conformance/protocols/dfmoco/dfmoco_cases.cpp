@@ -155,9 +155,9 @@ std::string Vec(const std::vector<int32_t>& v) {
   return s + "]";
 }
 
-// Rest, judged by DFM-MS-004.
-DfmRest Rest(DfmCaseContext& c) {
-  const DfmRest r = DfmWaitRest(c.host, kRestTimeout);
+// Rest, judged by DFM-MS-004; `while_moving` as DfmWaitRest's.
+DfmRest Rest(DfmCaseContext& c, const std::function<void()>& while_moving = {}) {
+  const DfmRest r = DfmWaitRest(c.host, kRestTimeout, while_moving);
   Expect(c, "DFM-MS-004", r.rested, "every ms digit 0 once the motors rest",
          "still moving after " + Str(kRestTimeout / kMs) + " ms");
   return r;
@@ -599,20 +599,106 @@ void Unknown(DfmCaseContext& c) {
 
 // ---------------------------------------------------------------- go-motion
 
-// Where a blur channel starts and ends (FACTS: a 1 s ramp before and after
-// the exposure, half the exposure on each half).
+// One channel's go-motion move (dfmoco-protocol.txt "Go-Motion (Blur)"; ERRATA
+// 2.5; FACTS DFMoco). With b = blur / 1000 "the exposure happens between
+// these positions: [p1 - (p1 - p0) * blurPercent] -> [p1] -> [p1 + (p2 - p1) *
+// blurPercent]", taking "1/2 of the exposure time" for each half (at v1, then
+// v2); "a ramp up to speed before the exposure starts" that "should take
+// exactly 1 second" from rest to v1, and "a slow-down after it", a fixed 1 s
+// from v2 to rest (FACTS). The move starts at `go` ("immediately").
 struct BlurPlan {
-  double start_steps;
-  double end_steps;
+  double exposure_s = 0;
+  double exposure_start_steps = 0;
+  double p1_steps = 0;
+  double exposure_end_steps = 0;
+  double v1_steps_per_s = 0;
+  double v2_steps_per_s = 0;
+  double start_steps = 0;  // where the ramp starts: the motor pre-positions there
+  double end_steps = 0;    // where the slow-down ends
+
+  // Where the motor is `t_s` seconds after the move starts.
+  double At(double t_s) const {
+    const double half = exposure_s / 2;
+    if (t_s <= 0) return start_steps;
+    if (t_s < 1) return start_steps + v1_steps_per_s * t_s * t_s / 2;
+    if (t_s < 1 + half) return exposure_start_steps + v1_steps_per_s * (t_s - 1);
+    if (t_s < 1 + exposure_s) return p1_steps + v2_steps_per_s * (t_s - 1 - half);
+    if (t_s < 2 + exposure_s) {
+      const double tau = t_s - 1 - exposure_s;
+      return exposure_end_steps + v2_steps_per_s * tau - v2_steps_per_s * tau * tau / 2;
+    }
+    return end_steps;
+  }
+  // The lowest and the highest position between `from_s` and `to_s`.
+  std::pair<double, double> Span(double from_s, double to_s) const {
+    double lo = At(from_s);
+    double hi = lo;
+    for (double t = from_s; t < to_s; t += 0.001) {
+      lo = std::min(lo, At(t));
+      hi = std::max(hi, At(t));
+    }
+    lo = std::min(lo, At(to_s));
+    hi = std::max(hi, At(to_s));
+    return {lo, hi};
+  }
 };
 BlurPlan PlanOf(int32_t exposure_ms, int32_t blur, int32_t p0, int32_t p1, int32_t p2) {
+  BlurPlan plan;
   const double b = blur / 1000.0;
-  const double half_s = exposure_ms / 2000.0;
-  const double s = p1 - (p1 - p0) * b;
-  const double f = p1 + (p2 - p1) * b;
-  const double v1 = (p1 - s) / half_s;
-  const double v2 = (f - p1) / half_s;
-  return BlurPlan{s - v1 / 2, f + v2 / 2};
+  plan.exposure_s = exposure_ms / 1000.0;
+  plan.p1_steps = p1;
+  plan.exposure_start_steps = p1 - (p1 - p0) * b;
+  plan.exposure_end_steps = p1 + (p2 - p1) * b;
+  plan.v1_steps_per_s = (p1 - plan.exposure_start_steps) / (plan.exposure_s / 2);
+  plan.v2_steps_per_s = (plan.exposure_end_steps - p1) / (plan.exposure_s / 2);
+  // From rest to v over 1 s covers v / 2, and from v to rest as much.
+  plan.start_steps = plan.exposure_start_steps - plan.v1_steps_per_s / 2;
+  plan.end_steps = plan.exposure_end_steps + plan.v2_steps_per_s / 2;
+  return plan;
+}
+
+// A motor's position sampled during the go-motion move: `mp m` sent at
+// `asked_ns`, answered at `answered_ns`.
+struct GoSample {
+  int32_t motor;
+  TimeNs asked_ns;
+  TimeNs answered_ns;
+  int32_t steps;
+};
+
+constexpr TimeNs kGoWithinNs = 150 * kMs;  // DFM-GO-006's tolerance
+constexpr TimeNs kChunkNs = 50 * kMs;      // FACTS: the sketch's velocity chunks
+
+double Seconds(TimeNs t) { return static_cast<double>(t) / 1e9; }
+
+// DFM-GO-006 along the move, not only its length: Dragonframe triggers the
+// camera by the clock ("so that Dragonframe knows when to trigger the
+// camera"), so each sample must lie where the plan puts the motor within
+// 150 ms of when it was taken, measured from `go` sent at `t_go`. A
+// position answered is the planned end of the 50 ms chunk running (FACTS),
+// so it may lead the clock by a chunk on top of that (the emulated sketch's
+// answers trail the plan by about 40 ms, well inside the 150 ms); motors
+// land on whole steps (2 steps, as DFM-GO-003/005).
+void JudgeGoShape(DfmCaseContext& c, const std::vector<std::pair<int32_t, BlurPlan>>& plans,
+                  const std::vector<GoSample>& samples, TimeNs t_go) {
+  for (const auto& [m, plan] : plans) {
+    for (const GoSample& s : samples) {
+      if (s.motor != m) continue;
+      const auto [lo, hi] = plan.Span(Seconds(s.asked_ns - t_go - kGoWithinNs),
+                                      Seconds(s.answered_ns - t_go + kChunkNs + kGoWithinNs));
+      const bool ok = s.steps >= lo - 2.0 && s.steps <= hi + 2.0;
+      c.v.Check("DFM-GO-006", ok, [&] {
+        const auto exposure_ms = std::llround(plan.exposure_s * 1000);
+        return Evidence{"motor " + Str(m) + " on " + Str(std::llround(lo)) + ".." +
+                            Str(std::llround(hi)) + " " + Str((s.asked_ns - t_go) / kMs) + ".." +
+                            Str((s.answered_ns - t_go) / kMs) + " ms after go (a 1 s ramp, " +
+                            Str(exposure_ms / 2) + " ms on each half of the exposure, a 1 s " +
+                            "slow-down; within " + Str(kGoWithinNs / kMs) + " ms)",
+                        "mp " + Str(m) + " " + Str(s.steps), "", s.answered_ns};
+      });
+      if (!ok) break;  // the first sample off the plan explains it
+    }
+  }
 }
 
 void Blur(DfmCaseContext& c) {
@@ -643,11 +729,22 @@ void Blur(DfmCaseContext& c) {
   }
   const TimeNs t_go = h.Now();
   h.Call("go");
-  const DfmRest rest = Rest(c);
+  // Each `ms` showing motion is followed by `mp` of every blur motor.
+  std::vector<GoSample> samples;
+  const DfmRest rest = Rest(c, [&] {
+    for (const auto& [m, plan] : plans) {
+      const TimeNs asked = h.Now();
+      const DfmLine* l = h.Call(Cmd("mp", {m}));
+      if (const auto* p = As<dfmoco::PositionReply>(l)) {
+        samples.push_back(GoSample{m, asked, l->t_ns, p->position_steps});
+      }
+    }
+  });
   const TimeNs took = rest.rest_ns - t_go;
   const TimeNs want = 2000 * kMs + exposure_ms * kMs;
-  Expect(c, "DFM-GO-006", std::llabs(took - want) <= 150 * kMs,
+  Expect(c, "DFM-GO-006", std::llabs(took - want) <= kGoWithinNs,
          "motion for 1 s + " + Str(exposure_ms) + " ms + 1 s after go", Str(took / kMs) + " ms");
+  JudgeGoShape(c, plans, samples, t_go);
   for (const auto& [m, plan] : plans) {
     const auto p = DfmPosition(h, m);
     if (!p) return;
@@ -765,7 +862,7 @@ std::optional<int32_t> DfmPosition(DfmHost& host, int32_t motor) {
   return p->position_steps;
 }
 
-DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns) {
+DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns, const std::function<void()>& while_moving) {
   DfmRest r;
   r.last_moving_ns.assign(static_cast<size_t>(std::max(host.axes(), 0)), -1);
   const TimeNs until = host.Now() + timeout_ns;
@@ -784,6 +881,7 @@ DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns) {
       return r;
     }
     if (host.Now() >= until || host.link_lost()) return r;
+    if (while_moving) while_moving();
     host.Idle(kPollNs);
   }
 }

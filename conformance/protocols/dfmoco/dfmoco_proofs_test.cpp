@@ -16,16 +16,6 @@ namespace {
 
 using Lines = std::set<std::string>;
 
-RunOptions Only(const char* cases) {
-  RunOptions o;
-  o.cases = cases;
-  return o;
-}
-
-bool StartsWith(const std::string& line, std::string_view word) {
-  return line.rfind(std::string(word) + " ", 0) == 0 || line == word;
-}
-
 // ------------------------------------------------------------- lines
 
 // "Messages are in ASCII text, with trailing \r\n": lines end in a bare \n.

@@ -40,8 +40,11 @@ struct DfmRest {
   // or -1 when none did.
   std::vector<TimeNs> last_moving_ns;
 };
-// Polls `ms` every 50 ms until every digit is 0 or `timeout_ns` passes.
-DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns);
+// Polls `ms` every 50 ms until every digit is 0 or `timeout_ns` passes;
+// `while_moving`, when set, runs after each `ms` answer that shows a motor
+// moving (to sample positions along the move).
+DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns,
+                    const std::function<void()>& while_moving = {});
 
 // The random suite's case: a sequence of valid commands drawn from
 // `random.seed`, checked against a model of where each motor must rest; a
