@@ -270,10 +270,12 @@ const std::vector<Rule> kStackshotRules = {
     // --- Stacks (CC_RAIL_STACK, StackShot 3X) ---
     {"SS-STACK-001", L::kMust, N::kSsThreeAxes,
      "CC_RAIL_STACK at rest is accepted, STACK_STATUS shows it running, STACK_POSITION counts up "
-     "to the number of steps and the stack ends",
+     "to the number of steps and the stack ends; the shutter fires (CC_RAIL_STATUS SHUTTER) in "
+     "each frame and the rail ends on the end position (auto-return off)",
      "Run a 1 - 3 axis stack using the passed in parameters; Get the current status of a running "
-     "stack; Get the current position of a stack",
-     "1.2 comm_cmd_t; 2 CC_RAIL_STACK"},
+     "stack; Get the current position of a stack / Time in seconds the rail should pause before "
+     "activating the shutter. / Number of pulses (pictures to be taken) applied at each step.",
+     "1.2 comm_cmd_t; 2 CC_RAIL_STACK, CC_RAIL_CONFIG_SETTLE_TIME, CC_RAIL_CONFIG_NUM_PULSES"},
     {"SS-STACK-002", L::kMust, N::kSsThreeAxes, "CC_RAIL_STACK while an axis moves is refused BUSY",
      "COMM_ACTION_BUSY, // The controller is already performing the specified action",
      "2 CC_RAIL_STACK; 1.2 comm_action_t"},
@@ -325,7 +327,8 @@ const std::vector<Rule> kStackshotRules = {
     // --- Bezier curves (CC_MOTION_CONFIG / CC_MOTION_START, StackShot 3X; ERRATA 5) ---
     {"SS-CURVE-001", L::kMust, N::kSsThreeAxes,
      "A CC_MOTION_CONFIG meeting every listed requirement is accepted, a position jump between "
-     "curves and a speed beyond the axis's maximum included (the list requires neither)",
+     "curves and a speed beyond the axis's maximum included (the list requires neither), and "
+     "taken: CC_MOTION_START plays it to its last keyframe",
      "Motion paths in StackShot 3X are defined using cubic Bézier curves. Up to four curves can be "
      "specified to form a Bézier spline yielding five keyframes. ... A curve's initial P0.x must "
      "match the previous curves P3.x to provide continuity. ... Limits should be applied to "
@@ -345,10 +348,12 @@ const std::vector<Rule> kStackshotRules = {
      "than P3.x.",
      "2 CC_MOTION_CONFIG"},
     {"SS-CURVE-005", L::kMust, N::kSsThreeAxes,
-     "CC_MOTION_START plays the configured spline: the axis moves and rests on the last keyframe's "
-     "position (mm)",
-     "All linear distances are specified in mm. ... The CC_MOTION_START command will begin the "
-     "motion process.",
+     "CC_MOTION_START plays the configured spline: each position read while it plays lies on the "
+     "curve (x the time in s, y the position in mm) and the axis rests on the last keyframe's "
+     "position",
+     "Motion paths in StackShot 3X are defined using cubic Bézier curves. ... All linear "
+     "distances are specified in mm. ... The CC_MOTION_START command will begin the motion "
+     "process.",
      "2 CC_MOTION_CONFIG, CC_MOTION_START"},
 
     // --- Reply deadlines (the runner's --deadline-ms; FACTS host timeouts) ---

@@ -4,8 +4,11 @@
 // Listed by the table in stackshot_cases.cpp.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <initializer_list>
 #include <limits>
+#include <set>
+#include <vector>
 
 #include "base/format.h"
 #include "conformance/protocols/stackshot/stackshot_cases_internal.h"
@@ -345,13 +348,60 @@ void NvmPersistCase(SsCaseContext& c) {
 
 // ---------------------------------------------------------------- stack
 
+// Sets a setting for the rest of the case; the write that puts the old value
+// back goes into `undo`. False when the setting cannot be read.
+bool SetForCase(SsHost& h, std::vector<stackshot::HostCommand>& undo, Command cmd,
+                const stackshot::Payload& value, uint8_t axis = 0, bool sub = false) {
+  const auto old = ReadSetting(h, cmd, axis, sub);
+  if (!old) return false;
+  undo.push_back(SsWrite(cmd, *old, axis, sub));
+  h.Call(SsWrite(cmd, value, axis, sub));
+  return true;
+}
+
+void Undo(SsHost& h, std::vector<stackshot::HostCommand>& undo) {
+  for (auto it = undo.rbegin(); it != undo.rend(); ++it) h.Call(*it);
+  undo.clear();
+}
+
+std::string Frames(const std::set<uint32_t>& frames) {
+  if (frames.empty()) return "never";
+  std::string s = "at stack position(s)";
+  for (uint32_t f : frames) s += " " + std::to_string(f);
+  return s;
+}
+
 void StackCase(SsCaseContext& c) {
   SsHost& h = c.host;
   SsWaitRest(h, Axes(c), kRestTimeout);
   const auto p0 = SsPositionSteps(h, 0);
-  const auto settle = ReadSetting(h, Command::kRailConfigSettleTime);
-  if (!p0 || !settle) return;
-  h.Call(SsWrite(Command::kRailConfigSettleTime, stackshot::F32Value{0.05f}));
+  if (!p0) return;
+  // A stack step is a move, a pause "before activating the shutter"
+  // (CC_RAIL_CONFIG_SETTLE_TIME) and the "Number of pulses (pictures to be
+  // taken) applied at each step" (CC_RAIL_CONFIG_NUM_PULSES) on the shutter
+  // the axis names ("For the specified axis, this value indicates which
+  // shutter should be active", CC_RAIL_CONFIG_SHUTTER). The case fixes them
+  // for X: shutter 1, one pulse of 0.3 s (long enough for 100 ms status polls
+  // to see each one, "RAIL_STATUS_SHUTTER 0x02 The shutter is currently
+  // firing", 1.1.6), and no "auto-return upon finishing a sequence"
+  // (CC_RAIL_CONFIG_AUTO_RETURN), so that the stack ends on its end position.
+  using stackshot::EnumValue;
+  std::vector<stackshot::HostCommand> undo;
+  const bool set =
+      SetForCase(h, undo, Command::kRailConfigSettleTime, stackshot::F32Value{0.05f}) &&
+      SetForCase(h, undo, Command::kRailConfigShutter,
+                 EnumValue<stackshot::ShutterSetting>{stackshot::ShutterSetting::kShutter1}) &&
+      SetForCase(h, undo, Command::kRailConfigShutterDisable, stackshot::BoolValue{false}) &&
+      SetForCase(h, undo, Command::kRailConfigNumPulses, stackshot::U16Value{1}) &&
+      SetForCase(h, undo, Command::kRailConfigPulseTime, stackshot::F32Value{0.3f}) &&
+      SetForCase(h, undo, Command::kRailConfigAutoReturn, stackshot::BoolValue{false});
+  if (!set) {
+    c.log.push_back(
+        "a stack setting (settle, shutter, pulses, auto-return) is unreadable: "
+        "the stack is not run");
+    Undo(h, undo);
+    return;
+  }
   stackshot::RailStack s;
   s.mode = 0;
   s.num_steps = 3;
@@ -363,12 +413,17 @@ void StackCase(SsCaseContext& c) {
   const auto* st = PayloadOf<stackshot::RailStatus>(r);
   Expect(c, "SS-STACK-001", st != nullptr && st->bits != 0, "STACK_STATUS running", Show(r));
   uint32_t frames = 0;
+  std::set<uint32_t> fired;  // the stack positions at which the shutter was seen firing
   bool ended = false;
   for (const TimeNs until = h.Now() + 60'000 * kMs; h.Now() < until && !h.link_lost();) {
     h.Idle(100 * kMs);
-    if (const auto* pos =
-            PayloadOf<stackshot::U32Value>(h.Call(SsRead(Command::kRailStackPosition))))
-      frames = std::max(frames, pos->value);
+    // The count first: it does not change while the shutter fires.
+    const auto* pos = PayloadOf<stackshot::U32Value>(h.Call(SsRead(Command::kRailStackPosition)));
+    if (pos != nullptr) frames = std::max(frames, pos->value);
+    const auto rail = SsRailStatus(h, 0);
+    if (pos != nullptr && rail && (*rail & stackshot::kRailStatusShutter) != 0) {
+      fired.insert(pos->value);
+    }
     st = PayloadOf<stackshot::RailStatus>(h.Call(SsRead(Command::kRailStackStatus)));
     if (st != nullptr && st->bits == 0) {
       ended = true;
@@ -380,11 +435,21 @@ void StackCase(SsCaseContext& c) {
   Expect(c, "SS-STACK-001", ended && frames == 3, "the stack ends after 3 frames",
          (ended ? "ended" : "still running") + std::string(" after ") + std::to_string(frames) +
              " frame(s)");
+  // Each step takes its picture, and the rail travels from start to end.
+  Expect(c, "SS-STACK-001", fired.size() == 3,
+         "the shutter seen firing (CC_RAIL_STATUS SHUTTER) in each of the 3 frames",
+         "seen firing " + Frames(fired));
+  SsWaitRest(h, {0}, kRestTimeout);
+  const auto p1 = SsPositionSteps(h, 0);
+  Expect(c, "SS-STACK-001", p1 && std::llabs(*p1 - (*p0 + 800)) <= 1,
+         "the rail at rest on the X end position " + std::to_string(*p0 + 800) + " steps",
+         Steps(p1));
   // A stack while an axis moves.
   h.Call(Move(0, 20000));
   ExpectStatus(c, "SS-STACK-002", h.Call(SsWrite(Command::kRailStack, s)), Action::kBusy);
   h.Call(SsWrite(Command::kRailStop));
-  h.Call(SsWrite(Command::kRailConfigSettleTime, *settle));
+  SsWaitRest(h, {0}, kRestTimeout);
+  Undo(h, undo);
   ReturnTo(c, 0, *p0);
 }
 
@@ -407,24 +472,113 @@ std::optional<float> PositionMm(SsHost& h, uint8_t axis) {
   return v->value.value();
 }
 
+// The position on cubic Bezier `k` at time `t_s`: x(u) is the time and y(u)
+// the position, u in 0..1 ("Motion paths in StackShot 3X are defined using
+// cubic Bezier curves", 2 CC_MOTION_CONFIG; x in seconds from
+// CC_MOTION_START, the reading docs/protocol-notes.md takes). x(u) rises with u for the
+// curves this case sends (P0.x <= P1.x <= P2.x <= P3.x); t is clamped to the
+// curve's time.
+double CurveAt(const stackshot::BezierCurve& k, double t_s) {
+  auto at = [](double a, double b, double c, double d, double u) {
+    const double v = 1 - u;
+    return v * v * v * a + 3 * v * v * u * b + 3 * v * u * u * c + u * u * u * d;
+  };
+  const auto& p = k.p;
+  double lo = 0, hi = 1;
+  for (int i = 0; i < 60; ++i) {
+    const double u = (lo + hi) / 2;
+    if (at(p[0].x.value(), p[1].x.value(), p[2].x.value(), p[3].x.value(), u) < t_s) {
+      lo = u;
+    } else {
+      hi = u;
+    }
+  }
+  return at(p[0].y.value(), p[1].y.value(), p[2].y.value(), p[3].y.value(), (lo + hi) / 2);
+}
+
+// CC_MOTION_START of X; once X rests, its position in mm.
+std::optional<float> PlayX(SsCaseContext& c, std::string_view rule) {
+  ExpectOk(c, rule,
+           c.host.Call(SsWrite(Command::kMotionStart, stackshot::MotionStart{true, false, false})));
+  c.host.Idle(100 * kMs);
+  SsWaitRest(c.host, {0}, kRestTimeout);
+  return PositionMm(c.host, 0);
+}
+
+std::string Mm(std::optional<float> mm) {
+  return mm ? stackshot::FormatF32(*mm) + " mm" : "no position";
+}
+
+// SS-CURVE-005: CC_MOTION_START plays `m` (one curve 0 rising over `t_s`
+// seconds from where X rests) along its curve: each position read while it
+// plays lies on the curve between the earliest and the latest time it can
+// have been read at. The spline's time starts between the MOTION_START
+// request and its reply, a reading is taken between its request and its
+// reply; 0.05 mm to spare (a step, the float). Then X rests on the last
+// keyframe.
+void PlayAlongTheCurve(SsCaseContext& c, const stackshot::MotionConfig& m, double t_s) {
+  SsHost& h = c.host;
+  const stackshot::BezierCurve& k = m.curves[0];
+  const int go = h.Send(SsWrite(Command::kMotionStart, stackshot::MotionStart{true, false, false}));
+  const SsRecord* started = h.Await(go);
+  ExpectOk(c, "SS-CURVE-005", started);
+  if (started == nullptr) return;
+  const TimeNs go_lo = h.requests()[static_cast<size_t>(go)].sent_ns, go_hi = started->t_ns;
+  const TimeNs length = static_cast<TimeNs>(t_s * 1000) * kMs;
+  size_t on_curve = 0;
+  bool bad = false, moving_checked = false;
+  while (h.Now() < go_hi + length && !h.link_lost()) {
+    h.Idle(200 * kMs);
+    const int i =
+        h.Send(SsRead(Command::kRailPositionCurrent, stackshot::UnitsQuery{Units::kMm}, 0));
+    const SsRecord* r = h.Await(i);
+    const auto* v = PayloadOf<stackshot::UnitsF32>(r);
+    if (v == nullptr) continue;
+    const double lo_s =
+        static_cast<double>(h.requests()[static_cast<size_t>(i)].sent_ns - go_hi) / 1e9;
+    const double hi_s = static_cast<double>(r->t_ns - go_lo) / 1e9;
+    if (lo_s >= t_s) continue;
+    ++on_curve;
+    const double want_lo = CurveAt(k, lo_s) - 0.05, want_hi = CurveAt(k, hi_s) + 0.05;
+    const double got = v->value.value();
+    if (!bad && (got < want_lo || got > want_hi)) {
+      bad = true;
+      char expected[160];
+      std::snprintf(expected, sizeof expected,
+                    "on the curve %.3f-%.3f s after CC_MOTION_START: %.3f-%.3f mm", lo_s, hi_s,
+                    want_lo, want_hi);
+      c.v.Check("SS-CURVE-005", false,
+                [&] { return EvOf(h, r, expected, stackshot::FormatF32(v->value) + " mm"); });
+    }
+    if (!moving_checked && hi_s >= 0.5 && hi_s < t_s - 0.5) {
+      moving_checked = true;
+      const auto st = SsRailStatus(h, 0);
+      Expect(c, "SS-CURVE-005", st && (*st & stackshot::kRailStatusMoving) != 0,
+             "MOVING while the curve plays", st ? std::to_string(*st) : "no status");
+    }
+  }
+  if (!bad) {
+    Expect(c, "SS-CURVE-005", on_curve >= 3,
+           "at least 3 positions read while the " + stackshot::FormatF32(static_cast<float>(t_s)) +
+               " s curve plays",
+           std::to_string(on_curve));
+  }
+  SsWaitRest(h, {0}, kRestTimeout);
+  const auto y = PositionMm(h, 0);
+  const float last = k.p[3].y.value();
+  Expect(c, "SS-CURVE-005", y && std::fabs(*y - last) <= 0.01f,
+         "at rest on " + stackshot::FormatF32(last) + " mm (the last keyframe)", Mm(y));
+}
+
 void CurveCase(SsCaseContext& c) {
   SsHost& h = c.host;
   SsWaitRest(h, {0}, kRestTimeout);
   const auto p0 = SsPositionSteps(h, 0);
   const auto y0 = PositionMm(h, 0);
   if (!p0 || !y0) return;
-  ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, Curve(*y0, 1.0f, 2.0f), 0)));
-  ExpectOk(c, "SS-CURVE-005",
-           h.Call(SsWrite(Command::kMotionStart, stackshot::MotionStart{true, false, false})));
-  h.Idle(500 * kMs);
-  const auto st = SsRailStatus(h, 0);
-  Expect(c, "SS-CURVE-005", st && (*st & stackshot::kRailStatusMoving) != 0,
-         "MOVING half a second into a 2 s curve", st ? std::to_string(*st) : "no status");
-  SsWaitRest(h, {0}, kRestTimeout);
-  const auto y1 = PositionMm(h, 0);
-  Expect(c, "SS-CURVE-005", y1 && std::fabs(*y1 - (*y0 + 1.0f)) <= 0.01f,
-         "at rest on " + std::to_string(*y0 + 1.0f) + " mm (the last keyframe)",
-         y1 ? std::to_string(*y1) + " mm" : "no position");
+  const stackshot::MotionConfig one = Curve(*y0, 1.0f, 2.0f);
+  ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, one, 0)));
+  PlayAlongTheCurve(c, one, 2.0);
   // Two curves in a row (five keyframes need not all be used).
   stackshot::MotionConfig two = Curve(*y0 + 1.0f, -0.5f, 1.0f);
   two.curves[1].p = {
@@ -432,11 +586,24 @@ void CurveCase(SsCaseContext& c) {
   ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, two, 0)));
   // Requirements the list does not make: position continuity (only P0.x =
   // previous P3.x is required) and a speed within the axis ("Limits should be
-  // applied": advice, no refusal). 2 mm in 10 ms outruns any rail.
+  // applied": advice, no refusal). Accepted is taken: each is played and X
+  // rests on its own last keyframe (a controller that acknowledged it and
+  // kept the spline before would rest elsewhere).
   stackshot::MotionConfig jump = two;
-  jump.curves[1].p[0].y = *y0 + 0.25f;
+  for (stackshot::BezierPoint& q : jump.curves[1].p) q.y = q.y.value() - 0.25f;
   ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, jump, 0)));
+  auto y = PlayX(c, "SS-CURVE-001");
+  Expect(c, "SS-CURVE-001", y && std::fabs(*y - (*y0 - 0.25f)) <= 0.01f,
+         "the curve with a position jump played: at rest on " + stackshot::FormatF32(*y0 - 0.25f) +
+             " mm",
+         Mm(y));
+  // 2 mm in 10 ms outruns any rail.
   ExpectOk(c, "SS-CURVE-001", h.Call(SsWrite(Command::kMotionConfig, Curve(*y0, 2.0f, 0.01f), 0)));
+  y = PlayX(c, "SS-CURVE-001");
+  Expect(c, "SS-CURVE-001", y && std::fabs(*y - (*y0 + 2.0f)) <= 0.01f,
+         "the curve faster than the axis played: at rest on " + stackshot::FormatF32(*y0 + 2.0f) +
+             " mm",
+         Mm(y));
   ReturnTo(c, 0, *p0);
 }
 

@@ -889,5 +889,158 @@ TEST(StackshotProofs, ASoftwareChecksumAnsweredAfterASecondIsCaughtByDl003) {
   ExpectMustsFailed(r, {});
 }
 
+// ------------------------------------------------------------------ SS-STACK
+
+TEST(StackshotProofs, AStackThatCountsItsFramesWithoutMovingIsCaughtByStack001) {
+  // CC_RAIL_STACK read with each axis's end at its start: the frames are
+  // counted and shot where the rail stands.
+  const RunReport r =
+      RunBroken(PassThrough, Only("stack/run"), OnRequest(Command::kRailStack, [](const Packet& p) {
+                  return std::optional<Packet>(EditRequest<stackshot::RailStack>(p, [](auto& s) {
+                    s.x_end = s.x_start;
+                    s.y_end = s.y_start;
+                    s.z_end = s.z_start;
+                  }));
+                }));
+  ExpectCaught(r, "SS-STACK-001");
+  ExpectMustsFailed(r, {"SS-STACK-001"});
+}
+
+TEST(StackshotProofs, AStackThatCountsItsFramesWithoutFiringIsCaughtByStack001) {
+  // The shutter the host names for the stack's axis is read as NONE: the
+  // rail steps from start to end and counts its frames, no picture is taken.
+  const RunReport r = RunBroken(
+      PassThrough, Only("stack/run"), OnRequest(Command::kRailConfigShutter, [](const Packet& p) {
+        if (p.action != static_cast<uint8_t>(Action::kWrite)) return std::optional<Packet>(p);
+        return std::optional<Packet>(EditRequest<stackshot::EnumValue<stackshot::ShutterSetting>>(
+            p, [](auto& v) { v.value = stackshot::ShutterSetting::kNone; }));
+      }));
+  ExpectCaught(r, "SS-STACK-001");
+  ExpectMustsFailed(r, {"SS-STACK-001"});
+}
+
+TEST(StackshotProofs, AStackAcceptedWhileAnAxisMovesIsCaughtByStack002) {
+  const RunReport r =
+      RunBroken(OnReplyTo(Command::kRailStack,
+                          [](const Packet&, Packet& reply) {
+                            if (reply.action == static_cast<uint8_t>(Action::kBusy)) {
+                              reply = WithStatus(reply, Action::kRspOk);
+                            }
+                          }),
+                Only("stack/run"));
+  ExpectCaught(r, "SS-STACK-002");
+  ExpectMustsFailed(r, {"SS-STACK-002"});
+}
+
+// ------------------------------------------------------------------ SS-CURVE
+
+// The CC_MOTION_CONFIG a host packet carries, or nullopt.
+std::optional<stackshot::MotionConfig> MotionOf(const Packet& request) {
+  const auto typed = Typed(&request);
+  if (!typed) return std::nullopt;
+  const auto* m = std::get_if<stackshot::MotionConfig>(&typed->payload);
+  if (m == nullptr) return std::nullopt;
+  return *m;
+}
+
+// A used curve (curve 0, or one whose P0.x is not zero) that starts elsewhere
+// than the curve before it ends.
+bool HasAPositionJump(const stackshot::MotionConfig& m) {
+  for (size_t k = 1; k < m.curves.size(); ++k) {
+    const auto& c = m.curves[k];
+    if (c.p[0].x.value() == 0.0f) break;
+    if (c.p[0].y.value() != m.curves[k - 1].p[3].y.value()) return true;
+  }
+  return false;
+}
+
+// CC_MOTION_CONFIG writes for which `when` holds answered `status`.
+Breakage MotionConfigAnswered(std::function<bool(const stackshot::MotionConfig&)> when,
+                              Action status) {
+  return OnReplyTo(Command::kMotionConfig, [when, status](const Packet& request, Packet& reply) {
+    const auto m = MotionOf(request);
+    if (m && when(*m)) reply = WithStatus(reply, status);
+  });
+}
+
+TEST(StackshotProofs, ASplineWithAPositionJumpRefusedIsCaughtByCurve001) {
+  // A controller that requires position continuity, which the list does not.
+  const RunReport r =
+      RunBroken(MotionConfigAnswered(HasAPositionJump, Action::kBadParam), Only("curve/play"));
+  ExpectCaught(r, "SS-CURVE-001");
+  ExpectMustsFailed(r, {"SS-CURVE-001", "SS-CODE-003"});
+}
+
+TEST(StackshotProofs, ASplineAcknowledgedButNotTakenIsCaughtByCurve001) {
+  // The spline with a position jump is acknowledged and dropped: the one
+  // before it plays instead.
+  const RunReport r = RunBroken(PassThrough, Only("curve/play"),
+                                OnRequest(Command::kMotionConfig, [](const Packet& p) {
+                                  const auto m = MotionOf(p);
+                                  if (m && HasAPositionJump(*m)) return std::optional<Packet>();
+                                  return std::optional<Packet>(p);
+                                }));
+  ExpectCaught(r, "SS-CURVE-001");
+  ExpectMustsFailed(r, {"SS-CURVE-001"});
+}
+
+TEST(StackshotProofs, ACurveZeroNotStartingAtTimeZeroAcceptedIsCaughtByCurve002) {
+  const RunReport r = RunBroken(
+      MotionConfigAnswered(
+          [](const stackshot::MotionConfig& m) { return m.curves[0].p[0].x.value() != 0.0f; },
+          Action::kRspOk),
+      Only("curve/invalid"));
+  ExpectCaught(r, "SS-CURVE-002");
+  ExpectMustsFailed(r, {"SS-CURVE-002"});
+}
+
+TEST(StackshotProofs, ACurveStartingAfterThePreviousEndsAcceptedIsCaughtByCurve003) {
+  const RunReport r = RunBroken(MotionConfigAnswered(
+                                    [](const stackshot::MotionConfig& m) {
+                                      for (size_t k = 1; k < m.curves.size(); ++k) {
+                                        const float x0 = m.curves[k].p[0].x.value();
+                                        if (x0 == 0.0f) break;
+                                        if (x0 != m.curves[k - 1].p[3].x.value()) return true;
+                                      }
+                                      return false;
+                                    },
+                                    Action::kRspOk),
+                                Only("curve/invalid"));
+  ExpectCaught(r, "SS-CURVE-003");
+  ExpectMustsFailed(r, {"SS-CURVE-003"});
+}
+
+TEST(StackshotProofs, AControlPointOutsideItsCurvesTimeAcceptedIsCaughtByCurve004) {
+  const RunReport r = RunBroken(
+      MotionConfigAnswered(
+          [](const stackshot::MotionConfig& m) {
+            for (const auto& c : m.curves) {
+              if (c.p[1].x.value() < c.p[0].x.value() || c.p[2].x.value() > c.p[3].x.value())
+                return true;
+            }
+            return false;
+          },
+          Action::kRspOk),
+      Only("curve/invalid"));
+  ExpectCaught(r, "SS-CURVE-004");
+  ExpectMustsFailed(r, {"SS-CURVE-004"});
+}
+
+TEST(StackshotProofs, ASplinePlayedAtTwiceItsSpeedIsCaughtByCurve005) {
+  // Every time of every CC_MOTION_CONFIG is halved before the controller
+  // reads it: each spline is still valid, ends on its last keyframe, and is
+  // over in half the time.
+  const RunReport r = RunBroken(
+      PassThrough, Only("curve/play"), OnRequest(Command::kMotionConfig, [](const Packet& p) {
+        return std::optional<Packet>(EditRequest<stackshot::MotionConfig>(p, [](auto& m) {
+          for (auto& c : m.curves) {
+            for (auto& q : c.p) q.x = q.x.value() / 2;
+          }
+        }));
+      }));
+  ExpectCaught(r, "SS-CURVE-005");
+  ExpectMustsFailed(r, {"SS-CURVE-005"});
+}
+
 }  // namespace
 }  // namespace moco::conformance

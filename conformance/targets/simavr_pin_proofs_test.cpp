@@ -1,0 +1,130 @@
+// Proving tests of the DFMoco pin rules (conformance/rules/pin_rules.cpp;
+// FACTS "Step drivers", "DFMoco"): the DFMoco test firmware
+// (fixtures/firmware/dfmoco_avr) built with one fault switch each (dfmoco.c
+// "Fault switches", fixtures/firmware/CMakeLists.txt) runs under the simavr
+// target with its STEP/DIR pins watched, as `mococheck run --target simavr:ELF
+// --board fixtures/boards/own-dfmoco.json --driver a4988` runs it
+// (targets/simavr_pins_cli_test.sh); the fault fails its rule and no other,
+// and the firmware without a fault passes every pin rule.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <set>
+#include <string>
+#include <variant>
+
+#include "conformance/core/pin_judge.h"
+#include "conformance/core/report.h"
+#include "conformance/core/rule_proof_testing.h"
+#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/targets/simavr_pins.h"
+#include "conformance/targets/simavr_target.h"
+
+namespace moco::conformance {
+namespace {
+
+using proof::ExpectCaught;
+using proof::ExpectMustsFailed;
+
+// The pin judging the CLI sets up for --board own-dfmoco --driver a4988.
+PinJudgeOptions OwnDfmocoPins() {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  const std::string path =
+      std::string(root != nullptr ? root : ".") + "/fixtures/boards/own-dfmoco.json";
+  PinJudgeOptions pins;
+  auto board = LoadBoard(path);
+  if (const auto* err = std::get_if<std::string>(&board)) {
+    ADD_FAILURE() << *err << " (is MOCO_SOURCE_DIR the source tree?)";
+    return pins;
+  }
+  auto driver = LoadDriver("a4988");
+  if (const auto* err = std::get_if<std::string>(&driver)) {
+    ADD_FAILURE() << *err;
+    return pins;
+  }
+  pins.board = std::get<Board>(board);
+  pins.driver = std::get<DriverProfile>(driver);
+  return pins;
+}
+
+// Every DFMoco case of the firmware `elf` under simavr, its pins judged.
+RunReport RunWithPins(const char* elf) {
+  const PinJudgeOptions pins = OwnDfmocoPins();
+  SimavrTarget target(SimavrSpec{elf, "", 0});
+  EXPECT_EQ(target.WatchPins(pins.board), std::nullopt);
+  EXPECT_EQ(target.Open(), std::nullopt) << elf;
+  RunOptions options;
+  options.pins = pins;
+  return RunDfmoco(target, options);
+}
+
+// The DFM-PIN rules the run failed.
+std::set<std::string> FailedPinRules(const RunReport& r) {
+  std::set<std::string> out;
+  for (const auto& [id, s] : r.rules) {
+    if (id.find("-PIN-") != std::string::npos && s.status == Status::kFail) out.insert(id);
+  }
+  return out;
+}
+
+// The fault fails `rule` and no other rule (of any level); a SHOULD rule
+// leaves the run's exit code 0.
+void ExpectOnly(const RunReport& r, const std::string& rule, bool must) {
+  ExpectCaught(r, rule);
+  std::set<std::string> failed;
+  for (const auto& [id, s] : r.rules) {
+    if (s.status == Status::kFail) failed.insert(id);
+  }
+  EXPECT_EQ(failed, std::set<std::string>{rule}) << ConsoleReport(r, false);
+  ExpectMustsFailed(r, must ? std::set<std::string>{rule} : std::set<std::string>{});
+  EXPECT_EQ(ExitCode(r), must ? 1 : 0);
+}
+
+TEST(SimavrPinProofs, TheFirmwareWithoutAFaultPassesEveryPinRule) {
+  const RunReport r = RunWithPins(MOCO_DFMOCO_ELF);
+  EXPECT_EQ(ExitCode(r), 0) << ConsoleReport(r, false);
+  EXPECT_TRUE(FailedPinRules(r).empty());
+  for (int n = 1; n <= 7; ++n) {
+    const std::string id = "DFM-PIN-00" + std::to_string(n);
+    ASSERT_TRUE(r.rules.count(id)) << id;
+    EXPECT_EQ(r.rules.at(id).status, Status::kPass) << id;
+  }
+}
+
+TEST(SimavrPinProofs, AStepCountedButNeverPulsedIsCaughtByPin001) {
+  // FAULT_LOST_STEP: every 1000th step moves the position, not the STEP pin.
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_LOST_STEP_ELF), "DFM-PIN-001", true);
+}
+
+TEST(SimavrPinProofs, AMovingPositionReportingTheDestinationIsCaughtByPin002) {
+  // FAULT_REPORT_TARGET: the once-a-second `mp` of a moving motor names its target.
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_REPORT_TARGET_ELF), "DFM-PIN-002", true);
+}
+
+TEST(SimavrPinProofs, AStepPulseShorterThanTheDriverNeedsIsCaughtByPin003) {
+  // FAULT_SHORT_PULSE: STEP is lowered a few cycles after it rises (A4988: >= 1 us).
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_SHORT_PULSE_ELF), "DFM-PIN-003", true);
+}
+
+TEST(SimavrPinProofs, DirWrittenWithTheStepEdgeIsCaughtByPin004) {
+  // FAULT_DIR_WITH_STEP: DIR changes in the port write that raises STEP (A4988: 200 ns setup).
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_DIR_WITH_STEP_ELF), "DFM-PIN-004", true);
+}
+
+TEST(SimavrPinProofs, StepsFasterThanTheBoardsMaximumAreCaughtByPin005) {
+  // FAULT_OVERSPEED: a 50 kHz step timer lets pr 20000 run at 25000 steps/s.
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_OVERSPEED_ELF), "DFM-PIN-005", true);
+}
+
+TEST(SimavrPinProofs, AMoveStartingAtFullSpeedIsCaughtByPin006) {
+  // FAULT_NO_RAMP: no acceleration ramp.
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_NO_RAMP_ELF), "DFM-PIN-006", false);
+}
+
+TEST(SimavrPinProofs, DirFlippedAtSpeedIsCaughtByPin007) {
+  // FAULT_REVERSE_AT_SPEED: DIR flips as soon as a new target lies behind.
+  ExpectOnly(RunWithPins(MOCO_DFMOCO_FAULT_REVERSE_AT_SPEED_ELF), "DFM-PIN-007", false);
+}
+
+}  // namespace
+}  // namespace moco::conformance
