@@ -253,6 +253,17 @@ void SessionWriter::Append(const SessionEntry& entry) {
   WriteLine(EntryToJson(entry));
 }
 
+void SessionWriter::Append(std::span<const SessionEntry> entries) {
+  if (finished_ || entries.empty()) return;
+  std::string text;
+  for (const SessionEntry& e : entries) {
+    text += EntryToJson(e).dump(-1, ' ', false, json::error_handler_t::replace);
+    text += '\n';
+  }
+  // An error is kept by the file and reported by Finish().
+  (void)file_.Write(text);
+}
+
 void SessionWriter::Abandon() {
   finished_ = true;
   file_.Abandon();

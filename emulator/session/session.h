@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -100,6 +101,10 @@ class SessionWriter {
   SessionWriter& operator=(const SessionWriter&) = delete;
 
   void Append(const SessionEntry& entry);
+  // Appends entries in order with one write (a recorder that batches its
+  // lines off a latency-critical path). A crash during the write leaves, as
+  // ever, at most the last line cut short.
+  void Append(std::span<const SessionEntry> entries);
   // Flushes, closes and renames into place. Returns false (with a message) on an I/O error.
   bool Finish(std::string* error = nullptr);
   // Drops the recording: an existing file at path() stays as it was (a

@@ -117,6 +117,49 @@ TEST(SessionTest, WriterWritesPartialThenRenames) {
   std::filesystem::remove_all(dir);
 }
 
+// A batch is the same file, line for line, as its entries appended one by
+// one: traffic, decoded text that needs escaping, and events, in order.
+TEST(SessionTest, WriterBatchAppendWritesTheSameLinesAsSingleAppends) {
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("moco_session_batch_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+  std::filesystem::create_directories(dir);
+  std::vector<SessionEntry> entries;
+  SessionEntry host;
+  host.t_ns = 1;
+  host.bytes = {0x44, 0x46, 0x00};
+  entries.push_back(host);
+  SessionEntry device;
+  device.t_ns = 2;
+  device.from = Origin::kDevice;
+  device.bytes = {0x0d, 0x0a};
+  device.decoded = {"HI \"dmc16\"\tv2", "second"};
+  entries.push_back(device);
+  entries.push_back(SessionEntry::Event({{"t_ns", 3}, {"event", "host_link"}, {"detail", "open"}}));
+  SessionHeader h;
+  {
+    SessionWriter one(dir / "one.jsonl", h);
+    for (const SessionEntry& e : entries) one.Append(e);
+    ASSERT_TRUE(one.Finish());
+    SessionWriter batch(dir / "batch.jsonl", h);
+    batch.Append(std::span<const SessionEntry>(entries.data(), 2));
+    batch.Append(std::span<const SessionEntry>(entries.data() + 2, 1));
+    batch.Append(std::span<const SessionEntry>());
+    ASSERT_TRUE(batch.Finish());
+  }
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string text = read(dir / "batch.jsonl");
+  EXPECT_EQ(text, read(dir / "one.jsonl"));
+  const Session s = Ok(ParseSession(text));
+  ASSERT_EQ(s.entries.size(), 3u);
+  EXPECT_EQ(s.entries[1].decoded, device.decoded);
+  EXPECT_TRUE(s.entries[2].is_event);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SessionTest, WriterRefusesUnwritableDirectoryWithMessage) {
   SessionHeader h;
   try {
