@@ -231,6 +231,54 @@ nlohmann::json EntryToJson(const SessionEntry& e) {
   return j;
 }
 
+namespace {
+
+// A string as JSON. Printable ASCII other than '"' and '\\' stands for itself
+// (nlohmann writes it so); anything else goes through nlohmann (escapes, UTF-8
+// checks, invalid bytes replaced).
+void AppendJsonString(std::string_view s, std::string& out) {
+  for (const char c : s) {
+    if (c < 0x20 || c > 0x7e || c == '"' || c == '\\') {
+      out += json(s).dump(-1, ' ', false, json::error_handler_t::replace);
+      return;
+    }
+  }
+  out += '"';
+  out += s;
+  out += '"';
+}
+
+}  // namespace
+
+void AppendEntryLine(const SessionEntry& e, std::string& out) {
+  if (e.is_event) {
+    out += EntryToJson(e).dump(-1, ' ', false, json::error_handler_t::replace);
+    out += '\n';
+    return;
+  }
+  // EntryToJson(e).dump() written directly, keys in its (sorted) order: a
+  // traffic line is most of a recording.
+  static constexpr char kDigits[] = "0123456789abcdef";
+  out += '{';
+  if (!e.decoded.empty()) {
+    out += "\"decoded\":[";
+    for (size_t i = 0; i < e.decoded.size(); ++i) {
+      if (i > 0) out += ',';
+      AppendJsonString(e.decoded[i], out);
+    }
+    out += "],";
+  }
+  out +=
+      e.from == Origin::kHost ? "\"from\":\"host\",\"hex\":\"" : "\"from\":\"device\",\"hex\":\"";
+  for (const uint8_t b : e.bytes) {
+    out += kDigits[b >> 4];
+    out += kDigits[b & 0xF];
+  }
+  out += "\",\"t_ns\":";
+  out += std::to_string(e.t_ns);
+  out += "}\n";
+}
+
 SessionWriter::SessionWriter(std::filesystem::path path, const SessionHeader& header)
     : path_(std::move(path)) {
   if (auto error = file_.Open(path_.string())) {
@@ -250,16 +298,15 @@ void SessionWriter::WriteLine(const nlohmann::json& j) {
 
 void SessionWriter::Append(const SessionEntry& entry) {
   if (finished_) return;
-  WriteLine(EntryToJson(entry));
+  std::string line;
+  AppendEntryLine(entry, line);
+  (void)file_.Write(line);
 }
 
 void SessionWriter::Append(std::span<const SessionEntry> entries) {
   if (finished_ || entries.empty()) return;
   std::string text;
-  for (const SessionEntry& e : entries) {
-    text += EntryToJson(e).dump(-1, ' ', false, json::error_handler_t::replace);
-    text += '\n';
-  }
+  for (const SessionEntry& e : entries) AppendEntryLine(e, text);
   // An error is kept by the file and reported by Finish().
   (void)file_.Write(text);
 }

@@ -84,6 +84,10 @@ std::variant<Session, SessionError> LoadSession(const std::filesystem::path& pat
 
 nlohmann::json HeaderToJson(const SessionHeader& h);
 nlohmann::json EntryToJson(const SessionEntry& e);
+// Appends e's session line: EntryToJson(e) as compact JSON (invalid UTF-8
+// replaced) and a newline, byte for byte; traffic lines without building
+// the JSON value.
+void AppendEntryLine(const SessionEntry& e, std::string& out);
 
 // Writes a session line by line: every line is written through as it comes
 // to an exclusively created "<path>.partial-<pid>-<n>" beside <path> (after

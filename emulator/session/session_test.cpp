@@ -197,6 +197,35 @@ RC_GTEST_PROP(SessionProp, TrafficRoundTripsThroughText,
   }
 }
 
+// A traffic line written directly is EntryToJson's compact dump, byte for
+// byte: any time, either side, any bytes, and decoded text of any bytes
+// (quotes, backslashes, control characters, UTF-8 valid or not).
+RC_GTEST_PROP(SessionProp, EntryLineIsTheJsonDumpByteForByte,
+              (int64_t t_ns, bool from_host, const std::vector<uint8_t>& bytes,
+               const std::vector<std::string>& decoded)) {
+  SessionEntry e;
+  e.t_ns = t_ns;
+  e.from = from_host ? Origin::kHost : Origin::kDevice;
+  e.bytes = bytes;
+  e.decoded = decoded;
+  // Printable text, quotes and backslashes among it, as decoded lines are.
+  e.decoded.push_back(*rc::gen::container<std::string>(rc::gen::inRange<char>(0x20, 0x7f)));
+  e.decoded.push_back(*rc::gen::element<std::string>("a\\b", "say \"hi\"", "tab\there", "\x7f",
+                                                     "caf\xc3\xa9", "bad \xff utf-8"));
+  std::string line;
+  AppendEntryLine(e, line);
+  RC_ASSERT(line ==
+            EntryToJson(e).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+}
+
+TEST(SessionTest, EventLinesAreTheirJsonDump) {
+  const SessionEntry e =
+      SessionEntry::Event({{"t_ns", 7}, {"event", "line_rate"}, {"baud", 57600}});
+  std::string line;
+  AppendEntryLine(e, line);
+  EXPECT_EQ(line, "{\"baud\":57600,\"event\":\"line_rate\",\"t_ns\":7}\n");
+}
+
 TEST(SessionTest, ALastLineCutShortKeepsTheLinesBeforeIt) {
   const std::string whole =
       "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n"
