@@ -233,18 +233,21 @@ nlohmann::json EntryToJson(const SessionEntry& e) {
 
 namespace {
 
-// A string as JSON. Printable ASCII other than '"' and '\\' stands for itself
-// (nlohmann writes it so); anything else goes through nlohmann (escapes, UTF-8
-// checks, invalid bytes replaced).
+// A string as JSON, as nlohmann writes it: printable ASCII stands for
+// itself, '"' and '\\' take a backslash; anything else (control characters,
+// UTF-8, invalid bytes: escaped, checked, replaced) goes through nlohmann.
 void AppendJsonString(std::string_view s, std::string& out) {
   for (const char c : s) {
-    if (c < 0x20 || c > 0x7e || c == '"' || c == '\\') {
+    if (c < 0x20 || c > 0x7e) {
       out += json(s).dump(-1, ' ', false, json::error_handler_t::replace);
       return;
     }
   }
   out += '"';
-  out += s;
+  for (const char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
   out += '"';
 }
 
