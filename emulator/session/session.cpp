@@ -244,10 +244,14 @@ void AppendJsonString(std::string_view s, std::string& out) {
     }
   }
   out += '"';
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+  size_t from = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] != '"' && s[i] != '\\') continue;
+    out.append(s.data() + from, i - from);
+    out += '\\';
+    from = i;
   }
+  out.append(s.data() + from, s.size() - from);
   out += '"';
 }
 
@@ -273,9 +277,12 @@ void AppendEntryLine(const SessionEntry& e, std::string& out) {
   }
   out +=
       e.from == Origin::kHost ? "\"from\":\"host\",\"hex\":\"" : "\"from\":\"device\",\"hex\":\"";
+  const size_t hex_at = out.size();
+  out.resize(hex_at + 2 * e.bytes.size());
+  char* hex = out.data() + hex_at;
   for (const uint8_t b : e.bytes) {
-    out += kDigits[b >> 4];
-    out += kDigits[b & 0xF];
+    *hex++ = kDigits[b >> 4];
+    *hex++ = kDigits[b & 0xF];
   }
   out += "\",\"t_ns\":";
   out += std::to_string(e.t_ns);
