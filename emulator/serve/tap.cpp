@@ -1,10 +1,15 @@
 // `mocosim tap`: a recording proxy between a host and a real device (see tap.h).
 #include "serve/tap.h"
 
+#include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 #include <utility>
+#include <vector>
 
 #include "base/file_io.h"
 #include "devices/registry.h"
@@ -29,42 +34,180 @@ class Tap::Forwarder final : public devices::Device {
   Tap& tap_;
 };
 
-// Writes the host link's traffic and events into the session, each traffic
-// line with the messages it completed, decoded in the dialect on the line.
+// Records the host link's traffic and events off the forwarding path. The io
+// thread only appends each chunk (its time, its side, its bytes) to a batch
+// in memory and goes back to forwarding; a writer thread takes the batch,
+// decodes the messages each chunk completed in the dialect then on the line,
+// and writes the batch's lines with one write. A batch is written
+// kBatchWindow after its first chunk, or at once past kBatchBytes, and
+// Finish() writes what is left: a stopped tap's recording is complete.
 class Tap::Recorder final : public transport::TrafficObserver {
  public:
-  Recorder(session::SessionWriter* writer, wire::Protocol protocol)
-      : writer_(writer), decoder_(std::make_unique<wire::TranscriptDecoder>(protocol)) {}
+  static constexpr std::chrono::milliseconds kBatchWindow{50};
+  static constexpr size_t kBatchBytes = 64 * 1024;
+
+  explicit Recorder(wire::Protocol protocol) : dialect_(protocol) {}
+  ~Recorder() { Finish(nullptr); }
+
+  // Records into `writer` from now on (the header names the host side, known
+  // once it is open; nothing crosses before Tap::Start()). The writer must
+  // outlive Finish(); until then only the writer thread touches it.
+  void Start(session::SessionWriter* writer) {
+    writer_ = writer;
+    decoder_ = std::make_unique<wire::TranscriptDecoder>(dialect_);
+    recording_ = true;
+    thread_ = std::thread([this] { Run(); });
+  }
 
   void OnTraffic(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override {
-    if (writer_ == nullptr) return;
-    session::SessionEntry e;
-    e.t_ns = t_ns;
-    const bool host = dir == transport::Direction::kToDevice;
-    e.from = host ? session::Origin::kHost : session::Origin::kDevice;
-    e.bytes.assign(bytes.begin(), bytes.end());
-    for (const wire::TranscriptLine& l :
-         decoder_->Feed(host ? wire::Side::kHost : wire::Side::kDevice, bytes)) {
-      e.decoded.push_back(l.text);
-    }
-    writer_->Append(e);
+    if (!recording_) return;
+    Item item;
+    item.kind = Kind::kTraffic;
+    item.t_ns = t_ns;
+    item.host = dir == transport::Direction::kToDevice;
+    Push(std::move(item), bytes);
   }
   void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override {
     Event({{"t_ns", t_ns}, {"event", std::string(kind)}, {"detail", std::string(detail)}});
   }
+  // An event line with its "t_ns".
   void Event(nlohmann::json line) {
-    if (writer_ != nullptr) writer_->Append(session::SessionEntry::Event(std::move(line)));
+    if (!recording_) return;
+    Item item;
+    item.kind = Kind::kEvent;
+    item.event = std::move(line);
+    Push(std::move(item), {});
   }
-  // Until set (the header names the host side, known once it is open),
-  // nothing is recorded: nothing crosses before Start().
-  void SetWriter(session::SessionWriter* writer) { writer_ = writer; }
+  // Chunks from now on are decoded in `dialect`.
   void SetDialect(wire::Protocol dialect) {
-    decoder_ = std::make_unique<wire::TranscriptDecoder>(dialect);
+    if (!recording_) {
+      dialect_ = dialect;
+      return;
+    }
+    Item item;
+    item.kind = Kind::kDialect;
+    item.dialect = dialect;
+    Push(std::move(item), {});
+  }
+
+  // Writes what is pending and stops the writer thread; the caller then
+  // finishes the writer. Returns false with a message when a batch could not
+  // be recorded. Idempotent.
+  bool Finish(std::string* error) {
+    recording_ = false;
+    if (thread_.joinable()) {
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        stop_ = true;
+      }
+      cv_.notify_one();
+      thread_.join();
+    }
+    if (failure_.empty()) return true;
+    if (error != nullptr) *error = failure_;
+    return false;
   }
 
  private:
-  session::SessionWriter* writer_;
+  enum class Kind : uint8_t { kTraffic, kEvent, kDialect };
+  struct Item {
+    Kind kind = Kind::kTraffic;
+    bool host = false;                              // kTraffic: host -> device
+    wire::Protocol dialect = wire::Protocol::kDmc;  // kDialect
+    sim::TimeNs t_ns = 0;                           // kTraffic
+    size_t size = 0;                                // kTraffic: its bytes in Batch::bytes
+    nlohmann::json event;                           // kEvent
+  };
+  struct Batch {
+    std::vector<Item> items;
+    wire::Bytes bytes;  // the traffic items' bytes, end to end
+  };
+
+  // io thread. Wakes the writer only for a batch's first item (and once when
+  // it grows past kBatchBytes): a chunk costs a copy, not a system call.
+  void Push(Item item, wire::ByteView bytes) {
+    bool wake = false;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (stop_) return;
+      const size_t before = pending_.bytes.size();
+      wake = pending_.items.empty();
+      item.size = bytes.size();
+      pending_.bytes.insert(pending_.bytes.end(), bytes.begin(), bytes.end());
+      pending_.items.push_back(std::move(item));
+      wake = wake || (before < kBatchBytes && pending_.bytes.size() >= kBatchBytes);
+    }
+    if (wake) cv_.notify_one();
+  }
+
+  // The writer thread.
+  void Run() {
+    Batch work;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mu_);
+        cv_.wait(lock, [this] { return stop_ || !pending_.items.empty(); });
+        // Lets the batch fill: a burst of chunks is one write.
+        cv_.wait_for(lock, kBatchWindow,
+                     [this] { return stop_ || pending_.bytes.size() >= kBatchBytes; });
+        std::swap(work, pending_);
+        if (work.items.empty() && stop_) return;
+      }
+      try {
+        Write(work);
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mu_);
+        failure_ = std::string("recording a batch of traffic failed: ") + e.what();
+        stop_ = true;  // later chunks are not recorded
+        return;
+      }
+      work.items.clear();
+      work.bytes.clear();
+    }
+  }
+
+  void Write(Batch& batch) {
+    lines_.clear();
+    size_t offset = 0;
+    for (Item& item : batch.items) {
+      switch (item.kind) {
+        case Kind::kDialect:
+          decoder_ = std::make_unique<wire::TranscriptDecoder>(item.dialect);
+          break;
+        case Kind::kEvent:
+          lines_.push_back(session::SessionEntry::Event(std::move(item.event)));
+          break;
+        case Kind::kTraffic: {
+          const wire::ByteView bytes(batch.bytes.data() + offset, item.size);
+          offset += item.size;
+          session::SessionEntry e;
+          e.t_ns = item.t_ns;
+          e.from = item.host ? session::Origin::kHost : session::Origin::kDevice;
+          e.bytes.assign(bytes.begin(), bytes.end());
+          for (const wire::TranscriptLine& l :
+               decoder_->Feed(item.host ? wire::Side::kHost : wire::Side::kDevice, bytes)) {
+            e.decoded.push_back(l.text);
+          }
+          lines_.push_back(std::move(e));
+          break;
+        }
+      }
+    }
+    writer_->Append(lines_);
+  }
+
+  bool recording_ = false;  // io thread
+  std::mutex mu_;
+  std::condition_variable cv_;
+  Batch pending_;        // guarded by mu_
+  bool stop_ = false;    // guarded by mu_
+  std::string failure_;  // guarded by mu_; read after the join
+  std::thread thread_;
+  // The writer thread's (before Start() and after the join: the caller's).
+  session::SessionWriter* writer_ = nullptr;
+  wire::Protocol dialect_;
   std::unique_ptr<wire::TranscriptDecoder> decoder_;
+  std::vector<session::SessionEntry> lines_;
 };
 
 std::variant<DeviceSpec, std::string> ParseDeviceSpec(std::string_view spec) {
@@ -149,7 +292,7 @@ Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn l
   // The device first: a host never finds a port with nothing behind it.
   OpenDevice();
   forwarder_ = std::make_unique<Forwarder>(*this);
-  recorder_ = std::make_unique<Recorder>(nullptr, config_.protocol);
+  recorder_ = std::make_unique<Recorder>(config_.protocol);
   transport::ServeOptions opts;
   opts.no_pacing = true;  // the real line paces; the tap adds nothing
   opts.observer = recorder_.get();
@@ -171,7 +314,6 @@ Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn l
     if (!config_.profile.empty()) h.extra["profile"] = config_.profile;
     h.extra["tap"] = {{"host", server_->Where()}, {"device", config_.device}, {"baud", baud_}};
     writer_ = std::make_unique<session::SessionWriter>(config_.record_path, h);
-    recorder_->SetWriter(writer_.get());
   }
 }
 
@@ -198,6 +340,7 @@ void Tap::OpenDevice() {
 void Tap::Start() {
   if (started_ || stopped_) return;
   started_ = true;
+  if (writer_) recorder_->Start(writer_.get());
   server_->Serve(*forwarder_);
   ReadDevice();
   if (transport::PtyPort* pty = server_->pty()) {
@@ -353,9 +496,10 @@ bool Tap::Stop(std::string* error) {
   if (device_stream_) device_stream_->Close();
   device_stream_.reset();
   serial_ = nullptr;
-  if (!writer_) return true;
   std::string e;
-  if (!writer_->Finish(&e)) {
+  const bool recorded = recorder_ == nullptr || recorder_->Finish(&e);
+  if (!writer_) return true;
+  if (!writer_->Finish(recorded ? &e : nullptr) || !recorded) {
     if (error) *error = e;
     return false;
   }

@@ -73,8 +73,12 @@ struct TapStats {
 // One tap. Construction opens both ends (the device side first, so a host
 // never sees a port with nothing behind it) and the recording; Start() begins
 // passing bytes. Host bytes reach the device in the order read, device bytes
-// the host in the order read; each is recorded as it is read, stamped with
-// the driver's clock (header "clock": "real", t_ns from the tap's start).
+// the host in the order read; each chunk is stamped with the driver's clock
+// as it is read (header "clock": "real", t_ns from the tap's start) and
+// recorded off the forwarding path: the io thread copies it into a batch and
+// a writer thread decodes and writes the batch (one write per batch, at most
+// about 50 ms after its first chunk). Stop() writes what is left, so a
+// stopped tap's recording is complete.
 //
 // Ends: the host closing and reopening its PTY (or a TCP host disconnecting
 // and another connecting) never ends the tap; it is recorded as a
@@ -85,7 +89,9 @@ struct TapStats {
 // (LineRateFollower, or the host setting another speed on the tap's PTY) is
 // applied to the serial port and recorded ("line_rate" with "baud").
 //
-// The driver must outlive the tap. Single-threaded: the driver's io thread.
+// The driver must outlive the tap. Every call comes from the driver's io
+// thread; the recording's writer thread is the tap's own (started by
+// Start(), joined by Stop()).
 class Tap {
  public:
   // Throws std::runtime_error with a message naming the side, the problem

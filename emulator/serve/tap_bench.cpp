@@ -1,22 +1,36 @@
-// The latency `mocosim tap` adds (docs/benchmarks.md "Recording tap"): the
-// round trip of a 12-byte frame (the size of a DMC HI request) to an echo
-// device on a PTY, directly, and to a second one through a recording tap
-// opening its PTY as the serial port, trips alternating so that both see the
-// same machine load; unpaced (the tap's own cost against the
+// The latency `mocosim tap` adds (docs/benchmarks.md "Recording tap"). Four
+// identical devices, each served on its own PTY on its own io thread, are
+// reached by one host each way:
+//   direct        host -> device PTY
+//   bare relay    host -> PTY -> a minimal forwarder (poll, read, write;
+//                 nothing else) -> device PTY: the floor, two more PTY hops
+//   tap           host -> the tap's PTY -> `mocosim tap` recording -> device PTY
+//   tap, no rec.  the same tap without a recording
+// one round trip on each in turn (the first path rotating), so that all four
+// see the same machine load. Devices: an echo of a 12-byte frame (a DMC HI
+// request's size) and an emulated DMC-16 answering MSG_HI (dmc-v2-protocol.txt
+// "MSG_HI [0x0001]"; 12 bytes out, 63 back), each unpaced (the tap's own cost against the
 // fastest link there is) and paced at 115200 baud (a DMC-16's line).
 //   tap_bench [iterations]
 #include <poll.h>
+#include <pthread.h>
+#include <pty.h>
+#include <stdlib.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "serve/serve.h"
 #include "serve/tap.h"
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
@@ -25,6 +39,7 @@
 namespace {
 
 namespace asio = moco::transport::asio;
+namespace dmc = moco::dmc;
 using Clock = std::chrono::steady_clock;
 
 double Median(std::vector<double> v) {
@@ -36,115 +51,287 @@ double P99(std::vector<double> v) {
   return v[std::min(v.size() - 1, v.size() * 99 / 100)];
 }
 
-double RoundTrip(int fd) {
-  static const moco::wire::Bytes frame(12, 0x5A);
-  moco::wire::Bytes back(frame.size());
-  const auto t0 = Clock::now();
-  moco::transport::testing::WriteAll(fd, frame.data(), frame.size());
-  size_t got = 0;
-  while (got < back.size()) {
-    pollfd p{fd, POLLIN, 0};
-    if (poll(&p, 1, 2000) <= 0) std::exit(1);
-    const ssize_t r = read(fd, back.data() + got, back.size() - got);
-    if (r <= 0) std::exit(1);
-    got += static_cast<size_t>(r);
-  }
-  return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+double Load1() {
+  double load[1] = {0};
+  return getloadavg(load, 1) == 1 ? load[0] : -1;
 }
 
-// Alternates a trip on each path, so both see the same machine load.
-void RoundTrips(const std::string& direct_pty, const std::string& tapped_pty, int n,
-                std::vector<double>& direct, std::vector<double>& tapped) {
-  const int a = moco::transport::testing::OpenPtyHost(direct_pty);
-  const int b = moco::transport::testing::OpenPtyHost(tapped_pty);
-  if (a < 0 || b < 0) std::exit(1);
-  for (int i = -200; i < n; ++i) {
-    const double da = RoundTrip(a);
-    const double db = RoundTrip(b);
-    if (i >= 0) {
-      direct.push_back(da);
-      tapped.push_back(db);
-    }
-  }
-  close(a);
-  close(b);
-}
+void Name(std::thread& t, const char* name) { pthread_setname_np(t.native_handle(), name); }
 
-void Row(const char* what, const std::vector<double>& direct, const std::vector<double>& tapped) {
-  std::printf("| %s | %.1f / %.1f us | %.1f / %.1f us | %.2f |\n", what, Median(direct),
-              P99(direct), Median(tapped), P99(tapped), Median(tapped) / Median(direct));
-}
+// A device served on a PTY on its own io thread.
+class Served {
+ public:
+  virtual ~Served() = default;
+};
 
-// An echo device served on a PTY on its own io thread.
-struct EchoServer {
-  EchoServer(const std::string& path, bool paced) : driver(io, scheduler) {
+class EchoServer final : public Served {
+ public:
+  EchoServer(const std::string& path, bool paced) : driver_(io_, scheduler_) {
     moco::transport::ServeOptions opts;
     opts.no_pacing = !paced;
     opts.log = [](std::string_view) {};
-    server = std::make_unique<moco::transport::DeviceServer>(driver, "pty:" + path, opts);
-    device = std::make_unique<moco::transport::testing::EchoDevice>(server->sink());
-    server->Serve(*device);
-    device->PowerOn();
-    driver.Start();
-    thread = std::thread([this] { io.run(); });
+    server_ = std::make_unique<moco::transport::DeviceServer>(driver_, "pty:" + path, opts);
+    device_ = std::make_unique<moco::transport::testing::EchoDevice>(server_->sink());
+    server_->Serve(*device_);
+    device_->PowerOn();
+    driver_.Start();
+    thread_ = std::thread([this] { io_.run(); });
+    Name(thread_, "echo");
   }
-  ~EchoServer() {
-    asio::post(io, [this] {
-      server->Stop();
-      driver.Stop();
-      io.stop();
+  ~EchoServer() override {
+    asio::post(io_, [this] {
+      server_->Stop();
+      driver_.Stop();
+      io_.stop();
     });
-    thread.join();
+    thread_.join();
   }
-  asio::io_context io;
-  moco::sim::Scheduler scheduler;
-  moco::transport::RealtimeDriver driver;
-  std::unique_ptr<moco::transport::DeviceServer> server;
-  std::unique_ptr<moco::transport::testing::EchoDevice> device;
-  std::thread thread;
+
+ private:
+  asio::io_context io_;
+  moco::sim::Scheduler scheduler_;
+  moco::transport::RealtimeDriver driver_;
+  std::unique_ptr<moco::transport::DeviceServer> server_;
+  std::unique_ptr<moco::transport::testing::EchoDevice> device_;
+  std::thread thread_;
 };
 
-void Measure(bool paced, int n) {
+// An emulated DMC-16, as `mocosim dmc16 --pty PATH [--no-pacing]` serves it.
+class Dmc16Server final : public Served {
+ public:
+  Dmc16Server(const std::string& path, bool paced) {
+    moco::serve::EmulatorConfig config;
+    config.log_level = moco::serve::LogLevel::kError;
+    moco::serve::DeviceConfig d;
+    d.endpoint = "pty:" + path;
+    d.no_pacing = !paced;
+    config.devices.push_back(d);
+    emulator_ = std::make_unique<moco::serve::Emulator>(config, [](std::string_view) {});
+    emulator_->Start();
+    thread_ = std::thread([this] { emulator_->Run(); });
+    Name(thread_, "dmc16");
+  }
+  ~Dmc16Server() override {
+    asio::post(emulator_->io(), [this] { emulator_->Stop(); });
+    thread_.join();
+  }
+
+ private:
+  std::unique_ptr<moco::serve::Emulator> emulator_;
+  std::thread thread_;
+};
+
+// The least a forwarder between two PTYs can do: one thread polling both
+// ends, reading what is there and writing it to the other end. No recording,
+// no event loop, no timers: what remains of the tap's cost is the two PTY
+// hops and the wake-ups they take.
+class BareRelay {
+ public:
+  BareRelay(const std::string& device_path, const std::string& link_path) : link_(link_path) {
+    char name[256] = {};
+    int slave = -1;
+    if (openpty(&master_, &slave, name, nullptr, nullptr) != 0) std::exit(1);
+    termios t{};
+    tcgetattr(slave, &t);
+    cfmakeraw(&t);
+    tcsetattr(slave, TCSANOW, &t);
+    slave_ = slave;
+    std::filesystem::remove(link_);
+    std::filesystem::create_symlink(name, link_);
+    device_ = moco::transport::testing::OpenPtyHost(device_path);
+    if (device_ < 0 || pipe(stop_) != 0) std::exit(1);
+    thread_ = std::thread([this] { Run(); });
+    Name(thread_, "relay");
+  }
+  ~BareRelay() {
+    const char c = 0;
+    (void)write(stop_[1], &c, 1);
+    thread_.join();
+    for (int fd : {master_, slave_, device_, stop_[0], stop_[1]}) close(fd);
+    std::filesystem::remove(link_);
+  }
+
+ private:
+  void Run() {
+    std::array<uint8_t, 4096> buf{};
+    for (;;) {
+      pollfd p[3] = {{master_, POLLIN, 0}, {device_, POLLIN, 0}, {stop_[0], POLLIN, 0}};
+      if (poll(p, 3, -1) < 0) continue;
+      if (p[2].revents != 0) return;
+      for (int i = 0; i < 2; ++i) {
+        if ((p[i].revents & POLLIN) == 0) continue;
+        const ssize_t n = read(p[i].fd, buf.data(), buf.size());
+        if (n > 0) {
+          moco::transport::testing::WriteAll(i == 0 ? device_ : master_, buf.data(),
+                                             static_cast<size_t>(n));
+        }
+      }
+    }
+  }
+  std::string link_;
+  int master_ = -1;
+  int slave_ = -1;
+  int device_ = -1;
+  int stop_[2] = {-1, -1};
+  std::thread thread_;
+};
+
+// A tap on its own io thread, recording when record_path is given.
+class TapRunner {
+ public:
+  TapRunner(const std::string& device_path, const std::string& host_path,
+            const std::string& record_path)
+      : driver_(io_, scheduler_) {
+    moco::serve::TapConfig config;
+    config.protocol = moco::wire::Protocol::kDmc;
+    config.device = "serial:" + device_path;
+    config.host = "pty:" + host_path;
+    config.record_path = record_path;
+    tap_ = std::make_unique<moco::serve::Tap>(driver_, config, [](std::string_view) {});
+    tap_->Start();
+    driver_.Start();
+    thread_ = std::thread([this] { io_.run(); });
+    Name(thread_, "tap");
+  }
+  ~TapRunner() {
+    asio::post(io_, [this] {
+      tap_->Stop();
+      driver_.Stop();
+      io_.stop();
+    });
+    thread_.join();
+  }
+
+ private:
+  asio::io_context io_;
+  moco::sim::Scheduler scheduler_;
+  moco::transport::RealtimeDriver driver_;
+  std::unique_ptr<moco::serve::Tap> tap_;
+  std::thread thread_;
+};
+
+// One host on one path: a round trip, in microseconds.
+class Host {
+ public:
+  virtual ~Host() = default;
+  virtual double Trip() = 0;
+};
+
+// Writes a 12-byte frame and reads it back: poll, then read, the calls the
+// DMC host client makes.
+class EchoHost final : public Host {
+ public:
+  explicit EchoHost(int fd) : fd_(fd) {}
+  ~EchoHost() override { close(fd_); }
+  double Trip() override {
+    static const moco::wire::Bytes frame(12, 0x5A);
+    moco::wire::Bytes back(frame.size());
+    const auto t0 = Clock::now();
+    moco::transport::testing::WriteAll(fd_, frame.data(), frame.size());
+    size_t got = 0;
+    while (got < back.size()) {
+      pollfd p{fd_, POLLIN, 0};
+      if (poll(&p, 1, 2000) <= 0) std::exit(1);
+      const ssize_t r = read(fd_, back.data() + got, back.size() - got);
+      if (r <= 0) std::exit(1);
+      got += static_cast<size_t>(r);
+    }
+    return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+  }
+
+ private:
+  int fd_;
+};
+
+// MSG_HI and its reply, as a host sees a device's answer.
+class HiHost final : public Host {
+ public:
+  explicit HiHost(int fd) : fd_(fd), client_(fd) {}
+  ~HiHost() override { close(fd_); }
+  double Trip() override {
+    const uint32_t id = ++id_;
+    const auto t0 = Clock::now();
+    client_.Send(id, dmc::HostMessage{dmc::HiRequest{}});
+    if (!client_.ReplyTo(id, 2000)) std::exit(1);
+    return std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+  }
+
+ private:
+  int fd_;
+  moco::transport::testing::DmcHostClient client_;
+  uint32_t id_ = 1000;
+};
+
+enum class Kind { kEcho, kDmc16 };
+constexpr int kPaths = 4;
+const char* const kPathNames[kPaths] = {"direct", "bare relay (floor)", "tap, recording",
+                                        "tap, not recording"};
+
+void Measure(Kind kind, bool paced, int n, int warmup) {
   const std::string dir =
       std::filesystem::temp_directory_path() / ("tap_bench." + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  std::vector<double> direct, tapped;
+  std::array<std::vector<double>, kPaths> us;
+  const double load_before = Load1();
   {
-    EchoServer direct_echo(dir + "/direct", paced);
-    EchoServer behind_echo(dir + "/behind", paced);
-    asio::io_context tap_io;
-    moco::sim::Scheduler tap_scheduler;
-    moco::transport::RealtimeDriver tap_driver(tap_io, tap_scheduler);
-    moco::serve::TapConfig config;
-    config.protocol = moco::wire::Protocol::kDmc;
-    config.device = "serial:" + dir + "/behind";
-    config.host = "pty:" + dir + "/host";
-    config.record_path = dir + "/tapped.jsonl";
-    auto tap = std::make_unique<moco::serve::Tap>(tap_driver, config, [](std::string_view) {});
-    tap->Start();
-    tap_driver.Start();
-    std::thread tap_thread([&] { tap_io.run(); });
-    RoundTrips(dir + "/direct", dir + "/host", n, direct, tapped);
-    asio::post(tap_io, [&] {
-      tap->Stop();
-      tap_driver.Stop();
-      tap_io.stop();
-    });
-    tap_thread.join();
+    std::vector<std::unique_ptr<Served>> devices;
+    for (int i = 0; i < kPaths; ++i) {
+      const std::string path = dir + "/device" + std::to_string(i);
+      if (kind == Kind::kEcho) {
+        devices.push_back(std::make_unique<EchoServer>(path, paced));
+      } else {
+        devices.push_back(std::make_unique<Dmc16Server>(path, paced));
+      }
+    }
+    BareRelay relay(dir + "/device1", dir + "/relay");
+    TapRunner tap(dir + "/device2", dir + "/tap", dir + "/tapped.jsonl");
+    TapRunner tap_unrecorded(dir + "/device3", dir + "/tap-unrecorded", "");
+    const std::string host_paths[kPaths] = {dir + "/device0", dir + "/relay", dir + "/tap",
+                                            dir + "/tap-unrecorded"};
+    std::vector<std::unique_ptr<Host>> hosts;
+    for (const std::string& p : host_paths) {
+      const int fd = moco::transport::testing::OpenPtyHost(p);
+      if (fd < 0) std::exit(1);
+      if (kind == Kind::kEcho) {
+        hosts.push_back(std::make_unique<EchoHost>(fd));
+      } else {
+        hosts.push_back(std::make_unique<HiHost>(fd));
+      }
+    }
+    for (int i = -warmup; i < n; ++i) {
+      const int first = (i + warmup) % kPaths;
+      for (int k = 0; k < kPaths; ++k) {
+        const int path = (first + k) % kPaths;
+        const double t = hosts[path]->Trip();
+        if (i >= 0) us[path].push_back(t);
+      }
+    }
   }
   std::filesystem::remove_all(dir);
-  Row(paced ? "echo paced at 115200 baud, 12 B" : "echo unpaced, 12 B", direct, tapped);
+  const std::string device = std::string(kind == Kind::kEcho ? "echo 12 B" : "DMC-16 HI") +
+                             (paced ? ", paced at 115200 baud" : ", unpaced");
+  const double direct = Median(us[0]);
+  for (int p = 0; p < kPaths; ++p) {
+    std::printf("| %s | %s | %.1f / %.1f us | %+.1f us | %.2f |\n", device.c_str(), kPathNames[p],
+                Median(us[p]), P99(us[p]), Median(us[p]) - direct, Median(us[p]) / direct);
+  }
+  std::fprintf(stderr, "  %s: load average %.2f before, %.2f after\n", device.c_str(), load_before,
+               Load1());
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   const int n = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3000;
-  std::printf("%d round trips after 200 warm-up ones\n\n", n);
+  const int paced_n = std::max(1, n / 10);
   std::printf(
-      "| device | direct median / p99 | through the tap (recording) median / p99 | ratio |\n");
-  std::printf("| --- | --- | --- | --- |\n");
-  Measure(false, n);
-  Measure(true, n / 10 > 0 ? n / 10 : 1);
+      "%d round trips per path unpaced, %d paced, after warm-up ones; load average %.2f\n\n", n,
+      paced_n, Load1());
+  std::printf("| device | path | median / p99 | median over direct | ratio |\n");
+  std::printf("| --- | --- | --- | --- | --- |\n");
+  Measure(Kind::kEcho, false, n, 200);
+  Measure(Kind::kEcho, true, paced_n, 20);
+  Measure(Kind::kDmc16, false, n, 200);
+  Measure(Kind::kDmc16, true, paced_n, 20);
   return 0;
 }

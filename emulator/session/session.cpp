@@ -231,6 +231,64 @@ nlohmann::json EntryToJson(const SessionEntry& e) {
   return j;
 }
 
+namespace {
+
+// A string as JSON, as nlohmann writes it: printable ASCII stands for
+// itself, '"' and '\\' take a backslash; anything else (control characters,
+// UTF-8, invalid bytes: escaped, checked, replaced) goes through nlohmann.
+void AppendJsonString(std::string_view s, std::string& out) {
+  for (const char c : s) {
+    if (c < 0x20 || c > 0x7e) {
+      out += json(s).dump(-1, ' ', false, json::error_handler_t::replace);
+      return;
+    }
+  }
+  out += '"';
+  size_t from = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] != '"' && s[i] != '\\') continue;
+    out.append(s.data() + from, i - from);
+    out += '\\';
+    from = i;
+  }
+  out.append(s.data() + from, s.size() - from);
+  out += '"';
+}
+
+}  // namespace
+
+void AppendEntryLine(const SessionEntry& e, std::string& out) {
+  if (e.is_event) {
+    out += EntryToJson(e).dump(-1, ' ', false, json::error_handler_t::replace);
+    out += '\n';
+    return;
+  }
+  // EntryToJson(e).dump() written directly, keys in its (sorted) order: a
+  // traffic line is most of a recording.
+  static constexpr char kDigits[] = "0123456789abcdef";
+  out += '{';
+  if (!e.decoded.empty()) {
+    out += "\"decoded\":[";
+    for (size_t i = 0; i < e.decoded.size(); ++i) {
+      if (i > 0) out += ',';
+      AppendJsonString(e.decoded[i], out);
+    }
+    out += "],";
+  }
+  out +=
+      e.from == Origin::kHost ? "\"from\":\"host\",\"hex\":\"" : "\"from\":\"device\",\"hex\":\"";
+  const size_t hex_at = out.size();
+  out.resize(hex_at + 2 * e.bytes.size());
+  char* hex = out.data() + hex_at;
+  for (const uint8_t b : e.bytes) {
+    *hex++ = kDigits[b >> 4];
+    *hex++ = kDigits[b & 0xF];
+  }
+  out += "\",\"t_ns\":";
+  out += std::to_string(e.t_ns);
+  out += "}\n";
+}
+
 SessionWriter::SessionWriter(std::filesystem::path path, const SessionHeader& header)
     : path_(std::move(path)) {
   if (auto error = file_.Open(path_.string())) {
@@ -250,7 +308,17 @@ void SessionWriter::WriteLine(const nlohmann::json& j) {
 
 void SessionWriter::Append(const SessionEntry& entry) {
   if (finished_) return;
-  WriteLine(EntryToJson(entry));
+  std::string line;
+  AppendEntryLine(entry, line);
+  (void)file_.Write(line);
+}
+
+void SessionWriter::Append(std::span<const SessionEntry> entries) {
+  if (finished_ || entries.empty()) return;
+  std::string text;
+  for (const SessionEntry& e : entries) AppendEntryLine(e, text);
+  // An error is kept by the file and reported by Finish().
+  (void)file_.Write(text);
 }
 
 void SessionWriter::Abandon() {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,10 @@ std::variant<Session, SessionError> LoadSession(const std::filesystem::path& pat
 
 nlohmann::json HeaderToJson(const SessionHeader& h);
 nlohmann::json EntryToJson(const SessionEntry& e);
+// Appends e's session line: EntryToJson(e) as compact JSON (invalid UTF-8
+// replaced) and a newline, byte for byte; traffic lines without building
+// the JSON value.
+void AppendEntryLine(const SessionEntry& e, std::string& out);
 
 // Writes a session line by line: every line is written through as it comes
 // to an exclusively created "<path>.partial-<pid>-<n>" beside <path> (after
@@ -100,6 +105,10 @@ class SessionWriter {
   SessionWriter& operator=(const SessionWriter&) = delete;
 
   void Append(const SessionEntry& entry);
+  // Appends entries in order with one write (a recorder that batches its
+  // lines off a latency-critical path). A crash during the write leaves, as
+  // ever, at most the last line cut short.
+  void Append(std::span<const SessionEntry> entries);
   // Flushes, closes and renames into place. Returns false (with a message) on an I/O error.
   bool Finish(std::string* error = nullptr);
   // Drops the recording: an existing file at path() stays as it was (a

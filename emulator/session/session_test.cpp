@@ -117,6 +117,49 @@ TEST(SessionTest, WriterWritesPartialThenRenames) {
   std::filesystem::remove_all(dir);
 }
 
+// A batch is the same file, line for line, as its entries appended one by
+// one: traffic, decoded text that needs escaping, and events, in order.
+TEST(SessionTest, WriterBatchAppendWritesTheSameLinesAsSingleAppends) {
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("moco_session_batch_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+  std::filesystem::create_directories(dir);
+  std::vector<SessionEntry> entries;
+  SessionEntry host;
+  host.t_ns = 1;
+  host.bytes = {0x44, 0x46, 0x00};
+  entries.push_back(host);
+  SessionEntry device;
+  device.t_ns = 2;
+  device.from = Origin::kDevice;
+  device.bytes = {0x0d, 0x0a};
+  device.decoded = {"HI \"dmc16\"\tv2", "second"};
+  entries.push_back(device);
+  entries.push_back(SessionEntry::Event({{"t_ns", 3}, {"event", "host_link"}, {"detail", "open"}}));
+  SessionHeader h;
+  {
+    SessionWriter one(dir / "one.jsonl", h);
+    for (const SessionEntry& e : entries) one.Append(e);
+    ASSERT_TRUE(one.Finish());
+    SessionWriter batch(dir / "batch.jsonl", h);
+    batch.Append(std::span<const SessionEntry>(entries.data(), 2));
+    batch.Append(std::span<const SessionEntry>(entries.data() + 2, 1));
+    batch.Append(std::span<const SessionEntry>());
+    ASSERT_TRUE(batch.Finish());
+  }
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string text = read(dir / "batch.jsonl");
+  EXPECT_EQ(text, read(dir / "one.jsonl"));
+  const Session s = Ok(ParseSession(text));
+  ASSERT_EQ(s.entries.size(), 3u);
+  EXPECT_EQ(s.entries[1].decoded, device.decoded);
+  EXPECT_TRUE(s.entries[2].is_event);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SessionTest, WriterRefusesUnwritableDirectoryWithMessage) {
   SessionHeader h;
   try {
@@ -152,6 +195,35 @@ RC_GTEST_PROP(SessionProp, TrafficRoundTripsThroughText,
     RC_ASSERT(s.entries[i].bytes == chunks[i].second);
     RC_ASSERT((s.entries[i].from == Origin::kHost) == chunks[i].first);
   }
+}
+
+// A traffic line written directly is EntryToJson's compact dump, byte for
+// byte: any time, either side, any bytes, and decoded text of any bytes
+// (quotes, backslashes, control characters, UTF-8 valid or not).
+RC_GTEST_PROP(SessionProp, EntryLineIsTheJsonDumpByteForByte,
+              (int64_t t_ns, bool from_host, const std::vector<uint8_t>& bytes,
+               const std::vector<std::string>& decoded)) {
+  SessionEntry e;
+  e.t_ns = t_ns;
+  e.from = from_host ? Origin::kHost : Origin::kDevice;
+  e.bytes = bytes;
+  e.decoded = decoded;
+  // Printable text, quotes and backslashes among it, as decoded lines are.
+  e.decoded.push_back(*rc::gen::container<std::string>(rc::gen::inRange<char>(0x20, 0x7f)));
+  e.decoded.push_back(*rc::gen::element<std::string>("a\\b", "say \"hi\"", "tab\there", "\x7f",
+                                                     "caf\xc3\xa9", "bad \xff utf-8"));
+  std::string line;
+  AppendEntryLine(e, line);
+  RC_ASSERT(line ==
+            EntryToJson(e).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+}
+
+TEST(SessionTest, EventLinesAreTheirJsonDump) {
+  const SessionEntry e =
+      SessionEntry::Event({{"t_ns", 7}, {"event", "line_rate"}, {"baud", 57600}});
+  std::string line;
+  AppendEntryLine(e, line);
+  EXPECT_EQ(line, "{\"baud\":57600,\"event\":\"line_rate\",\"t_ns\":7}\n");
 }
 
 TEST(SessionTest, ALastLineCutShortKeepsTheLinesBeforeIt) {

@@ -90,21 +90,44 @@ void Link::Write(wire::ByteView bytes) {
     stats_.discarded += bytes.size();
     return;
   }
+  if (Straight(Direction::kToHost) && out_.empty() && !writing_ && host_open_) {
+    // Nothing waits before these bytes and nothing delays them: what
+    // PumpWriter would take from the queue at once goes to the stream now.
+    faults_.CountPassed(Direction::kToHost, bytes.size());
+    CancelTimer(out_wake_);
+    const size_t n = std::min({bytes.size(), WriteChunk(), options_.max_queue_bytes});
+    write_buf_.assign(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    for (uint8_t b : bytes.subspan(n)) Enqueue(now, b);
+    if (!write_buf_.empty()) StartWrite();
+    return;
+  }
   for (const TimedBytes& chunk : faults_.Apply(Direction::kToHost, bytes, now)) {
-    for (uint8_t b : chunk.bytes) {
-      if (queued_bytes() >= options_.max_queue_bytes) {
-        ++stats_.overflowed;
-        if (!overflow_logged_) {
-          overflow_logged_ = true;
-          Log("outgoing queue full (" + std::to_string(options_.max_queue_bytes) +
-              " bytes, no host reading): dropping new device output");
-        }
-        continue;
-      }
-      out_.push_back({chunk.at_ns, b});
-    }
+    for (uint8_t b : chunk.bytes) Enqueue(chunk.at_ns, b);
   }
   PumpWriter();
+}
+
+void Link::Enqueue(sim::TimeNs ready_ns, uint8_t byte) {
+  if (queued_bytes() >= options_.max_queue_bytes) {
+    ++stats_.overflowed;
+    if (!overflow_logged_) {
+      overflow_logged_ = true;
+      Log("outgoing queue full (" + std::to_string(options_.max_queue_bytes) +
+          " bytes, no host reading): dropping new device output");
+    }
+    return;
+  }
+  out_.push_back({ready_ns, byte});
+}
+
+size_t Link::WriteChunk() const {
+  return options_.max_write_bytes == 0 ? kMaxWriteChunk
+                                       : std::min(options_.max_write_bytes, kMaxWriteChunk);
+}
+
+void Link::StartWrite() {
+  writing_ = true;
+  stream_->AsyncWriteAll(asio::buffer(write_buf_), Guard(&Link::OnWritten));
 }
 
 void Link::PumpWriter() {
@@ -113,9 +136,7 @@ void Link::PumpWriter() {
   const sim::TimeNs now = driver_.NowNs();
   write_buf_.clear();
   sim::TimeNs next_due = now;
-  const size_t chunk = options_.max_write_bytes == 0
-                           ? kMaxWriteChunk
-                           : std::min(options_.max_write_bytes, kMaxWriteChunk);
+  const size_t chunk = WriteChunk();
   while (!out_.empty() && write_buf_.size() < chunk) {
     const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
     const sim::TimeNs due = out_pacer_.DueTime(ready);
@@ -128,8 +149,7 @@ void Link::PumpWriter() {
     out_.pop_front();
   }
   if (!write_buf_.empty()) {
-    writing_ = true;
-    stream_->AsyncWriteAll(asio::buffer(write_buf_), Guard(&Link::OnWritten));
+    StartWrite();
   } else if (!out_.empty()) {
     out_wake_ = scheduler_.At(next_due, [this] {
       out_wake_ = sim::Scheduler::kNoTimer;
@@ -196,10 +216,24 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
     stats_.cut_dropped += n;
   } else {
     FollowLineRate();
-    for (const TimedBytes& chunk : faults_.Apply(Direction::kToDevice, bytes, now)) {
-      for (uint8_t b : chunk.bytes) in_.push_back({in_pacer_.Take(chunk.at_ns), b});
+    if (Straight(Direction::kToDevice) && in_.empty()) {
+      // Unpaced, no faults, nothing waiting: due now, as DeliverInbound
+      // would find them, and handed on without the per-byte queue.
+      faults_.CountPassed(Direction::kToDevice, n);
+      CancelTimer(in_wake_);
+      if (device_ != nullptr) {
+        stats_.bytes_to_device += n;
+        if (options_.observer != nullptr) {
+          options_.observer->OnTraffic(now, Direction::kToDevice, bytes);
+        }
+        device_->OnHostBytes(bytes);
+      }
+    } else {
+      for (const TimedBytes& chunk : faults_.Apply(Direction::kToDevice, bytes, now)) {
+        for (uint8_t b : chunk.bytes) in_.push_back({in_pacer_.Take(chunk.at_ns), b});
+      }
+      DeliverInbound();
     }
-    DeliverInbound();
   }
   reading_ = false;
   StartRead();

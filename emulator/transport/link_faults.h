@@ -56,6 +56,12 @@ class FaultInjector {
   // REQUIRES: now_ns non-decreasing across calls for the same direction.
   std::vector<TimedBytes> Apply(Direction dir, wire::ByteView bytes, sim::TimeNs now_ns);
 
+  // Whether `dir` has no fault configured: Apply() would return the bytes
+  // unchanged at the time given. A caller that passes them on itself counts
+  // them with CountPassed(), as Apply() would.
+  bool PassesUnchanged(Direction dir) const { return !Side(dir).faults.Any(); }
+  void CountPassed(Direction dir, size_t n) { Side(dir).counts.bytes_in += n; }
+
   const FaultCounts& counts(Direction dir) const { return Side(dir).counts; }
 
  private:

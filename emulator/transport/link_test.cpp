@@ -302,5 +302,37 @@ TEST_F(LinkTest, WithoutMaxWriteBytesOneWriteCarriesUpTo4096Bytes) {
   EXPECT_EQ(end->write_sizes, (std::vector<size_t>{2500}));
 }
 
+// Unpaced and fault-free, bytes skip the per-byte queues: the device's view,
+// the host's bytes, their order across writes still pending, the counts
+// and the queue cap are what the queues would give.
+TEST_F(LinkTest, UnpacedFaultFreeBytesPassStraightWithTheQueuesResults) {
+  LinkOptions o = Unpaced();
+  o.max_queue_bytes = 20;
+  Build(o);
+  auto end = AttachFake();
+  device_->echo = false;
+  device_->Send("0123456789ABCDEF");  // one write, still pending during the next ones
+  device_->Send("ab");                // queued behind it
+  device_->Send("cd");
+  device_->Send("ef");  // 20 bytes held (the write counts until done): over the cap
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 20; }));
+  EXPECT_EQ(end->written, "0123456789ABCDEFabcd");
+  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{16, 4}));
+  EXPECT_EQ(link_->stats().overflowed, 2u);
+  EXPECT_EQ(link_->stats().bytes_from_device, 22u);
+  EXPECT_EQ(link_->stats().bytes_to_host, 20u);
+  EXPECT_EQ(link_->faults().counts(Direction::kToHost).bytes_in, 22u);
+  end->HostSends("hello");
+  ASSERT_TRUE(RunUntil(io_, [&] { return device_->received == "hello"; }));
+  end->HostSends("!");
+  ASSERT_TRUE(RunUntil(io_, [&] { return device_->received == "hello!"; }));
+  EXPECT_EQ(link_->stats().bytes_to_device, 6u);
+  EXPECT_EQ(link_->faults().counts(Direction::kToDevice).bytes_in, 6u);
+  std::vector<std::string> seen;
+  for (const auto& r : recorder_.log) seen.push_back(r.what);
+  EXPECT_EQ(seen, (std::vector<std::string>{"E:host_link open", "D:0123456789ABCDEF", "D:ab",
+                                            "D:cd", "D:ef", "H:hello", "H:!"}));
+}
+
 }  // namespace
 }  // namespace moco::transport

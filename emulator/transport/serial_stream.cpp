@@ -2,6 +2,8 @@
 #include "transport/serial_stream.h"
 
 #include <fcntl.h>
+#include <linux/serial.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
@@ -104,6 +106,18 @@ std::optional<std::string> Apply(int fd, uint32_t baud, bool rtscts) {
   return std::nullopt;
 }
 
+// Asks the driver to pass received bytes on at once (ASYNC_LOW_LATENCY, a
+// flag an unprivileged user may set). Best effort: a PTY or a driver without
+// serial_struct refuses it, and the port works as it is.
+bool SetLowLatency(int fd) {
+  serial_struct s{};
+  if (ioctl(fd, TIOCGSERIAL, &s) != 0) return false;
+  if ((s.flags & ASYNC_LOW_LATENCY) != 0) return true;
+  s.flags |= ASYNC_LOW_LATENCY;
+  if (ioctl(fd, TIOCSSERIAL, &s) != 0) return false;
+  return ioctl(fd, TIOCGSERIAL, &s) == 0 && (s.flags & ASYNC_LOW_LATENCY) != 0;
+}
+
 }  // namespace
 
 bool IsStandardBaud(uint32_t baud) { return SpeedOf(baud).has_value(); }
@@ -135,8 +149,9 @@ std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std
     close(fd);
     throw std::runtime_error("cannot set up serial port " + path + ": " + *error);
   }
+  const bool low_latency = SetLowLatency(fd);
   return std::unique_ptr<SerialStream>(
-      new SerialStream(asio::posix::stream_descriptor(io, fd), path, settings.baud));
+      new SerialStream(asio::posix::stream_descriptor(io, fd), path, settings.baud, low_latency));
 }
 
 std::optional<std::string> SerialStream::SetBaud(uint32_t baud) {

@@ -37,11 +37,18 @@ class SerialStream final : public AsioByteStream<asio::posix::stream_descriptor>
   // Returns an error message, or nullopt.
   std::optional<std::string> SetBaud(uint32_t baud);
   uint32_t baud() const { return baud_; }
+  // Whether the driver took the low-latency flag (ASYNC_LOW_LATENCY, asked
+  // for at open): a USB adapter then hands each received byte on at once
+  // instead of holding it for its latency timer (an FTDI chip's is 16 ms by
+  // default, which would add up to 16 ms to every reply). Ports without the
+  // setting (a PTY, some adapters) say false and work as before.
+  bool low_latency() const { return low_latency_; }
 
  private:
-  SerialStream(asio::posix::stream_descriptor fd, std::string path, uint32_t baud)
-      : AsioByteStream(std::move(fd), std::move(path)), baud_(baud) {}
+  SerialStream(asio::posix::stream_descriptor fd, std::string path, uint32_t baud, bool low_latency)
+      : AsioByteStream(std::move(fd), std::move(path)), baud_(baud), low_latency_(low_latency) {}
   uint32_t baud_;
+  bool low_latency_;
 };
 
 // Connects to a device listening on TCP (blocking, at start-up). Throws
