@@ -343,15 +343,23 @@ void Link::UpdateHostOpen() {
       out_.clear();
     } else if (stream_ != nullptr) {
       if (!writing_) Reclaim();
-      CancelTimer(reclaim_timer_);
-      reclaim_timer_ = scheduler_.After(kReclaimRetryNs, [this] {
-        reclaim_timer_ = sim::Scheduler::kNoTimer;
-        if (!writing_) Reclaim();
-      });
+      ScheduleReclaimRetry();
     }
   }
   if (device_ != nullptr && options_.report_host_link) device_->OnHostLink(open);
   if (open) PumpWriter();
+}
+
+void Link::ScheduleReclaimRetry() {
+  CancelTimer(reclaim_timer_);
+  reclaim_timer_ = scheduler_.After(kReclaimRetryNs, [this] {
+    reclaim_timer_ = sim::Scheduler::kNoTimer;
+    // A write the departed host's full buffer holds up completes only once
+    // the buffer is read: reclaiming what it holds (older bytes than the
+    // write's) lets it finish, and OnWritten reclaims what it wrote, in order.
+    Reclaim();
+    if (writing_ && !host_present_ && stream_ != nullptr && !stopped_) ScheduleReclaimRetry();
+  });
 }
 
 void Link::Reclaim() {

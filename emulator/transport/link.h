@@ -208,6 +208,8 @@ class Link final : public devices::ByteSink {
   void DetachInternal();
   void UpdateHostOpen();
   void Reclaim();
+  // Reclaims again after kReclaimRetryNs, and on while a write is held up.
+  void ScheduleReclaimRetry();
   void CancelTimer(sim::Scheduler::TimerId& id);
   void Event(std::string_view kind, std::string_view detail);
   // Wraps a stream completion handler: it does nothing once the link is gone
