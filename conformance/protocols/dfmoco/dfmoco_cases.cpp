@@ -681,11 +681,16 @@ double Seconds(TimeNs t) { return static_cast<double>(t) / 1e9; }
 // land on whole steps (2 steps, as DFM-GO-003/005).
 void JudgeGoShape(DfmCaseContext& c, const std::vector<std::pair<int32_t, BlurPlan>>& plans,
                   const std::vector<GoSample>& samples, TimeNs t_go) {
-  for (const auto& [m, plan] : plans) {
+  // Plain names, not structured bindings: the lambda below captures them
+  // (clang 14 cannot capture a structured binding).
+  for (const auto& motor_plan : plans) {
+    const int32_t m = motor_plan.first;
+    const BlurPlan& plan = motor_plan.second;
     for (const GoSample& s : samples) {
       if (s.motor != m) continue;
-      const auto [lo, hi] = plan.Span(Seconds(s.asked_ns - t_go - kGoWithinNs),
-                                      Seconds(s.answered_ns - t_go + kChunkNs + kGoWithinNs));
+      const auto span = plan.Span(Seconds(s.asked_ns - t_go - kGoWithinNs),
+                                  Seconds(s.answered_ns - t_go + kChunkNs + kGoWithinNs));
+      const double lo = span.first, hi = span.second;
       const bool ok = s.steps >= lo - 2.0 && s.steps <= hi + 2.0;
       c.v.Check("DFM-GO-006", ok, [&] {
         const auto exposure_ms = std::llround(plan.exposure_s * 1000);
