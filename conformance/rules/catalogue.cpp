@@ -271,6 +271,25 @@ const std::vector<Rule> kRules = {
      "SPEED WORD 1=inching, 10000=jog at max velocity", "MSG_MOTOR_JOG"},
     {"DMC-CFG-005", L::kMust, N::kMotors, "MOTOR_SET_LIMITS is acknowledged OK",
      "Set the motor software and hardware limits.", "MSG_MOTOR_SET_LIMITS"},
+    {"DMC-CFG-006", L::kShould, N::kMotors,
+     "MOTOR_JOG SPEED sets the pace: a lower SPEED covers less ground in the same time, and "
+     "SPEED 1 at most a tenth of what SPEED 10000 covers",
+     "A speed of 1 means the device should move very slowly, for precise adjustments. A speed of "
+     "10,000 means the device should jog using the max velocity and acceleration. A value in "
+     "between 1 and 10,000 should provide an appropriate speed between 1% and 100% of the jog "
+     "speed.",
+     "MSG_MOTOR_JOG"},
+    {"DMC-CFG-007", L::kShould, N::kCoupleMotors,
+     "With capability 0x0100, MOTOR_CONFIGURE coupling a motor (flag 0x10, or 0x20 reversed) and "
+     "uncoupling it are acknowledged OK",
+     "0x0100 Couple motors; dmc-lite's header also defines MOTOR_CONFIGURE flags beyond the "
+     "spec's two: ... 0x10 coupled, 0x20 coupled reversed (capability 0x0100 \"couple motors\")",
+     "Capabilities; FACTS DMC v2"},
+    {"DMC-CFG-008", L::kNote, N::kCoupleMotors,
+     "A motor coupled with flag 0x10 makes the steps of the motor before it (mirrored with 0x20), "
+     "and moves on its own again once uncoupled",
+     "0x10 coupled, 0x20 coupled reversed (capability 0x0100 \"couple motors\")",
+     "Capabilities; FACTS DMC v2"},
 
     // --- Errors ---
     {"DMC-ERR-001", L::kMust, N::kMotors, "Motor number 0 is refused with ERR_RANGE",
@@ -387,6 +406,20 @@ const std::vector<Rule> kRules = {
      "Set DMX light values. The request specifies the initial channel to change, and then one or "
      "more light values.",
      "MSG_DMX"},
+    {"DMC-DMX-002", L::kShould, N::kDmx,
+     "After MSG_DMX with RAMP 1 changing a level, MOTOR_STATUS reports DMX STATUS 1 (adjusting)",
+     "If RAMP is set to 1, the device should ramp the light value of each channel up or down to "
+     "reach the target channel, rather than switching to it immediately. ... DMX STATUS BYTE "
+     "1=DMX adjusting, 0=Not adjusting",
+     "MSG_DMX; MSG_MOTOR_STATUS"},
+    {"DMC-DMX-003", L::kMust, N::kDmx,
+     "A DMX ramp ends: MOTOR_STATUS reports DMX STATUS 0 again within 30 s of a full-range ramp",
+     "Request the motor (and dmx) status. This is only a status of whether something is "
+     "moving/adjusting.",
+     "MSG_MOTOR_STATUS"},
+    {"DMC-DMX-004", L::kShould, N::kDmx,
+     "MSG_DMX with RAMP 0 switches at once: MOTOR_STATUS right after it reports DMX STATUS 0",
+     "RAMP BYTE 1=ramp, 0=immediate", "MSG_DMX"},
 
     // --- Real-time moves ---
     {"DMC-RT-001", L::kMust, N::kRealTime,
@@ -579,6 +612,8 @@ std::string_view NeedsText(Needs needs) {
       return "capability 0x0004 (boom-swing-track), MOTOR COUNT >= 6";
     case Needs::kAimPoint:
       return "capability 0x0040 (aim point)";
+    case Needs::kCoupleMotors:
+      return "capability 0x0100 (couple motors), MOTOR COUNT >= 2";
     case Needs::kSsThreeAxes:
       return "axes X, Y and Z (StackShot 3X)";
     case Needs::kDfmMotors:

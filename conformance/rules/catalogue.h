@@ -45,6 +45,7 @@ enum class Needs {
   kNoVirtual,       // none of the virtual capabilities
   kVirtualBoomRig,  // capability 0x0004 (boom-swing-track) and MOTOR COUNT >= 6
   kAimPoint,        // capability 0x0040
+  kCoupleMotors,    // capability 0x0100 and MOTOR COUNT >= 2
   // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
   kDfmMotors,       // `hi` number of axes >= 1
   kDfmTwoMotors,    // `hi` number of axes >= 2

@@ -413,6 +413,88 @@ void Configure(DmcCaseContext& c) {
   MoveAndRest(c, 1, start);
 }
 
+// MSG_MOTOR_JOG: "A speed of 1 means the device should move very slowly ...
+// A value in between 1 and 10,000 should provide an appropriate speed between
+// 1% and 100% of the jog speed." Each jog heads for a far destination for the
+// same time; what it covers in that time orders the speeds. At 3000 steps/s
+// and 6000 steps/s^2, 600 ms of a full-speed jog cover about 1000 steps and 1%
+// of it under 20.
+void JogSpeeds(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  SetSpeed(c, 1, 3000, 6000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t start = At(*p0, 0);
+  struct Leg {
+    uint16_t speed;
+    std::optional<int64_t> travel;
+  };
+  std::vector<Leg> legs = {{dmc::kJogSpeedMax, {}}, {2500, {}}, {dmc::kJogSpeedInch, {}}};
+  for (Leg& leg : legs) {
+    if (!ExpectOk(c, "DMC-CFG-003", h.Call(dmc::MotorJog{1, leg.speed, start + 100000}))) break;
+    h.Idle(600 * kMs);
+    const auto p = GetPositions(h);
+    h.Call(dmc::MotorStop{1});
+    WaitRest(c, 10'000 * kMs);
+    if (p) leg.travel = static_cast<int64_t>(At(*p, 0)) - start;
+    MoveAndRest(c, 1, start);
+  }
+  std::string seen;
+  for (const Leg& leg : legs) {
+    seen += (seen.empty() ? "" : ", ") + std::string("SPEED ") + std::to_string(leg.speed) + ": " +
+            (leg.travel ? std::to_string(*leg.travel) + " steps" : "not measured");
+  }
+  if (!legs[0].travel || !legs[1].travel || !legs[2].travel) return;
+  const int64_t full = *legs[0].travel, part = *legs[1].travel, inch = *legs[2].travel;
+  Expect(c, "DMC-CFG-006", full > 0 && part < full && inch < part && inch * 10 <= full,
+         "in 600 ms: SPEED 10000 > SPEED 2500 > SPEED 1 steps, SPEED 1 at most a tenth of "
+         "SPEED 10000",
+         seen);
+}
+
+// Capabilities "0x0100 Couple motors" through the MOTOR_CONFIGURE flags of
+// the reference firmware (FACTS "DMC v2": 0x10 coupled, 0x20 coupled
+// reversed). Motor 2 is coupled, both ways, then uncoupled; motor 1 moves.
+void Couple(DmcCaseContext& c) {
+  DmcHost& h = c.host;
+  SetSpeed(c, 1, 3000, 6000);
+  const auto p0 = GetPositions(h);
+  if (!p0) return;
+  const int32_t s1 = At(*p0, 0), s2 = At(*p0, 1);
+  constexpr int32_t kTravel = 400;
+  // Motor 1 moves out and back; `want2` is where motor 2 must be at the far end.
+  const auto follow = [&](int32_t want2, const std::string& how) {
+    const size_t mark = h.records().size();
+    MoveAndRest(c, 1, s1 + kTravel);
+    const auto p = GetPositions(h);
+    Expect(c, "DMC-CFG-008",
+           ReportsAt(h, mark, p, 1, [&](int32_t v) { return v == want2; }) &&
+               ReportsAt(h, mark, p, 0, [&](int32_t v) { return v == s1 + kTravel; }),
+           "motor 1 at " + std::to_string(s1 + kTravel) + ", motor 2 (" + how + ") at " +
+               std::to_string(want2),
+           p ? Vec(*p) : "no position");
+    MoveAndRest(c, 1, s1);
+  };
+  const struct {
+    uint8_t flag;
+    int32_t sign;
+    const char* how;
+  } kinds[] = {{dmc::kMotorCoupled, 1, "coupled"},
+               {dmc::kMotorCoupledReversed, -1, "coupled reversed"}};
+  for (const auto& k : kinds) {
+    const auto at = GetPositions(h);
+    if (!at) return;
+    const DeviceRecord* r = h.Call(dmc::MotorConfigure{2, uint8_t(dmc::kMotorEnabled | k.flag)});
+    if (!ExpectOk(c, "DMC-CFG-007", r)) continue;
+    follow(At(*at, 1) + k.sign * kTravel, k.how);
+  }
+  ExpectOk(c, "DMC-CFG-007", h.Call(dmc::MotorConfigure{2, dmc::kMotorEnabled}));
+  const auto at = GetPositions(h);
+  if (!at) return;
+  follow(At(*at, 1), "uncoupled, standing");
+  MoveAndRest(c, 2, s2);
+}
+
 void NoHostAck(DmcCaseContext& c) {
   DmcHost& h = c.host;
   h.set_ack_unsolicited(false);
@@ -597,6 +679,33 @@ void Dmx(DmcCaseContext& c) {
   ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, {10, 20, 30}}));
   ExpectCode(c, "DMC-ERR-011", h.Call(dmc::Dmx{0, 0, {10}}), AckCode::kErrRange);
   ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, {0, 0, 0}}));
+  // MSG_DMX "If RAMP is set to 1, the device should ramp the light value ...
+  // rather than switching to it immediately"; MSG_MOTOR_STATUS "DMX STATUS
+  // BYTE 1=DMX adjusting, 0=Not adjusting". Channel 1 ramps over its full range.
+  ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{1, 1, {255}}));
+  const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+  const auto* st = As<dmc::MotorStatusResponse>(r);
+  c.v.Check("DMC-DMX-002", st != nullptr && st->dmx_adjusting == 1, [&] {
+    return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 1 right after a ramp to 255 began", Show(r));
+  });
+  // The ramp ends: polled as a host waiting for the rig to settle would.
+  const TimeNs until = h.Now() + 30'000 * kMs;
+  for (;;) {
+    r = h.Call(dmc::MotorStatusRequest{});
+    st = As<dmc::MotorStatusResponse>(r);
+    if (st == nullptr || st->dmx_adjusting == 0 || h.Now() >= until) break;
+    h.Idle(100 * kMs);
+  }
+  c.v.Check("DMC-DMX-003", st != nullptr && st->dmx_adjusting == 0, [&] {
+    return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 0 within 30 s of the ramp", Show(r));
+  });
+  // "RAMP BYTE 1=ramp, 0=immediate": back to 0 at once.
+  ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, {0}}));
+  r = h.Call(dmc::MotorStatusRequest{});
+  st = As<dmc::MotorStatusResponse>(r);
+  c.v.Check("DMC-DMX-004", st != nullptr && st->dmx_adjusting == 0, [&] {
+    return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 0 right after an immediate set", Show(r));
+  });
 }
 
 // ---------------------------------------------------------------- limits
@@ -746,6 +855,9 @@ std::vector<DmcCase> MakeCases() {
       {"motor", "hard-stop", N::kMotors, "a second STOP_ALL stops no later than one", HardStop},
       {"motor", "reset-position", N::kMotors, "RESET_POSITION and its position update", Reset},
       {"motor", "configure-jog", N::kMotors, "CONFIGURE, SET_LIMITS, SET_SPEED, JOG", Configure},
+      {"motor", "jog-speeds", N::kMotors, "JOG at SPEED 10000, 2500 and 1: the pace follows SPEED",
+       JogSpeeds},
+      {"motor", "couple", N::kCoupleMotors, "motor 2 coupled, coupled reversed, uncoupled", Couple},
       {"motor", "no-host-ack", N::kMotors, "updates left un-ACKed do not stall the device",
        NoHostAck},
       {"motor", "estop", N::kMotors, "the e-stop button (in-process): MOTOR_HARD_STOP", EStop},
@@ -759,7 +871,7 @@ std::vector<DmcCase> MakeCases() {
       {"errors", "unadvertised", N::kNoVirtual, "virtual messages to a device without virtuals",
        Unadvertised},
       {"io", "gio", N::kNothing, "GIO_IN, GIO_OUT, GIO_CAM", Io},
-      {"io", "dmx", N::kDmx, "DMX set and channel 0", Dmx},
+      {"io", "dmx", N::kDmx, "DMX set, channel 0, a ramp and its DMX STATUS", Dmx},
       {"io", "gio-in-change", N::kGioIn, "an input changing (in-process): GIO_IN sent unsolicited",
        GioInputChange},
       {"limits", "soft", N::kMotors, "moves and a jog against enabled and disabled soft limits",

@@ -476,6 +476,23 @@ bool IsOkFor(const dmc::FrameRef& f, uint32_t code, MsgType t) {
   return IsAckOf(f, t) && code == ToWire(AckCode::kOk);
 }
 
+// A device that reads every host request of type M as `change` leaves it.
+template <typename M>
+InputBreakage Rewrite(std::function<void(M&)> change) {
+  return [change](wire::ByteView bytes) {
+    wire::Bytes out(bytes.begin(), bytes.end());
+    if (const auto f = WholeFrame(bytes)) {
+      const auto m = dmc::DecodeHostMessage(*f);
+      if (const auto* msg = m.ok() ? std::get_if<M>(&m.value()) : nullptr) {
+        M changed = *msg;
+        change(changed);
+        out = dmc::Encode(f->id, dmc::HostMessage{changed});
+      }
+    }
+    return out;
+  };
+}
+
 TEST(DmcLinkProofs, AValidSpeedRefusedIsCaughtByCfg001) {
   const RunReport r =
       RunBroken(Recode([](const dmc::FrameRef& f,
@@ -773,6 +790,51 @@ TEST(DmcLinkProofs, AHardStopWithAnUnknownReasonIsCaughtByUns003) {
   ExpectMustsFailed(r, {"DMC-UNS-003"});
 }
 
+TEST(DmcLinkProofs, AJogThatIgnoresItsSpeedIsCaughtByCfg006) {
+  // Every jog runs at full speed, whatever SPEED says: a SPEED 1 inch races.
+  const RunReport r =
+      RunBroken(PassThrough, Only("motor/jog-speeds"), "",
+                Rewrite<dmc::MotorJog>([](dmc::MotorJog& j) { j.speed = dmc::kJogSpeedMax; }));
+  ExpectCaught(r, "DMC-CFG-006");
+  ExpectMustsFailed(r, {});
+}
+
+TEST(DmcLinkProofs, ACorrectJogPassesCfg006) {
+  const RunReport r = RunBroken(PassThrough, Only("motor/jog-speeds"));
+  EXPECT_EQ(r.rules.at("DMC-CFG-006").status, Status::kPass) << ConsoleReport(r, false);
+}
+
+TEST(DmcLinkProofs, CouplingRefusedIsCaughtByCfg007) {
+  // The device takes a coupling flag as a motor out of range.
+  const RunReport r =
+      RunBroken(PassThrough, Only("motor/couple"), "",
+                Rewrite<dmc::MotorConfigure>([](dmc::MotorConfigure& m) {
+                  if ((m.flags & (dmc::kMotorCoupled | dmc::kMotorCoupledReversed)) != 0) {
+                    m.motor = 0;
+                  }
+                }));
+  ExpectCaught(r, "DMC-CFG-007");
+  ExpectMustsFailed(r, {});
+}
+
+TEST(DmcLinkProofs, CouplingAcknowledgedButNotDoneIsNotedByCfg008) {
+  // The flags are taken and dropped: motor 2 never follows motor 1.
+  const RunReport r = RunBroken(PassThrough, Only("motor/couple"), "",
+                                Rewrite<dmc::MotorConfigure>([](dmc::MotorConfigure& m) {
+                                  m.flags = static_cast<uint8_t>(
+                                      m.flags & ~(dmc::kMotorCoupled | dmc::kMotorCoupledReversed));
+                                }));
+  EXPECT_EQ(r.rules.at("DMC-CFG-007").status, Status::kPass) << ConsoleReport(r, false);
+  ExpectCaught(r, "DMC-CFG-008", Status::kNoted);
+  ExpectMustsFailed(r, {});
+}
+
+TEST(DmcLinkProofs, ACorrectCouplingPassesCfg007And008) {
+  const RunReport r = RunBroken(PassThrough, Only("motor/couple"));
+  EXPECT_EQ(r.rules.at("DMC-CFG-007").status, Status::kPass) << ConsoleReport(r, false);
+  EXPECT_EQ(r.rules.at("DMC-CFG-008").status, Status::kPass) << ConsoleReport(r, false);
+}
+
 // ------------------------------------------------------------------ DMC-DMX
 
 TEST(DmcLinkProofs, DmxWithinTheChannelsRefusedIsCaughtByDmx001) {
@@ -782,6 +844,52 @@ TEST(DmcLinkProofs, DmxWithinTheChannelsRefusedIsCaughtByDmx001) {
       Only("io/dmx"));
   ExpectCaught(r, "DMC-DMX-001");
   ExpectMustsFailed(r, {"DMC-DMX-001"});
+}
+
+TEST(DmcLinkProofs, ARampThatSwitchesAtOnceIsCaughtByDmx002) {
+  const RunReport r = RunBroken(PassThrough, Only("io/dmx"), "",
+                                Rewrite<dmc::Dmx>([](dmc::Dmx& d) { d.ramp = 0; }));
+  ExpectCaught(r, "DMC-DMX-002");
+  ExpectMustsFailed(r, {});
+}
+
+// MOTOR_STATUS with DMX STATUS 1 from the first that showed a ramp on.
+Breakage DmxStatusStuck() {
+  auto stuck = std::make_shared<bool>(false);
+  return [stuck](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+    const auto m = dmc::DecodeDeviceMessage(f.type, f.data);
+    if (const auto* st = m.ok() ? std::get_if<dmc::MotorStatusResponse>(&m.value()) : nullptr) {
+      *stuck = *stuck || st->dmx_adjusting == 1;
+      if (*stuck) {
+        dmc::MotorStatusResponse changed = *st;
+        changed.dmx_adjusting = 1;
+        raw = dmc::Encode(f.id, dmc::DeviceMessage{changed});
+      }
+    }
+    out.Write(raw);
+  };
+}
+
+TEST(DmcLinkProofs, ADmxStatusThatNeverSettlesIsCaughtByDmx003) {
+  const RunReport r = RunBroken(DmxStatusStuck(), Only("io/dmx"));
+  ExpectCaught(r, "DMC-DMX-003");
+  // The immediate set after it still reads adjusting: DMC-DMX-004, a SHOULD.
+  ExpectMustsFailed(r, {"DMC-DMX-003"});
+}
+
+TEST(DmcLinkProofs, AnImmediateSetThatRampsIsCaughtByDmx004) {
+  const RunReport r = RunBroken(PassThrough, Only("io/dmx"), "",
+                                Rewrite<dmc::Dmx>([](dmc::Dmx& d) { d.ramp = 1; }));
+  ExpectCaught(r, "DMC-DMX-004");
+  EXPECT_EQ(r.rules.at("DMC-DMX-002").status, Status::kPass) << ConsoleReport(r, false);
+  ExpectMustsFailed(r, {});
+}
+
+TEST(DmcLinkProofs, ACorrectDmxPassesDmx002To004) {
+  const RunReport r = RunBroken(PassThrough, Only("io/dmx"));
+  for (const char* rule : {"DMC-DMX-002", "DMC-DMX-003", "DMC-DMX-004"}) {
+    EXPECT_EQ(r.rules.at(rule).status, Status::kPass) << rule << "\n" << ConsoleReport(r, false);
+  }
 }
 
 }  // namespace

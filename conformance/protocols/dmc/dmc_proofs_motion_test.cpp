@@ -932,8 +932,10 @@ TEST(Attribution, AMotorStatusThatNeverShowsMotionFailsStat004AndNothingElse) {
   const RunReport r = RunMisreading(
       {},
       [](const dmc::FrameRef& f, const dmc::HostMessage*, wire::Bytes& raw) {
-        if (Decoded<dmc::MotorStatusResponse>(f)) {
-          raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::MotorStatusResponse{0, 0}});
+        // The motor bits only: the DMX STATUS byte stays the device's.
+        if (const auto st = Decoded<dmc::MotorStatusResponse>(f)) {
+          raw =
+              dmc::Encode(f.id, dmc::DeviceMessage{dmc::MotorStatusResponse{0, st->dmx_adjusting}});
         }
       },
       RunOptions{});

@@ -44,6 +44,8 @@ bool Applies(Needs needs, const dmc::HiResponse& hi) {
       return (hi.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && hi.motor_count >= 6;
     case Needs::kAimPoint:
       return (hi.capabilities & dmc::kCapAimPoint) != 0;
+    case Needs::kCoupleMotors:
+      return (hi.capabilities & dmc::kCapCoupleMotors) != 0 && hi.motor_count >= 2;
     case Needs::kSsThreeAxes:
       return false;  // a StackShot need: no DMC v2 device has it
     default:         // another protocol's needs
