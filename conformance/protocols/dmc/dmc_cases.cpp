@@ -784,13 +784,24 @@ void HardLimit(DmcCaseContext& c) {
     const char* name;
   };
   const End ends[] = {{true, s + 50000, 1, "upper"}, {false, s - 50000, 2, "lower"}};
+  // Whether the runner can reach the switches is asked before anything moves
+  // (opening an open switch changes nothing): a motor sent off and stopped
+  // with STOP_ALL instead would put a device with a STOP_ALL lockout (the
+  // reference firmware's 2 s) into it, and the case's own SET_LIMITS after
+  // would be refused for the runner's doing.
+  const bool reachable = c.target.SetLimitInput(1, true, false) &&
+                         c.target.SetLimitInput(1, false, false);
+  if (!reachable) {
+    c.log.push_back(
+        "the target has no limit switch the runner can close: hardware limits not exercised");
+  }
   for (const End& e : ends) {
+    if (!reachable) break;
     h.Call(dmc::MotorMove{1, e.towards});
     h.Idle(300 * kMs);
     const size_t mark = h.records().size();
     if (!c.target.SetLimitInput(1, e.high, true)) {
-      c.log.push_back(
-          "the target has no limit switch the runner can close: hardware limits not exercised");
+      // Reached a moment ago: the link went meanwhile.
       h.Call(dmc::MotorStopAll{});
       WaitRest(c, kRestTimeout);
       break;

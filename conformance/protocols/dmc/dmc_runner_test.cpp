@@ -84,6 +84,55 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
   EXPECT_EQ(ExitCode(r), 1);
 }
 
+// An in-process device reached as a PTY reaches a device: no restart, no
+// e-stop, limit switches or inputs the runner can drive; still virtual time.
+class WithoutControl final : public Target {
+ public:
+  explicit WithoutControl(std::unique_ptr<InProcessTarget> inner) : inner_(std::move(inner)) {}
+  std::string Name() const override { return inner_->Name() + " (no control)"; }
+  bool VirtualClock() const override { return true; }
+  bool CanRestart() const override { return false; }
+  std::optional<std::string> Open() override { return inner_->Open(); }
+  void Restart() override {
+    wire::Bytes unread;
+    inner_->Receive(inner_->Now(), unread);
+  }
+  TimeNs Now() const override { return inner_->Now(); }
+  bool Send(wire::ByteView bytes) override { return inner_->Send(bytes); }
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override {
+    return inner_->Receive(deadline_ns, out);
+  }
+
+ private:
+  std::unique_ptr<InProcessTarget> inner_;
+};
+
+// Over a PTY the runner cannot close a limit switch; limits/hard used to send
+// a motor off and stop it with STOP_ALL anyway, and the reference firmware's
+// 2 s lockout after that refused the case's own SET_LIMITS (DMC-CFG-005, a
+// MUST failed for the runner's doing). Without the control channel the
+// reference firmware fails no rule it does not fail in-process.
+TEST(Runner, TheReferenceFirmwareWithoutAControlChannelFailsNothingMore) {
+  WithoutControl target(
+      InProcessTarget::ForModel("dmc16", SourceDir() + "/fixtures/profiles/dmc-lite.json"));
+  ASSERT_FALSE(target.Open().has_value());
+  const RunReport r = RunDmc(target, {});
+  const std::set<std::string> may_fail = {
+      "DMC-ACK-008", "DMC-MOVE-001", "DMC-MOVE-002", "DMC-GIO-001", "DMC-GM-001",  "DMC-GM-002",
+      "DMC-CFG-004", "DMC-LIM-001",  "DMC-LIM-002",  "DMC-LIM-006", "DMC-ACK-010", "DMC-ACK-011"};
+  std::set<std::string> failed;
+  for (const auto& [id, s] : r.rules) {
+    if (s.status == Status::kFail) failed.insert(id);
+  }
+  for (const std::string& id : failed) {
+    EXPECT_TRUE(may_fail.count(id)) << id << " failed\n" << ConsoleReport(r, false);
+  }
+  EXPECT_EQ(r.rules.at("DMC-CFG-005").status, Status::kPass) << ConsoleReport(r, false);
+  // The control channel's rules are left unjudged, never failed.
+  EXPECT_EQ(r.rules.at("DMC-LIM-007").status, Status::kNotExercised);
+  EXPECT_EQ(r.rules.at("DMC-GIO-005").status, Status::kNotExercised);
+}
+
 TEST(Runner, EveryRuleHoldsForTheEmulatedDmc16) {
   const RunReport report = RunInProcess();
   ASSERT_TRUE(report.device_info.contains("name"));
