@@ -234,8 +234,11 @@ const std::vector<Rule> kStackshotRules = {
      "10.0 mm are issued back to back, the rail will move 20.0 mm total.",
      "1.1.3 StackShot_Move"},
     {"SS-MOVE-002", L::kMust, N::kNothing,
-     "CC_RAIL_MOVE while the rail moves is refused BUSY and the move under way is unchanged",
-     "COMM_STATUS_BUSY StackShot is currently moving. The move request was rejected.",
+     "CC_RAIL_MOVE while the rail moves is either refused BUSY, the move under way unchanged, or "
+     "accepted and added to the target; nothing else",
+     "The move command is relative from the target position of the rail. If two move commands of "
+     "10.0 mm are issued back to back, the rail will move 20.0 mm total. ... COMM_STATUS_BUSY "
+     "StackShot is currently moving. The move request was rejected.",
      "1.1.3 StackShot_Move"},
     {"SS-MOVE-003", L::kMust, N::kNothing,
      "CC_RAIL_MOVE_AT_SPEED moves the distance from the rail's immediate position",
@@ -254,6 +257,11 @@ const std::vector<Rule> kStackshotRules = {
      "negative distance is BAD_PARAM)",
      "direction Direction to move the rail. Valid values are: COMM_RAIL_DIR_FWD ... "
      "COMM_RAIL_DIR_BACK",
+     "1.1.3 StackShot_Move"},
+    {"SS-MOVE-007", L::kNote, N::kNothing,
+     "CC_RAIL_MOVE while the rail moves is refused BUSY (the reading taken: the return value's), "
+     "not added to the target (the summary's back-to-back reading)",
+     "COMM_STATUS_BUSY StackShot is currently moving. The move request was rejected.",
      "1.1.3 StackShot_Move"},
     {"SS-STOP-001", L::kMust, N::kNothing,
      "CC_RAIL_STOP during a long move is accepted and the rail comes to rest short of its target",
