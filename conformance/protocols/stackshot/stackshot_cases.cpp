@@ -308,7 +308,7 @@ void MoveCase(SsCaseContext& c) {
   const bool rested = SsWaitRest(h, {0}, kRestTimeout);
   Expect(c, "SS-STATUS-002", rested, "MOVING clear once the move ends", "still moving");
   auto p1 = SsPositionSteps(h, 0);
-  const int32_t added = second == Action::kRspOk ? 500 : 0;
+  const int64_t added = second == Action::kRspOk ? 500 : 0;
   if (second != Action::kRspOk) {
     Expect(c, "SS-MOVE-001", p1 && *p1 == *p0 + 1600, "at rest on " + std::to_string(*p0 + 1600),
            Steps(p1));
@@ -322,7 +322,7 @@ void MoveCase(SsCaseContext& c) {
   }
   // Back to back: a second move adds up. Judged from where the rail rests,
   // so a fault above is not counted again.
-  const int32_t at = p1 ? *p1 : *p0 + 1600 + added;
+  const int64_t at = p1 ? *p1 : *p0 + 1600 + added;
   ExpectOk(c, "SS-MOVE-001", h.Call(Move(0, 1600)));
   SsWaitRest(h, {0}, kRestTimeout);
   p1 = SsPositionSteps(h, 0);
