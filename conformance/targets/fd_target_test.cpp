@@ -6,6 +6,7 @@
 #include <netinet/in.h>
 #include <pty.h>
 #include <sys/socket.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <memory>
 #include <thread>
 
+#include "base/termios_speed.h"
 #include "conformance/core/report.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
 #include "conformance/targets/target.h"
@@ -195,6 +197,26 @@ std::unique_ptr<FdTarget> TargetOnAClosedPty() {
   close(slave);
   close(master);
   return opened ? std::move(t) : nullptr;
+}
+
+// A serial: target takes every rate the serial driver names (the one table in
+// emulator/base/termios_speed.h), and sets it on the line: 4800 and 500000
+// were refused while the target kept a shorter table of its own.
+TEST(FdTarget, EveryRateTheDriverNamesIsSetOnTheLine) {
+  for (const uint32_t baud : {4800u, 57600u, 500000u}) {
+    int master = -1;
+    int slave = -1;
+    char name[256] = {};
+    ASSERT_EQ(openpty(&master, &slave, name, nullptr, nullptr), 0);
+    FdTarget t(FdTarget::Kind::kSerial, name, baud, "serial");
+    const auto err = t.Open();
+    EXPECT_FALSE(err.has_value()) << baud << ": " << err.value_or("");
+    termios tio{};
+    ASSERT_EQ(tcgetattr(slave, &tio), 0);
+    EXPECT_EQ(base::BaudOfTermiosSpeed(cfgetospeed(&tio)), std::optional<uint32_t>(baud)) << baud;
+    close(slave);
+    close(master);
+  }
 }
 
 // The emulator serving a PTY dies mid-run: reading the PTY then gives end of

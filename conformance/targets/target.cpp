@@ -19,6 +19,7 @@
 #include <cstring>
 #include <exception>
 
+#include "base/termios_speed.h"
 #include "devices/registry.h"
 #include "devices/stackshot3x/stackshot3x.h"
 #include "sim/io.h"
@@ -38,29 +39,6 @@ int64_t SteadyNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
-}
-
-std::optional<speed_t> BaudConstant(uint32_t baud) {
-  switch (baud) {
-    case 9600:
-      return B9600;
-    case 19200:
-      return B19200;
-    case 38400:
-      return B38400;
-    case 57600:
-      return B57600;
-    case 115200:
-      return B115200;
-    case 230400:
-      return B230400;
-    case 460800:
-      return B460800;
-    case 921600:
-      return B921600;
-    default:
-      return std::nullopt;
-  }
 }
 
 }  // namespace
@@ -196,11 +174,8 @@ std::string FdTarget::NotADevice(const struct stat& st) const {
 
 std::optional<std::string> FdTarget::Open() {
   if (kind_ == Kind::kSerial) {
-    const std::optional<speed_t> speed = BaudConstant(baud_);
-    if (!speed) {
-      return "unsupported baud rate " + std::to_string(baud_) +
-             "; use one of 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600";
-    }
+    const std::optional<speed_t> speed = base::TermiosSpeed(baud_);
+    if (!speed) return base::NonStandardBaudHint(baud_);
     // Never O_CREAT or O_TRUNC, and nothing is written before the path is
     // known to be a terminal, a character device or a socket: a regular file
     // given by mistake is left as it was.

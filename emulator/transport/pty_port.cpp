@@ -12,6 +12,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "base/termios_speed.h"
+
 namespace moco::transport {
 namespace {
 
@@ -58,16 +60,6 @@ std::string LinkErrorHint(int err) {
       return "";
   }
 }
-
-struct SpeedName {
-  uint32_t baud;
-  speed_t speed;
-};
-constexpr SpeedName kSpeeds[] = {
-    {1200, B1200},       {2400, B2400},       {4800, B4800},       {9600, B9600},
-    {19200, B19200},     {38400, B38400},     {57600, B57600},     {115200, B115200},
-    {230400, B230400},   {460800, B460800},   {500000, B500000},   {921600, B921600},
-    {1000000, B1000000}, {2000000, B2000000}, {3000000, B3000000}, {4000000, B4000000}};
 
 }  // namespace
 
@@ -269,23 +261,17 @@ void PtyPort::OnInotify(const ErrorCode& ec, size_t n) {
 uint32_t PtyPort::LineBaud() const {
   termios t{};
   if (slave_fd_ < 0 || tcgetattr(slave_fd_, &t) != 0) return 0;
-  const speed_t speed = cfgetospeed(&t);
-  for (const SpeedName& s : kSpeeds) {
-    if (s.speed == speed) return s.baud;
-  }
-  return 0;
+  return base::BaudOfTermiosSpeed(cfgetospeed(&t)).value_or(0);
 }
 
 bool PtyPort::SetLineBaud(uint32_t baud) {
   termios t{};
   if (slave_fd_ < 0 || tcgetattr(slave_fd_, &t) != 0) return false;
-  for (const SpeedName& s : kSpeeds) {
-    if (s.baud != baud) continue;
-    cfsetispeed(&t, s.speed);
-    cfsetospeed(&t, s.speed);
-    return tcsetattr(slave_fd_, TCSANOW, &t) == 0;
-  }
-  return false;
+  const std::optional<speed_t> speed = base::TermiosSpeed(baud);
+  if (!speed) return false;
+  cfsetispeed(&t, *speed);
+  cfsetospeed(&t, *speed);
+  return tcsetattr(slave_fd_, TCSANOW, &t) == 0;
 }
 
 void PtyPort::Stop() {

@@ -12,85 +12,14 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "base/termios_speed.h"
+
 namespace moco::transport {
 namespace {
 
-std::optional<speed_t> SpeedOf(uint32_t baud) {
-  switch (baud) {
-    case 50:
-      return B50;
-    case 75:
-      return B75;
-    case 110:
-      return B110;
-    case 134:
-      return B134;
-    case 150:
-      return B150;
-    case 200:
-      return B200;
-    case 300:
-      return B300;
-    case 600:
-      return B600;
-    case 1200:
-      return B1200;
-    case 1800:
-      return B1800;
-    case 2400:
-      return B2400;
-    case 4800:
-      return B4800;
-    case 9600:
-      return B9600;
-    case 19200:
-      return B19200;
-    case 38400:
-      return B38400;
-    case 57600:
-      return B57600;
-    case 115200:
-      return B115200;
-    case 230400:
-      return B230400;
-    case 460800:
-      return B460800;
-    case 500000:
-      return B500000;
-    case 576000:
-      return B576000;
-    case 921600:
-      return B921600;
-    case 1000000:
-      return B1000000;
-    case 1152000:
-      return B1152000;
-    case 1500000:
-      return B1500000;
-    case 2000000:
-      return B2000000;
-    case 2500000:
-      return B2500000;
-    case 3000000:
-      return B3000000;
-    case 3500000:
-      return B3500000;
-    case 4000000:
-      return B4000000;
-    default:
-      return std::nullopt;
-  }
-}
-
-std::string BaudHint(uint32_t baud) {
-  return "baud rate " + std::to_string(baud) +
-         " is not one the serial driver can set; use a standard rate such as 38400, 57600 or "
-         "115200";
-}
-
 std::optional<std::string> Apply(int fd, uint32_t baud, bool rtscts) {
-  const std::optional<speed_t> speed = SpeedOf(baud);
-  if (!speed) return BaudHint(baud);
+  const std::optional<speed_t> speed = base::TermiosSpeed(baud);
+  if (!speed) return base::NonStandardBaudHint(baud);
   termios t{};
   if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);
   cfmakeraw(&t);
@@ -120,12 +49,13 @@ bool SetLowLatency(int fd) {
 
 }  // namespace
 
-bool IsStandardBaud(uint32_t baud) { return SpeedOf(baud).has_value(); }
+bool IsStandardBaud(uint32_t baud) { return base::TermiosSpeed(baud).has_value(); }
 
 std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std::string& path,
                                                  const SerialSettings& settings) {
   if (!IsStandardBaud(settings.baud)) {
-    throw std::runtime_error("serial port " + path + ": " + BaudHint(settings.baud));
+    throw std::runtime_error("serial port " + path + ": " +
+                             base::NonStandardBaudHint(settings.baud));
   }
   const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
@@ -155,8 +85,8 @@ std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std
 }
 
 std::optional<std::string> SerialStream::SetBaud(uint32_t baud) {
-  const std::optional<speed_t> speed = SpeedOf(baud);
-  if (!speed) return BaudHint(baud);
+  const std::optional<speed_t> speed = base::TermiosSpeed(baud);
+  if (!speed) return base::NonStandardBaudHint(baud);
   const int fd = stream().native_handle();
   termios t{};
   if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);
