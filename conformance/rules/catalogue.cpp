@@ -420,6 +420,44 @@ const std::vector<Rule> kRules = {
     {"DMC-DMX-004", L::kShould, N::kDmx,
      "MSG_DMX with RAMP 0 switches at once: MOTOR_STATUS right after it reports DMX STATUS 0",
      "RAMP BYTE 1=ramp, 0=immediate", "MSG_DMX"},
+    {"DMC-DMX-005", L::kMust, N::kRtDmx,
+     "RT_UPLOAD_MOVE_DMX sections of channels within DMX COUNT and frames within the upload are "
+     "acknowledged OK",
+     "If the device advertises real-time capabilities, Dragonframe expects it to handle the "
+     "following commands: ... MSG_RT_UPLOAD_MOVE_DMX (only if the device also support DMX)",
+     "Real-time Moves; MSG_RT_UPLOAD_MOVE_DMX"},
+    {"DMC-DMX-006", L::kShould, N::kRtDmx,
+     "RT_UPLOAD_MOVE_DMX for channel 0, a channel past DMX COUNT or frames past END FRAME is "
+     "refused with ERR_RANGE",
+     "CHANNEL WORD The DMX channel ... ERR_RANGE 0x0014 A parameter was out of range",
+     "MSG_RT_UPLOAD_MOVE_DMX; MSG_FLAG_ACK"},
+    {"DMC-DMX-007", L::kMust, N::kRtDmx,
+     "RT_POSITION_FRAME sets the uploaded DMX channels to their levels at that frame (observed "
+     "in-process)",
+     "Instructs the device to send all motors (and DMX if applicable) to the uploaded frame "
+     "position.",
+     "MSG_RT_POSITION_FRAME"},
+    {"DMC-DMX-008", L::kMust, N::kRtDmx,
+     "After a channel's last set of DMX data its final level repeats until END FRAME (observed "
+     "in-process)",
+     "If the high bit is set (0x80000000), then this is the last set of DMX data for this channel. "
+     "That means the device must repeat the final value until the end of the uploaded move frame "
+     "range",
+     "MSG_RT_UPLOAD_MOVE_DMX"},
+    {"DMC-DMX-009", L::kMust, N::kRtDmx,
+     "During a live run with SYNC DMX 1 the uploaded channels hold each frame's uploaded level "
+     "when the frame is reported (observed in-process)",
+     "SYNC DMX BYTE 1=Play back upload DMX, 0=don't play DMX", "MSG_RT_RUN_MOVE"},
+    {"DMC-DMX-010", L::kShould, N::kRtDmx,
+     "A live run with SYNC DMX 0 leaves the DMX channels at the levels MSG_DMX set (observed "
+     "in-process)",
+     "SYNC DMX BYTE 1=Play back upload DMX, 0=don't play DMX", "MSG_RT_RUN_MOVE"},
+    {"DMC-DMX-011", L::kNote, N::kRtDmx,
+     "BLOOP DMX CHANNEL goes to full level (255) once during the run for about BLOOP TIME, then "
+     "back (observed in-process)",
+     "BLOOP DMX CHANNEL WORD 0=None, 1-512 = a channel for the BLOOP; BLOOP TIME WORD Bloop time "
+     "(approx) in ms",
+     "MSG_RT_RUN_MOVE"},
 
     // --- Real-time moves ---
     {"DMC-RT-001", L::kMust, N::kRealTime,
@@ -493,6 +531,74 @@ const std::vector<Rule> kRules = {
      "A motor sent to an uploaded frame reads exactly the uploaded position (the reference "
      "firmware can read one step short: 199 for 200)",
      "a position read after an upload can be one step short (199 for 200)", "FACTS DMC v2"},
+    {"DMC-RT-017", L::kShould, N::kRtTriggers,
+     "RT_UPLOAD_MOVE_TRIGGERS with frame indices within the upload is acknowledged OK",
+     "MSG_RT_UPLOAD_MOVE_TRIGGERS [0x0104] Introduced in Protocol: 2 Send a section of trigger "
+     "data. Only sent if the DMX program has triggers.",
+     "MSG_RT_UPLOAD_MOVE_TRIGGERS"},
+    {"DMC-RT-018", L::kShould, N::kRtTriggers,
+     "RT_UPLOAD_MOVE_TRIGGERS with a frame index past the upload is refused with ERR_RANGE",
+     "FRAME DWORD Frame index (frame - start) ... ERR_RANGE 0x0014 A parameter was out of range",
+     "MSG_RT_UPLOAD_MOVE_TRIGGERS; MSG_FLAG_ACK"},
+    {"DMC-RT-019", L::kShould, N::kRtTriggers,
+     "During a live run with SYNC DMX 1 the GIO outputs under MASK hold each frame's uploaded "
+     "trigger values (0 where none was sent) (observed in-process)",
+     "MASK DWORD The trigger mask ... Only sends frame/value pairs where one or more triggers is "
+     "on. ... VALUES DWORD Trigger values",
+     "MSG_RT_UPLOAD_MOVE_TRIGGERS"},
+    {"DMC-RT-020", L::kShould, N::kRtTriggers,
+     "The GIO outputs of BLOOP LOCATION turn on once during the run for about BLOOP TIME "
+     "(observed in-process)",
+     "BLOOP LOCATION DWORD GIO Outputs for \"bloop\" signal ... BLOOP TIME WORD Bloop time "
+     "(approx) in ms",
+     "MSG_RT_RUN_MOVE"},
+    {"DMC-RT-021", L::kMust, N::kRtCamera,
+     "RT_RUN_MOVE with camera FLAGS (0x10 video, 0x20 stills with angles) is acknowledged OK, "
+     "GO is OK and RT_END follows the run",
+     "FLAGS WORD Only set if capability 0x0200 (real-time looping) or 0x0400 (real-time camera) "
+     "are set. ... 0x10 is camera trigger at start/stop of move (video) 0x20 is camera trigger for "
+     "every frame (stills)",
+     "MSG_RT_RUN_MOVE; Capabilities"},
+    {"DMC-RT-022", L::kMust, N::kRtCamera,
+     "With FLAGS 0x20 (stills) the camera shutter fires once for every frame of the run, start "
+     "and end frames included (observed in-process)",
+     "0x20 is camera trigger for every frame (stills)", "MSG_RT_RUN_MOVE"},
+    {"DMC-RT-023", L::kShould, N::kRtCamera,
+     "A stills exposure is open from CAMERA OPEN ANGLE to CAMERA CLOSE ANGLE of its frame's "
+     "interval (observed in-process, within a tenth of a frame)",
+     "CAMERA OPEN ANGLE WORD Only used if camera trigger for every frame, 0-360 degrees; CAMERA "
+     "CLOSE ANGLE WORD Only used if camera trigger for every frame, 0-360 degrees",
+     "MSG_RT_RUN_MOVE"},
+    {"DMC-RT-024", L::kShould, N::kRtCamera,
+     "RT_RUN_MOVE with stills and a camera angle past 360 is refused with ERR_RANGE",
+     "CAMERA OPEN ANGLE WORD ... 0-360 degrees ... ERR_RANGE 0x0014 A parameter was out of range",
+     "MSG_RT_RUN_MOVE; MSG_FLAG_ACK"},
+    {"DMC-RT-025", L::kShould, N::kRtCamera,
+     "With FLAGS 0x10 (video) the shutter line is pressed once as the run reaches its start "
+     "frame and once at its end frame (observed in-process)",
+     "0x10 is camera trigger at start/stop of move (video)", "MSG_RT_RUN_MOVE"},
+    {"DMC-RT-026", L::kShould, N::kRealTime,
+     "RT_RUN_MOVE whose pre-roll would take a motor past an enabled soft limit is refused with "
+     "ERR_PREROLL",
+     "ERR_PREROLL 0x0017 A real-time move preroll failed, usually because preroll would send "
+     "motors past limits.",
+     "MSG_FLAG_ACK; MSG_RT_RUN_MOVE"},
+    {"DMC-RT-027", L::kShould, N::kRealTime,
+     "RT_RUN_MOVE whose post-roll would take a motor past an enabled soft limit is refused with "
+     "ERR_POSTROLL",
+     "ERR_POSTROLL 0x0018 A real-time move postroll failed, usually because a limit check failed.",
+     "MSG_FLAG_ACK; MSG_RT_RUN_MOVE"},
+    {"DMC-RT-028", L::kMust, N::kRealTime,
+     "An RT_RUN_MOVE refused for its pre- or post-roll leaves every motor where it was",
+     "The rig must move into a pre-roll position that it calculates ... ERR_PREROLL ... preroll "
+     "would send motors past limits",
+     "MSG_RT_RUN_MOVE; MSG_FLAG_ACK"},
+    {"DMC-RT-029", L::kMust, N::kRealTime,
+     "RT_RUN_MOVE whose pre-roll and post-roll stay within enabled soft limits is acknowledged OK "
+     "and runs",
+     "Prepares the device to run a section of the move live. The rig must move into a pre-roll "
+     "position that it calculates",
+     "MSG_RT_RUN_MOVE"},
     {"DMC-GM-001", L::kMust, N::kGoMotion,
      "RT_SHOOT_FRAME then RT_GO are acknowledged OK and RT_END follows the exposure",
      "Set up a blur-motion frame capture", "MSG_RT_SHOOT_FRAME; MSG_RT_END"},
@@ -614,6 +720,12 @@ std::string_view NeedsText(Needs needs) {
       return "capability 0x0040 (aim point)";
     case Needs::kCoupleMotors:
       return "capability 0x0100 (couple motors), MOTOR COUNT >= 2";
+    case Needs::kRtDmx:
+      return "capability 0x0001 (real-time), DMX COUNT >= 1";
+    case Needs::kRtTriggers:
+      return "capability 0x0001 (real-time), GIO OUT COUNT >= 1";
+    case Needs::kRtCamera:
+      return "capabilities 0x0001 (real-time) and 0x0400 (camera trigger)";
     case Needs::kSsThreeAxes:
       return "axes X, Y and Z (StackShot 3X)";
     case Needs::kDfmMotors:

@@ -46,6 +46,9 @@ enum class Needs {
   kVirtualBoomRig,  // capability 0x0004 (boom-swing-track) and MOTOR COUNT >= 6
   kAimPoint,        // capability 0x0040
   kCoupleMotors,    // capability 0x0100 and MOTOR COUNT >= 2
+  kRtDmx,           // capability 0x0001, MOTOR COUNT >= 1 and DMX COUNT >= 1
+  kRtTriggers,      // capability 0x0001, MOTOR COUNT >= 1 and GIO OUT COUNT >= 1
+  kRtCamera,        // capabilities 0x0001 and 0x0400 (camera trigger), MOTOR COUNT >= 1
   // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
   kDfmMotors,       // `hi` number of axes >= 1
   kDfmTwoMotors,    // `hi` number of axes >= 2

@@ -64,6 +64,21 @@ TEST(Catalogue, ApplicabilityFollowsTheHiDescription) {
   EXPECT_TRUE(Applies(*FindRule("DMC-RT-004"), rt));
   EXPECT_FALSE(Applies(*FindRule("DMC-GM-001"), rt));
   EXPECT_TRUE(Applies(*FindRule("DMC-ERR-010"), rt));
+  // The real-time outputs: DMX channels, GIO outputs, the camera capability.
+  EXPECT_FALSE(Applies(*FindRule("DMC-DMX-005"), rt));
+  EXPECT_FALSE(Applies(*FindRule("DMC-RT-017"), rt));
+  EXPECT_FALSE(Applies(*FindRule("DMC-RT-021"), rt));
+  EXPECT_TRUE(Applies(*FindRule("DMC-RT-026"), rt));
+  dmc::HiResponse io = rt;
+  io.dmx_count = 4;
+  io.gio_out_count = 1;
+  io.capabilities |= dmc::kCapRtCameraTrigger;
+  EXPECT_TRUE(Applies(*FindRule("DMC-DMX-005"), io));
+  EXPECT_TRUE(Applies(*FindRule("DMC-RT-017"), io));
+  EXPECT_TRUE(Applies(*FindRule("DMC-RT-021"), io));
+  io.capabilities &= ~dmc::kCapRealTime;
+  EXPECT_FALSE(Applies(*FindRule("DMC-DMX-005"), io));
+  EXPECT_FALSE(Applies(*FindRule("DMC-RT-021"), io));
   rt.capabilities |= dmc::kCapVirtXyz;
   EXPECT_FALSE(Applies(*FindRule("DMC-ERR-010"), rt));
   EXPECT_TRUE(Applies(*FindRule("DMC-VIRT-001"), rt));

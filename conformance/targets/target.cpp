@@ -142,6 +142,11 @@ bool InProcessTarget::SetGioInput(int bit, bool level) {
   return true;
 }
 
+DeviceOutputs InProcessTarget::Outputs() const {
+  if (!device_) return {};
+  return DeviceOutputs{device_->dmx_out(), device_->gio(), device_->camera_out()};
+}
+
 // --- FdTarget ------------------------------------------------------------------------
 
 FdTarget::FdTarget(Kind kind, std::string address, uint32_t baud, std::string scheme)

@@ -16,12 +16,22 @@
 
 #include "conformance/targets/simavr_pins.h"
 #include "devices/device.h"
+#include "sim/io.h"
 #include "sim/scheduler.h"
 #include "wire/bytes.h"
 
 namespace moco::conformance {
 
 using sim::TimeNs;
+
+// The outputs of a device that the runner can read where it reaches the
+// device (in-process): its DMX universe, general I/O outputs and camera lines
+// (with their edges). Each is null when the target cannot observe it.
+struct DeviceOutputs {
+  const sim::DmxUniverse* dmx = nullptr;
+  const sim::GioPort* gio = nullptr;
+  const sim::CameraPort* camera = nullptr;
+};
 
 // Carries bytes both ways and keeps the clock timing rules are judged on.
 // One thread uses a Target.
@@ -61,6 +71,9 @@ class Target {
   // Drives general I/O input `bit` (0-based) to `level`, as a wired trigger
   // would (in-process only). False when it cannot.
   virtual bool SetGioInput(int /*bit*/, bool /*level*/) { return false; }
+  // What the runner can read of the device's outputs now (in-process only);
+  // all null when it cannot observe them (an external device).
+  virtual DeviceOutputs Outputs() const { return {}; }
 
   // Why the link is gone for good (the device closed the connection, a
   // write or read failed), or nullopt while it is up. A lost link makes the
@@ -114,6 +127,7 @@ class InProcessTarget final : public Target {
   bool SetEStop(bool engaged) override;
   bool SetLimitInput(int set, bool high, bool active) override;
   bool SetGioInput(int bit, bool level) override;
+  DeviceOutputs Outputs() const override;
 
   // The device under test (null before Open()).
   devices::Device* device() { return device_.get(); }

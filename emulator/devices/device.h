@@ -17,6 +17,8 @@
 namespace moco::sim {
 class Rig;
 class GioPort;
+class DmxUniverse;
+class CameraPort;
 }  // namespace moco::sim
 
 namespace moco::devices {
@@ -74,6 +76,11 @@ class Device {
   // channel (e-stop, limit switches, inputs). Null when the device has none.
   virtual sim::Rig* rig() { return nullptr; }
   virtual sim::GioPort* gio() { return nullptr; }
+  // The DMX universe and the camera lines the device drives, for an observer
+  // in the same process (the conformance runner's in-process target). Null
+  // when the device has none.
+  virtual const sim::DmxUniverse* dmx_out() const { return nullptr; }
+  virtual const sim::CameraPort* camera_out() const { return nullptr; }
   // A snapshot of the device's state (positions, motion, I/O, mode) for the
   // control channel's "state" query and for logs. An object; {} when none.
   virtual nlohmann::json State() const { return nlohmann::json::object(); }

@@ -59,6 +59,9 @@ class BrokenDmc16 final : public devices::Device {
   // The control channel reaches the real device (e-stop, limit switches, inputs).
   sim::Rig* rig() override { return inner_->rig(); }
   sim::GioPort* gio() override { return inner_->gio(); }
+  // The runner reads the real device's outputs (DMX, camera lines).
+  const sim::DmxUniverse* dmx_out() const override { return inner_->dmx_out(); }
+  const sim::CameraPort* camera_out() const override { return inner_->camera_out(); }
 
  private:
   InputBreakage in_;

@@ -69,6 +69,24 @@ inline constexpr TimeNs kRestTimeout = 60'000 * kMs;
 // Moves `motor` to `to` and waits until nothing moves.
 void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to);
 
+// --- the real-time uploads and runs the cases share (dmc_cases_rt.cpp)
+struct Uploaded {
+  std::vector<std::vector<int32_t>> path;  // [motor-1][frame]: positions at frames 0..end
+  uint32_t end = 0;
+};
+// Uploads frames 0..20 (fewer when the device holds fewer): motor 1 climbs 40
+// steps a frame and motor 2 falls 25 a frame over frames 0..10, then both
+// hold. `more` sends further sections (DMX, triggers) before
+// UPLOAD_MOVE_END; every ACK is judged by DMC-RT-001. Nullopt when the
+// positions cannot be read.
+std::optional<Uploaded> Upload(DmcCaseContext& c,
+                               const std::function<void(uint32_t end)>& more = {});
+// RT_POSITION_FRAME `frame` (judged by `rule`), then the rig at rest on it.
+bool AtFrame(DmcCaseContext& c, const Uploaded& u, uint32_t frame, std::string_view rule);
+// RT_RUN_MOVE of frames 0..end at 24 fps, 500 ms pre- and post-roll, in the
+// 29-byte form (no FLAGS, no camera angles).
+dmc::RtRunMove ShortRun(uint32_t end);
+
 // --- the real-time, go-motion, looping and virtual-axis cases (dmc_cases_rt.cpp)
 void UploadPosition(DmcCaseContext& c);
 void LiveRun(DmcCaseContext& c);
@@ -83,6 +101,15 @@ void VirtMoveReadBack(DmcCaseContext& c);
 void VirtStopShort(DmcCaseContext& c);
 void VirtJogs(DmcCaseContext& c);
 void VirtAim(DmcCaseContext& c);
+
+// --- the real-time outputs: DMX, triggers, bloop, camera, pre-/post-roll
+// (dmc_cases_rt_io.cpp)
+void UploadDmx(DmcCaseContext& c);
+void SyncRun(DmcCaseContext& c);
+void Triggers(DmcCaseContext& c);
+void CameraStills(DmcCaseContext& c);
+void CameraVideo(DmcCaseContext& c);
+void RollLimits(DmcCaseContext& c);
 
 }  // namespace moco::conformance::dmc_cases
 

@@ -18,15 +18,11 @@ using dmc::ToWire;
 
 // ---------------------------------------------------------------- real-time
 
-struct Uploaded {
-  std::vector<std::vector<int32_t>> path;  // [motor-1][frame]: positions at frames 0..end
-  uint32_t end = 0;
-};
-
 // Uploads frames 0..20 (fewer when the device holds fewer: HI UPLOAD FRAME
 // COUNT): motor 1 climbs 40 steps a frame and motor 2 falls 25 a frame over
-// frames 0..10 (last set), then both hold.
-std::optional<Uploaded> Upload(DmcCaseContext& c) {
+// frames 0..10 (last set), then both hold. `more` sends further sections
+// (DMX, triggers) before UPLOAD_MOVE_END.
+std::optional<Uploaded> Upload(DmcCaseContext& c, const std::function<void(uint32_t end)>& more) {
   DmcHost& h = c.host;
   const auto p0 = GetPositions(h);
   if (!p0) return std::nullopt;
@@ -44,6 +40,7 @@ std::optional<Uploaded> Upload(DmcCaseContext& c) {
     while (path.size() <= u.end) path.push_back(section.back());
     u.path.push_back(path);
   }
+  if (more) more(u.end);
   ExpectOk(c, "DMC-RT-001", h.Call(dmc::RtUploadMoveEnd{}));
   return u;
 }

@@ -46,6 +46,12 @@ bool Applies(Needs needs, const dmc::HiResponse& hi) {
       return (hi.capabilities & dmc::kCapAimPoint) != 0;
     case Needs::kCoupleMotors:
       return (hi.capabilities & dmc::kCapCoupleMotors) != 0 && hi.motor_count >= 2;
+    case Needs::kRtDmx:
+      return Applies(Needs::kRealTime, hi) && hi.dmx_count >= 1;
+    case Needs::kRtTriggers:
+      return Applies(Needs::kRealTime, hi) && hi.gio_out_count >= 1;
+    case Needs::kRtCamera:
+      return Applies(Needs::kRealTime, hi) && (hi.capabilities & dmc::kCapRtCameraTrigger) != 0;
     case Needs::kSsThreeAxes:
       return false;  // a StackShot need: no DMC v2 device has it
     default:         // another protocol's needs

@@ -70,6 +70,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
   void OnHostLink(bool open) override;
   sim::Rig* rig() override { return &rig_; }
   sim::GioPort* gio() override { return &gio_; }
+  const sim::DmxUniverse* dmx_out() const override { return &dmx_; }
+  const sim::CameraPort* camera_out() const override { return &camera_; }
   nlohmann::json State() const override;
 
   // --- observation (tests, control channel) ---
