@@ -286,6 +286,26 @@ mococheck_cli_stackshot_dfmoco_in_process)
   expect_rc 0 "$m" run --help
   grep -q -- '--dialect' out.txt || fail "--help does not list --dialect"
   ;;
+# `mocosim stackshot3x` on a PTY, switched to DfMoco mode by the binary
+# protocol's CC_RAIL_CONFIG_GLOBAL_MODE write (0x109E, GLOBAL_MODE_MOTION_DFMOCO
+# = 8; acknowledged in the binary dialect, then the line speaks DfMoco), then
+# certified through --protocol dfmoco: the StackShot dialect detected.
+mococheck_cli_stackshot_dfmoco_pty)
+  "$sim" stackshot3x --pty "$work/dev" --state "$work/nvm.json" >sim.log 2>&1 &
+  sim_pid=$!
+  pids="$pids $sim_pid"
+  wait_for test -L "$work/dev" || fail "no PTY"
+  stty -F "$work/dev" raw -echo || fail "stty failed on the PTY"
+  printf '\125\020\236\001\001\010\000' >"$work/dev"
+  timeout 1 cat "$work/dev" >ack.bin
+  [ "$(od -An -tx1 -N1 ack.bin | tr -d ' ')" = aa ] || fail "no binary acknowledgement"
+  expect_rc 0 "$m" run --target "pty:$work/dev" --protocol dfmoco -q --json pty.json \
+    --cases 'connect/hi,stackshot/mp-all,stackshot/pulse-rate,stackshot/np-zm'
+  grep -q '^result: PASS' out.txt || fail "no PASS verdict"
+  grep -q '"dialect": "stackshot3x"' pty.json || fail "the JSON report names no stackshot3x dialect"
+  kill -TERM "$sim_pid"
+  wait "$sim_pid" || fail "mocosim did not stop cleanly"
+  ;;
 mococheck_cli_dfmoco_mega)
   expect_rc 0 "$m" run --target in-process:dfmoco -q \
     --profile "$src/fixtures/profiles/dfmoco-mega.json"
