@@ -266,6 +266,46 @@ mococheck_cli_dfmoco_in_process)
   expect_rc 0 "$m" run --target in-process:dfmoco -q --junit dfm.xml --json dfm.json
   test -s dfm.xml && test -s dfm.json || fail "reports missing"
   ;;
+# A StackShot 3X in DfMoco mode (stackshot-protocol.txt section 3) certified
+# through --protocol dfmoco: the StackShot dialect detected from `hi 1 3 1.2.6`
+# and recorded in the JSON report; a bad --dialect is a usage error.
+mococheck_cli_stackshot_dfmoco_in_process)
+  expect_rc 0 "$m" run --target in-process:stackshot3x --protocol dfmoco --json ss.json
+  grep -q '^result: PASS' out.txt || fail "no PASS verdict"
+  grep -q '"dialect": "stackshot3x"' ss.json || fail "the JSON report names no stackshot3x dialect"
+  grep -q 'stackshot/mp-all' out.txt || fail "the stackshot cases did not run"
+  expect_rc 0 "$m" run --target in-process:stackshot3x --protocol dfmoco --dialect stackshot3x \
+    -q --cases 'stackshot/*' --json forced.json
+  grep -q '"dialect": "stackshot3x"' forced.json || fail "--dialect stackshot3x not recorded"
+  expect_rc 0 "$m" run --target in-process:dfmoco -q --json sketch.json
+  grep -q '"dialect": "sketch"' sketch.json || fail "the sketch's dialect not recorded"
+  expect_rc 2 "$m" run --target in-process:stackshot3x --protocol dfmoco --dialect arduino
+  grep -q 'give auto' err.txt || fail "the bad --dialect is not explained"
+  expect_rc 2 "$m" run --target in-process:dmc16 --dialect sketch
+  grep -q 'applies to --protocol dfmoco only' err.txt || fail "--dialect on DMC not refused"
+  expect_rc 0 "$m" run --help
+  grep -q -- '--dialect' out.txt || fail "--help does not list --dialect"
+  ;;
+# `mocosim stackshot3x` on a PTY, switched to DfMoco mode by the binary
+# protocol's CC_RAIL_CONFIG_GLOBAL_MODE write (0x109E, GLOBAL_MODE_MOTION_DFMOCO
+# = 8; acknowledged in the binary dialect, then the line speaks DfMoco), then
+# certified through --protocol dfmoco: the StackShot dialect detected.
+mococheck_cli_stackshot_dfmoco_pty)
+  "$sim" stackshot3x --pty "$work/dev" --state "$work/nvm.json" >sim.log 2>&1 &
+  sim_pid=$!
+  pids="$pids $sim_pid"
+  wait_for test -L "$work/dev" || fail "no PTY"
+  stty -F "$work/dev" raw -echo || fail "stty failed on the PTY"
+  printf '\125\020\236\001\001\010\000' >"$work/dev"
+  timeout 1 cat "$work/dev" >ack.bin
+  [ "$(od -An -tx1 -N1 ack.bin | tr -d ' ')" = aa ] || fail "no binary acknowledgement"
+  expect_rc 0 "$m" run --target "pty:$work/dev" --protocol dfmoco -q --json pty.json \
+    --cases 'connect/hi,stackshot/mp-all,stackshot/pulse-rate,stackshot/np-zm'
+  grep -q '^result: PASS' out.txt || fail "no PASS verdict"
+  grep -q '"dialect": "stackshot3x"' pty.json || fail "the JSON report names no stackshot3x dialect"
+  kill -TERM "$sim_pid"
+  wait "$sim_pid" || fail "mocosim did not stop cleanly"
+  ;;
 mococheck_cli_dfmoco_mega)
   expect_rc 0 "$m" run --target in-process:dfmoco -q \
     --profile "$src/fixtures/profiles/dfmoco-mega.json"

@@ -50,6 +50,8 @@ struct ResolvedTarget {
   TargetSpec spec;
   Protocol protocol = Protocol::kDmc;
   std::unique_ptr<Target> target;  // not opened yet; nullptr with in_process_only_message
+  // in-process:stackshot3x with --protocol dfmoco: the device runs in DfMoco mode.
+  bool stackshot_dfmoco = false;
 };
 
 // Parses the target, settles the protocol (a model that speaks another

@@ -67,12 +67,18 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
     if (!p) {
       return "--protocol " + request.protocol_option + ": give " + wire::NameList(kAllProtocols);
     }
-    if (model != nullptr && model->protocol != *p) {
+    // A StackShot 3X speaks DfMoco in its DfMoco mode (stackshot-protocol.txt
+    // section 3): the in-process device is then started in that mode.
+    const bool stackshot_dfmoco = model != nullptr && ts.address == "stackshot3x" &&
+                                  *p == Protocol::kDfmoco &&
+                                  request.in_process_only_message.empty();
+    if (model != nullptr && model->protocol != *p && !stackshot_dfmoco) {
       return "--protocol " + request.protocol_option + " does not match in-process:" + ts.address +
              ", which speaks " + std::string(ProtocolName(model->protocol)) +
              "; drop --protocol or pick the matching model";
     }
     out.protocol = *p;
+    out.stackshot_dfmoco = stackshot_dfmoco;
   } else if (model != nullptr) {
     out.protocol = model->protocol;
   }
@@ -81,6 +87,10 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
     return "--profile applies to in-process targets only; an external device has its own";
   }
   if (!request.in_process_only_message.empty()) return out;
+  if (out.stackshot_dfmoco) {
+    out.target = InProcessTarget::ForModel(ts.address, request.profile, true);
+    return out;
+  }
   auto made = MakeTarget(ts, request.profile,
                          request.baud ? request.baud : wire::Info(out.protocol).line.baud);
   if (const auto* err = std::get_if<std::string>(&made)) return *err;

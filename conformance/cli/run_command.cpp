@@ -54,7 +54,7 @@ void InstallStopHandlers() {
 
 struct RunArgs {
   std::string target_text, protocol, profile, rules_glob, cases_glob, junit, json_path, html_path,
-      shard = "1/1", session_path, board_path, driver, vcd_path;
+      shard = "1/1", session_path, board_path, driver, vcd_path, dialect = "auto";
   uint64_t seed = 1;
   int steps = 40;
   uint32_t baud = 0;
@@ -96,11 +96,21 @@ int Run(const RunArgs& a) {
   request.profile = a.profile;
   request.baud = a.baud;
   request.protocol_option = a.protocol;
+  if (a.dialect != "auto" && a.dialect != "sketch" && a.dialect != "stackshot3x") {
+    return Fail("--dialect " + a.dialect +
+                ": give auto (detect from the `hi` reply), sketch (Dragonframe's Arduino "
+                "sketch) or stackshot3x (a StackShot 3X in DfMoco mode)");
+  }
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
   ResolvedTarget& rt = std::get<ResolvedTarget>(resolved);
   const Protocol proto = rt.protocol;
   const std::string title(wire::Info(proto).title);
+  if (a.dialect != "auto" && proto != Protocol::kDfmoco) {
+    return Fail("--dialect " + a.dialect +
+                " applies to --protocol dfmoco only; this target speaks " +
+                std::string(ProtocolName(proto)));
+  }
   const ProtocolRunner* runner = FindRunner(proto);
   if (runner == nullptr) {
     return Fail(title + " has no conformance suites in this build; use a DMC v2 target");
@@ -160,6 +170,7 @@ int Run(const RunArgs& a) {
     }
     options.host.deadline_by_kind_ns[kind] = ms * sim::kNsPerMs;
   }
+  options.host.dfmoco_dialect = a.dialect;
   options.host.answer_timeout_ns = a.answer_timeout_ms * sim::kNsPerMs;
   options.host.position_gap_ns = a.position_gap_ms * sim::kNsPerMs;
   options.random.seed = a.seed;
@@ -306,6 +317,12 @@ Runner AddRunCommand(CLI::App& app, CLI::App*& sub) {
   run->add_option("--protocol", a->protocol,
                   "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "
                   "in-process model's protocol, else dmc");
+  run->add_option("--dialect", a->dialect,
+                  "DFMoco dialect the device is judged in: auto (default: stackshot3x when `hi` "
+                  "is exactly `hi 1 3 1.2.6`, else sketch), sketch (Dragonframe's Arduino "
+                  "sketch) or stackshot3x (a StackShot 3X in DfMoco mode, stackshot-protocol.txt "
+                  "section 3). in-process:stackshot3x with --protocol dfmoco runs in DfMoco mode")
+      ->capture_default_str();
   run->add_option("--profile", a->profile, "Device profile (JSON) for an in-process target")
       ->check(CLI::ExistingFile);
   run->add_option("--rules", a->rules_glob,

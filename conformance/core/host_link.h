@@ -26,6 +26,9 @@ struct HostOptions {
   TimeNs answer_timeout_ns = 2000 * sim::kNsPerMs;  // DMC-ACK-001: no answer after this
   TimeNs position_gap_ns = 200 * sim::kNsPerMs;     // DMC-POS-002: largest update gap
   TimeNs quiet_ns = 50 * sim::kNsPerMs;             // listened for after a case
+  // DFMoco only (--dialect): "auto" (the StackShot 3X dialect when `hi` is
+  // exactly the StackShot's, else the sketch's), "sketch" or "stackshot3x".
+  std::string dfmoco_dialect = "auto";
 };
 
 // The request kinds of HostOptions::deadline_by_kind_ns.

@@ -81,6 +81,27 @@ std::string NotApplicableOn(const Target& target, Needs needs,
   return "";
 }
 
+// Why a case is not applicable beyond its needs ("" when it is): a protocol
+// whose devices speak dialects (DFMoco: the sketch's or the StackShot 3X's)
+// gives Traits::CaseNotApplicable(case, device).
+template <typename Traits>
+std::string CaseNotApplicable(const typename Traits::Case& k,
+                              const std::optional<typename Traits::Device>& device) {
+  if constexpr (requires { Traits::CaseNotApplicable(k, *device); }) {
+    if (device) return Traits::CaseNotApplicable(k, *device);
+  }
+  return "";
+}
+// The same for a rule (Traits::RuleNotApplicable(rule, device)).
+template <typename Traits>
+std::string RuleNotApplicable(const Rule& rule,
+                              const std::optional<typename Traits::Device>& device) {
+  if constexpr (requires { Traits::RuleNotApplicable(rule, *device); }) {
+    if (device) return Traits::RuleNotApplicable(rule, *device);
+  }
+  return "";
+}
+
 template <typename Traits>
 RunReport Run(Target& target, const RunOptions& options) {
   using Host = typename Traits::Host;
@@ -122,6 +143,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     result.name = k.name;
     result.summary = k.summary;
     std::string why = NotApplicableOn<Traits>(target, k.needs, device);
+    if (why.empty()) why = CaseNotApplicable<Traits>(k, device);
     if (why.empty() && !device && silent_cases >= kSilentCasesBeforeGivingUp) {
       why = kGaveUpOnSilence;
     }
@@ -176,7 +198,8 @@ RunReport Run(Target& target, const RunOptions& options) {
 
   SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
     if (rule.needs == Needs::kPins && !options.pins) return false;
-    return NotApplicableOn<Traits>(target, rule.needs, device).empty();
+    return NotApplicableOn<Traits>(target, rule.needs, device).empty() &&
+           RuleNotApplicable<Traits>(rule, device).empty();
   });
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return report;

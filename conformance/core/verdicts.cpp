@@ -25,6 +25,7 @@ RuleOutcome* Verdicts::Slot(std::string_view id) {
   assert(FindRule(id) != nullptr && "rule id missing from the catalogue");
   if (muted_) return nullptr;
   if (!filter_.empty() && !GlobMatch(filter_, id)) return nullptr;
+  if (excluded_ && excluded_(id)) return nullptr;
   auto it = outcomes_.find(id);
   if (it == outcomes_.end()) it = outcomes_.emplace(std::string(id), RuleOutcome{}).first;
   return &it->second;

@@ -4,6 +4,7 @@
 #define MOCO_CONFORMANCE_CORE_VERDICTS_H_
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -64,6 +65,12 @@ class Verdicts {
   void set_muted(bool muted) { muted_ = muted; }
   bool muted() const { return muted_; }
 
+  // Rules `excluded` names are not judged at all (a DFMoco device's dialect
+  // the rule does not apply to); empty: none.
+  void set_excluded(std::function<bool(std::string_view id)> excluded) {
+    excluded_ = std::move(excluded);
+  }
+
   const std::map<std::string, RuleOutcome, std::less<>>& outcomes() const { return outcomes_; }
   // True when a MUST rule failed in this case.
   bool MustFailed() const;
@@ -75,6 +82,7 @@ class Verdicts {
   std::string filter_;
   std::map<std::string, RuleOutcome, std::less<>> outcomes_;
   bool muted_ = false;
+  std::function<bool(std::string_view)> excluded_;
 };
 
 // Mutes `v` for its lifetime (restoring what it was).

@@ -278,6 +278,61 @@ const std::vector<Rule> kRules = {
     {"DFM-QUEUE-001", L::kShould, N::kNothing,
      "Twelve commands sent in one write are all answered, in order",
      "Outgoing messages wait in a 16-slot queue that drops silently on overflow", "FACTS DFMoco"},
+
+    // --- The StackShot 3X DfMoco dialect (stackshot-protocol.txt section 3;
+    // ERRATA 3.9): judged only when the device is judged in that dialect
+    // (--dialect stackshot3x, or auto and `hi 1 3 1.2.6`) ---
+    {"DFM-SS-001", L::kMust, N::kNothing, "StackShot 3X dialect: `hi` advertises 1 to 3 axes",
+     "Up to three axes can be controlled. ... Motors are specified as 1, 2, or 3.",
+     "stackshot-protocol.txt 3; ERRATA 3.9"},
+    {"DFM-SS-002", L::kMust, N::kDfmMotors,
+     "StackShot 3X dialect: `mm m p` to a position the motor is not at is answered `mm m <current "
+     "position>` (where "
+     "the motor is, not p)",
+     "If NOT at the specified position, this will be transmitted periodically: rsp: mm <motor> "
+     "<current position>",
+     "stackshot-protocol.txt 3"},
+    {"DFM-SS-003", L::kShould, N::kDfmMotors,
+     "StackShot 3X dialect: A motor that moves for more than 1.5 s is reported by unprompted `mm m "
+     "<current position>` "
+     "lines, each between where the move started and its target",
+     "If NOT at the specified position, this will be transmitted periodically: rsp: mm <motor> "
+     "<current position>",
+     "stackshot-protocol.txt 3"},
+    {"DFM-SS-004", L::kMust, N::kDfmMotors,
+     "StackShot 3X dialect: `mp *` is answered with one `mp m pos` line per motor, 1 to the axes "
+     "in order, each the "
+     "motor's position",
+     "Optionally, a \"*\" can be sent as the motor to have all positions sent.",
+     "stackshot-protocol.txt 3"},
+    {"DFM-SS-005", L::kMust, N::kDfmMotors,
+     "StackShot 3X dialect: `zm m` and `np m p` are answered `mp m <current position>` (0 after "
+     "`zm`, p after `np` at "
+     "rest), not `zm`/`np`",
+     "cmd: zm <motor> rsp: mp <motor> <current position> ... cmd: np <motor> <position> rsp: mp "
+     "<motor> <current position> (yes, that is a \"m\")",
+     "stackshot-protocol.txt 3; ERRATA 3.9"},
+    {"DFM-SS-006", L::kShould, N::kDfmMotors,
+     "StackShot 3X dialect: `np m p` while the motor moves sends it to p: it comes to rest on p",
+     "Set a new target position. If the motor is currently moving it will go to that position.",
+     "stackshot-protocol.txt 3"},
+    {"DFM-SS-007", L::kMust, N::kDfmMotors,
+     "StackShot 3X dialect: `sa <motor>` is answered `sa` and every moving motor comes to rest "
+     "short of its target "
+     "within 5 s",
+     "cmd: sa <motor> rsp: sa Stop All.", "stackshot-protocol.txt 3"},
+    {"DFM-SS-008", L::kMust, N::kDfmMotors,
+     "StackShot 3X dialect: `pr m v` is answered `pr m v` up to the controller's maximum and `pr m "
+     "<maximum>` (below v) "
+     "above it",
+     "If the requested speed is faster than the controller is allowing, then the controller will "
+     "respond with the maximum speed.",
+     "stackshot-protocol.txt 3"},
+    {"DFM-SS-009", L::kShould, N::kDfmMotors,
+     "StackShot 3X dialect: `bf` and `go` get no go-motion answer (`bf`, `go`) and move nothing",
+     "The DfMoco interface does not support real-time motion control. It can only be used for "
+     "shoot-move-shoot applications.",
+     "stackshot-protocol.txt 3"},
 };
 
 }  // namespace

@@ -56,17 +56,30 @@ InProcessTarget::~InProcessTarget() {
 }
 
 std::unique_ptr<InProcessTarget> InProcessTarget::ForModel(const std::string& model,
-                                                           const std::string& profile_path) {
+                                                           const std::string& profile_path,
+                                                           bool stackshot_dfmoco) {
   if (model == "stackshot3x") {
     // NVM outlives the device, so Restart() is a power cycle that keeps it.
     auto nvm = std::make_shared<devices::MemoryStateStore>();
+    auto first = std::make_shared<bool>(true);
     return std::make_unique<InProcessTarget>(
-        model, [profile_path, nvm](sim::Scheduler& s, devices::ByteSink& sink) {
-          return std::make_unique<devices::Stackshot3x>(
+        model,
+        [profile_path, nvm, stackshot_dfmoco, first](sim::Scheduler& s, devices::ByteSink& sink) {
+          auto device = std::make_unique<devices::Stackshot3x>(
               s, sink,
               profile_path.empty() ? devices::Stackshot3xProfile{}
                                    : devices::LoadStackshot3xProfile(profile_path),
               nvm.get());
+          if (stackshot_dfmoco && *first) {
+            // The panel's Settings->Mode->Motion->DfMoco (stackshot-protocol.txt
+            // section 3) stores the power-on mode in NVM: the power-on that
+            // follows (Build()) starts in DfMoco mode, and so does every Restart().
+            device->PowerOn();
+            device->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
+            device->PowerOff();
+          }
+          *first = false;
+          return device;
         });
   }
   return std::make_unique<InProcessTarget>(

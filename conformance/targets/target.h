@@ -112,8 +112,11 @@ class InProcessTarget final : public Target {
   // A registered model (devices::CreateDevice) with its profile (empty: built-in).
   // A model with NVM (stackshot3x) keeps it in memory across Restart(), as a
   // real power cycle does; each target starts with empty NVM.
+  // `stackshot_dfmoco`: a stackshot3x starts in DfMoco mode (Settings->Mode->
+  // Motion->DfMoco set on its panel, kept in its NVM as the power-on mode).
   static std::unique_ptr<InProcessTarget> ForModel(const std::string& model,
-                                                   const std::string& profile_path);
+                                                   const std::string& profile_path,
+                                                   bool stackshot_dfmoco = false);
   ~InProcessTarget() override;
 
   std::string Name() const override { return "in-process:" + name_; }

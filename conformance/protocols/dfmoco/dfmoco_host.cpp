@@ -115,8 +115,22 @@ DfmHost::DfmHost(Target& target, Verdicts& verdicts, HostOptions options)
     : HostBase(target, verdicts, std::move(options),
                [this](wire::ByteView bytes) { OnBytes(bytes); }) {}
 
+bool IsStackShotHello(const dfmoco::HelloReply& hello) {
+  const dfmoco::Dialect ss = dfmoco::StackShot3x();
+  return hello.protocol_major == ss.protocol_major && hello.motor_count == ss.motor_count &&
+         hello.version == ss.firmware_version;
+}
+
+bool DfmHost::stackshot() const {
+  const std::string& d = options().dfmoco_dialect;
+  if (d == "stackshot3x") return true;
+  if (d == "sketch") return false;
+  return hello_ && IsStackShotHello(*hello_);
+}
+
 dfmoco::Dialect DfmHost::dialect() const {
-  return hello_ ? dfmoco::DialectFrom(*hello_, false) : dfmoco::Dfmoco2(4);
+  if (!hello_) return stackshot() ? dfmoco::StackShot3x() : dfmoco::Dfmoco2(4);
+  return dfmoco::DialectFrom(*hello_, stackshot());
 }
 
 Evidence DfmHost::Ev(const DfmLine& line, std::string expected, std::string observed) const {
@@ -131,18 +145,21 @@ DfmCommand DfmHost::MakeCommand(std::string_view line, std::string_view error_ru
   // A real sketch reads the line byte by byte (wire/dfmoco_sketch_reader.h):
   // "mm 1 --5" is a move to -5, "mm 1 99999999999" wraps, "ms 1" is `ms`;
   // only what it then reads is judged for counts and motors (FACTS DFMoco).
+  // The StackShot 3X is no sketch: its lines are read by the protocol's
+  // grammar in its dialect (`mp *`, `sa <motor>`).
+  const bool ss = stackshot();
   const dfmoco::SketchReading sketch = dfmoco::ReadLineAsSketch(line);
-  if (sketch.kind == dfmoco::SketchReading::Kind::kTooManyArgs) {
+  if (!ss && sketch.kind == dfmoco::SketchReading::Kind::kTooManyArgs) {
     c.expect = DfmExpect::kTooMany;
     c.error_rule = "DFM-ERR-003";
     return c;
   }
-  if (sketch.kind == dfmoco::SketchReading::Kind::kNothing) {
+  if (!ss && sketch.kind == dfmoco::SketchReading::Kind::kNothing) {
     c.parsed = dfmoco::HostCommand{dfmoco::UnknownCommand{std::string(line)}};
     c.expect = DfmExpect::kSilence;
     return c;
   }
-  const auto parsed = dfmoco::ParseHostLine(sketch.CanonicalLine(), d);
+  const auto parsed = dfmoco::ParseHostLine(ss ? std::string(line) : sketch.CanonicalLine(), d);
   if (!parsed.ok()) {
     c.expect = dfmoco::IsTooManyArgs(parsed.error()) ? DfmExpect::kTooMany : DfmExpect::kError;
     c.error_rule = c.expect == DfmExpect::kTooMany ? "DFM-ERR-003" : "DFM-ERR-001";
@@ -151,6 +168,11 @@ DfmCommand DfmHost::MakeCommand(std::string_view line, std::string_view error_ru
   c.parsed = parsed.value();
   const auto motor = dfmoco::AddressedMotor(*c.parsed);
   if (std::holds_alternative<dfmoco::UnknownCommand>(*c.parsed)) {
+    c.expect = DfmExpect::kSilence;
+  } else if (stackshot() && (std::holds_alternative<dfmoco::BlurFrame>(*c.parsed) ||
+                             std::holds_alternative<dfmoco::Go>(*c.parsed))) {
+    // "The DfMoco interface does not support real-time motion control"
+    // (stackshot-protocol.txt section 3): no go-motion answer (DFM-SS-009).
     c.expect = DfmExpect::kSilence;
   } else if (motor && hello_ && !dfmoco::MotorInRange(*motor, d)) {
     c.expect = DfmExpect::kError;
@@ -287,7 +309,10 @@ void DfmHost::OnLine(DfmLine line, bool crlf) {
     CheckAnswer(c, stored);
     return;
   }
-  if (std::holds_alternative<dfmoco::PositionReply>(reply)) return;                    // a report
+  if (std::holds_alternative<dfmoco::PositionReply>(reply)) return;  // a report
+  // The StackShot 3X reports a moving motor with `mm <motor> <current
+  // position>` "transmitted periodically" (stackshot-protocol.txt section 3).
+  if (stackshot() && std::holds_alternative<dfmoco::MoveReply>(reply)) return;
   if (std::holds_alternative<dfmoco::HelloReply>(reply) && commands_.empty()) return;  // boot
   // A second answer to a command already answered?
   for (size_t i = commands_.size(); i-- > 0;) {
@@ -321,7 +346,8 @@ bool DfmHost::Fits(const DfmCommand& c, const DeviceReply& reply) const {
             const auto* p = std::get_if<PositionReply>(&reply);
             return p != nullptr && p->motor == m.motor;
           },
-          [&](const PositionQueryAll&) { return false; },
+          // `mp *`: one `mp` per motor (the StackShot dialect); the first answers.
+          [&](const PositionQueryAll&) { return std::holds_alternative<PositionReply>(reply); },
           [&](const StopMotor&) { return std::holds_alternative<StopMotorReply>(reply); },
           [&](const StopAll&) { return std::holds_alternative<StopAllReply>(reply); },
           [&](const JogMotor&) { return std::holds_alternative<JogReply>(reply); },
@@ -335,7 +361,10 @@ bool DfmHost::Fits(const DfmCommand& c, const DeviceReply& reply) const {
           [&](const NewPosition& m) {
             if (std::holds_alternative<NewPositionReply>(reply)) return true;
             const auto* p = std::get_if<PositionReply>(&reply);
-            return p != nullptr && p->motor == m.motor && p->position_steps == m.position_steps;
+            // The StackShot answers `mp <motor> <current position>`: the motor
+            // may be moving to the new target (stackshot-protocol.txt section 3).
+            return p != nullptr && p->motor == m.motor &&
+                   (p->position_steps == m.position_steps || stackshot());
           },
           [&](const BlurFrame&) { return std::holds_alternative<BlurReply>(reply); },
           [&](const Go&) { return std::holds_alternative<GoReply>(reply); },

@@ -32,6 +32,13 @@ struct DfmLine {
   int command = -1;  // index of the command it answers; -1: unprompted (or stray)
 };
 
+// What a DFMoco device said of itself: its `hi`, and the dialect it is
+// judged in (stackshot: the StackShot 3X's DfMoco mode, stackshot-protocol.txt
+// section 3; else the Arduino sketch's).
+struct DfmDevice : dfmoco::HelloReply {
+  bool stackshot = false;
+};
+
 // What the host expects a command to get.
 enum class DfmExpect {
   kReply,    // its OUT line
@@ -88,8 +95,13 @@ class DfmHost : public HostBase {
 
   // The last `hi` the device sent (answer or unprompted), if any.
   const std::optional<dfmoco::HelloReply>& hello() const { return hello_; }
-  // The dialect learnt from `hi` (the 2.0.0 sketch with 4 motors before it).
+  // The dialect learnt from `hi` (the 2.0.0 sketch with 4 motors before it),
+  // the StackShot 3X's as HostOptions::dfmoco_dialect says.
   dfmoco::Dialect dialect() const;
+  // Whether the device is judged in the StackShot 3X DfMoco dialect
+  // (stackshot-protocol.txt section 3; ERRATA 3.9): --dialect stackshot3x, or
+  // auto and a `hi` that is exactly `hi 1 3 1.2.6`.
+  bool stackshot() const;
   // Axes from `hi` (0 before it).
   int32_t axes() const { return hello_ ? hello_->motor_count : 0; }
 
@@ -113,6 +125,10 @@ class DfmHost : public HostBase {
   bool pending_cr_ = false;
   bool closed_ = false;
 };
+
+// Whether `hello` is exactly the StackShot 3X's in DfMoco mode, `hi 1 3 1.2.6`
+// (stackshot-protocol.txt section 3).
+bool IsStackShotHello(const dfmoco::HelloReply& hello);
 
 // The reply of `line` as T, or nullptr.
 template <typename T>

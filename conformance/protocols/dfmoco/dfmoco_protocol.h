@@ -7,6 +7,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -28,21 +29,32 @@ std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text);
 bool DfmocoApplies(const Rule& rule, const dfmoco::HelloReply& hello);
 bool DfmocoApplies(Needs needs, const dfmoco::HelloReply& hello);
 
+// Why DFMoco `rule` (or case `k`) does not apply to `device`'s dialect, ""
+// when it does: the sketch's own behaviour (FACTS DFMoco) is not judged on a
+// StackShot 3X in DfMoco mode, and the DFM-SS-* rules and the "stackshot"
+// suite judge only that dialect (stackshot-protocol.txt section 3; ERRATA 3.9).
+std::string DfmocoDialectExcludes(std::string_view rule_or_case, const DfmDevice& device);
+
 struct DfmocoProtocol {
   static constexpr Protocol kProtocol = Protocol::kDfmoco;
   static constexpr std::string_view kLacking = "the device does not advertise ";
   using Host = DfmHost;
-  using Device = dfmoco::HelloReply;
+  using Device = DfmDevice;
   using Case = DfmCase;
   static const std::vector<DfmCase>& Cases() { return DfmocoCases(); }
   static const std::vector<Rule>& Rules() { return DfmocoRules(); }
-  static std::optional<dfmoco::HelloReply> Discover(DfmHost& probe);
-  static void Describe(const dfmoco::HelloReply& hello, RunReport& report);
+  static std::optional<DfmDevice> Discover(DfmHost& probe);
+  static void Describe(const DfmDevice& device, RunReport& report);
   static bool Applies(Needs needs, const dfmoco::HelloReply& hello) {
     return DfmocoApplies(needs, hello);
   }
-  static std::optional<dfmoco::HelloReply> Greet(DfmHost& host, Target& target,
-                                                 const dfmoco::HelloReply& discovered);
+  static std::optional<DfmDevice> Greet(DfmHost& host, Target& target, const DfmDevice& discovered);
+  static std::string RuleNotApplicable(const Rule& rule, const DfmDevice& device) {
+    return DfmocoDialectExcludes(rule.id, device);
+  }
+  static std::string CaseNotApplicable(const DfmCase& k, const DfmDevice& device) {
+    return DfmocoDialectExcludes(k.suite + "/" + k.name, device);
+  }
   // Every `mp` line the device sent.
   static PositionSeries Positions(const std::vector<Chunk>& traffic);
 };

@@ -20,8 +20,8 @@ namespace moco::conformance {
 
 // What a DFMoco case works with: the host has read the device's `hi`
 // already (`device`).
-using DfmCaseContext = CaseContextOf<DfmHost, dfmoco::HelloReply>;
-// suite: "connect", "motor", "errors", "gomotion", "shoot", "random".
+using DfmCaseContext = CaseContextOf<DfmHost, DfmDevice>;
+// suite: "connect", "motor", "errors", "gomotion", "shoot", "stackshot", "random".
 using DfmCase = CaseOf<DfmCaseContext>;
 
 // Every DFMoco case in run order.
