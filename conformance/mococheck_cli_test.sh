@@ -147,6 +147,62 @@ mococheck_cli_cases_filter_selecting_nothing_is_a_usage_error)
   expect_rc 0 "$m" run --target in-process:dmc16 --cases 'connect/*' -q
   ;;
 
+# No PASS without evidence: a PTY that reads everything and answers nothing is
+# a target error (2) for every protocol, subset and shard; a second mococheck
+# on a port in use is refused; a selection that judges no rule is NO VERDICT
+# (2); each glob of --cases / --rules must select something.
+mococheck_cli_no_pass_without_evidence)
+  python3 -c '
+import os, pty, sys
+master, slave = pty.openpty()
+os.symlink(os.ttyname(slave), sys.argv[1])
+while True:
+    os.read(master, 4096)
+' "$work/silent" >silent.log 2>&1 &
+  pids="$pids $!"
+  wait_for test -L "$work/silent" || fail "no silent PTY"
+  for args in "--protocol dmc --cases motor/*" "--protocol dfmoco --cases motor/*" \
+              "--protocol dmc --shard 5/8" "--protocol dmc --shard 7/8" \
+              "--protocol dfmoco --shard 3/8" "--protocol stackshot --shard 2/8"; do
+    # shellcheck disable=SC2086
+    expect_rc 2 "$m" run --target "pty:$work/silent" $args --answer-timeout-ms 100 \
+      --junit r.xml --json r.json
+    grep -q '^result: TARGET ERROR' out.txt || fail "no TARGET ERROR for $args"
+    grep -q 'sent nothing in answer to two introductions' out.txt ||
+      fail "the console does not say why: $args"
+    grep -q '"exit_code": 2' r.json || fail "JSON exit_code is not 2: $args"
+    grep -q '<error message="target error' r.xml || fail "JUnit has no error: $args"
+  done
+  # Two runs on one emulated PTY: the second is refused, the first goes on.
+  "$sim" dmc16 --pty "$work/dmc" >sim.log 2>&1 &
+  sim_pid=$!
+  pids="$pids $sim_pid"
+  wait_for test -L "$work/dmc" || fail "no PTY"
+  "$m" run --target "pty:$work/dmc" --cases 'connect/*' -q >first.txt 2>first-err.txt &
+  first=$!
+  pids="$pids $first"
+  wait_for grep -q '^mococheck: \[1/' first-err.txt || fail "the first run did not start"
+  expect_rc 2 "$m" run --target "pty:$work/dmc" --cases 'connect/*' -q
+  grep -q 'in use by another program' err.txt || fail "the second run was not refused"
+  wait "$first"
+  rc=$?
+  [ "$rc" = 0 ] || fail "the first run: exit $rc, not 0"
+  grep -q '^result: PASS' first.txt || fail "the first run did not pass"
+  kill -TERM "$sim_pid"
+  # A selection whose cases judge none of its rules has no verdict.
+  expect_rc 2 "$m" run --target in-process:dmc16 --rules DMC-RT-029 --cases 'motor/*' \
+    --junit nv.xml
+  grep -q '^result: NO VERDICT' out.txt || fail "no NO VERDICT"
+  grep -q '<error message="no rule was judged' nv.xml || fail "JUnit has no error"
+  # Every glob of a list must select something.
+  expect_rc 2 "$m" run --target in-process:dmc16 --cases 'motor/*,nonexistent/*'
+  grep -q "'nonexistent/\*' selects no" err.txt || fail "the empty glob is not named"
+  expect_rc 2 "$m" run --target in-process:dmc16 --rules 'DMC-HI-*,DMC-NOPE-*'
+  grep -q "'DMC-NOPE-\*' matches no" err.txt || fail "the empty rule glob is not named"
+  expect_rc 2 "$m" run --target in-process:dmc16 --cases ','
+  grep -q 'holds no glob' err.txt || fail "a list of no globs accepted"
+  ;;
+
 # Report paths are checked before the run; two reports on one path are refused.
 mococheck_cli_report_paths_are_checked_before_the_run)
   mkdir adir

@@ -2,6 +2,7 @@
 // streamed as cases end, and the JUnit, JSON and HTML reports (docs/files.md,
 // docs/exit-codes.md).
 #include <unistd.h>
+#include <atomic>
 #include <chrono>
 #include <set>
 
@@ -32,16 +33,33 @@ bool ParseShard(const std::string& text, uint32_t& index, uint32_t& count) {
   return true;
 }
 
-// SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops after the
-// current case and the reports of what ran are written; a second signal ends
-// the program at once.
+// The comma-separated globs of a --rules / --cases value, empty ones left out.
+std::vector<std::string> SplitGlobs(const std::string& text) {
+  std::vector<std::string> globs;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    std::string one = text.substr(start, comma == std::string::npos ? comma : comma - start);
+    if (!one.empty()) globs.push_back(std::move(one));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return globs;
+}
+
+// SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops at once
+// (every wait of the host ends; the case under way is dropped, as half a case
+// proves nothing) and the reports of what ran are written. A second signal
+// changes nothing (the reports are being written, which takes milliseconds);
+// a third ends the program at once, reports or not.
+std::atomic<int> g_signals_seen{0};
 extern "C" void OnStopSignal(int sig) {
-  if (StopRequested() != 0) {
+  if (g_signals_seen.fetch_add(1) >= 2) {
     std::signal(sig, SIG_DFL);
     std::raise(sig);
     return;
   }
-  RequestStop(sig);
+  if (StopRequested() == 0) RequestStop(sig);
 }
 
 void InstallStopHandlers() {
@@ -119,23 +137,31 @@ int Run(const RunArgs& a) {
   if (!ParseShard(a.shard, options.shard_index, options.shard_count)) {
     return Fail("--shard " + a.shard + ": give i/n with 1 <= i <= n, e.g. --shard 1/4");
   }
-  if (!a.rules_glob.empty()) {
+  // Every glob of --rules and --cases must select something: a misspelt one
+  // would otherwise shrink the run without a word.
+  for (const std::string& glob : SplitGlobs(a.rules_glob)) {
     bool any = false;
-    for (const Rule& r : runner->rules()) any = any || GlobMatch(a.rules_glob, r.id);
+    for (const Rule& r : runner->rules()) any = any || GlobMatch(glob, r.id);
     if (!any) {
-      return Fail("--rules " + a.rules_glob + " matches no " + title +
-                  " rule; see 'mococheck rules'");
+      return Fail("--rules " + a.rules_glob + ": '" + glob + "' matches no " + title +
+                  " rule; see the rule ids with 'mococheck rules'");
     }
   }
-  if (!a.cases_glob.empty()) {
+  for (const std::string& glob : SplitGlobs(a.cases_glob)) {
     bool any = false;
     for (const CaseInfo& k : runner->cases())
-      any = any || GlobMatch(a.cases_glob, k.suite + "/" + k.name);
+      any = any || GlobMatch(glob, k.suite + "/" + k.name);
     if (!any) {
-      return Fail("--cases " + a.cases_glob + " selects no " + title +
+      return Fail("--cases " + a.cases_glob + ": '" + glob + "' selects no " + title +
                   " case; see the case names with 'mococheck cases --protocol " +
                   std::string(ProtocolName(proto)) + "'");
     }
+  }
+  if ((!a.rules_glob.empty() && SplitGlobs(a.rules_glob).empty()) ||
+      (!a.cases_glob.empty() && SplitGlobs(a.cases_glob).empty())) {
+    return Fail(std::string(SplitGlobs(a.rules_glob).empty() && !a.rules_glob.empty() ? "--rules"
+                                                                                      : "--cases") +
+                " holds no glob: give globs separated by commas, e.g. 'motor/*,rt/*'");
   }
   options.rules = a.rules_glob;
   options.cases = a.cases_glob;

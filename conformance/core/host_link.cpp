@@ -9,6 +9,10 @@ void HostLink::Write(wire::ByteView bytes) {
 }
 
 void HostLink::WriteWithoutReading(wire::ByteView bytes) {
+  if (StopRequested() != 0) {
+    lost_ = true;
+    return;
+  }
   traffic_.push_back(Chunk{Now(), true, wire::Bytes(bytes.begin(), bytes.end())});
   if (!target_.Send(bytes)) lost_ = true;
 }
@@ -19,6 +23,12 @@ void HostLink::WriteBytewise(wire::ByteView bytes) {
 
 void HostLink::Pump(TimeNs deadline_ns) {
   if (lost_) return;
+  // A stop request (SIGINT, SIGTERM, SIGHUP) ends every wait at once, on any
+  // target: the case under way is dropped and the reports are written.
+  if (StopRequested() != 0) {
+    lost_ = true;
+    return;
+  }
   wire::Bytes in;
   if (!target_.Receive(deadline_ns, in)) lost_ = true;
   if (!in.empty()) {

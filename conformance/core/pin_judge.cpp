@@ -25,10 +25,13 @@ constexpr TimeNs kRestWindowNs = 50 * kMs;
 constexpr TimeNs kRateWindowNs = 50 * kMs;
 constexpr double kAccelTolerance = 1.5;  // the planner's acceleration plus 50 %
 constexpr double kQuantumPulses = 3;     // plus 3 pulses per window
-// PIN-005 measures the rate over this many STEP intervals, allowing its ends
-// this much interrupt latency (a step ISR entered late after a cli section).
-constexpr size_t kRatePulses = 8;
-constexpr double kLatencyAllowanceNs = 8000;
+// PIN-005 counts the pulses in every window of these lengths, anchored at a
+// pulse (a rate sustained over a burst and over a stretch: what a driver, a
+// motor and the protocol's maximum speed are about): a step entered late
+// after a long interrupt shortens the next interval but adds no step, so
+// interrupt latency never reads as a rate. One pulse of slack for where the
+// window's end falls between pulses.
+constexpr TimeNs kRateWindowsNs[] = {1 * kMs, 10 * kMs};
 
 std::string Seconds(TimeNs t) {
   char text[32];
@@ -152,7 +155,6 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
                const std::vector<PinPositionEvent>& events, const PinJudgeOptions& o, TimeNs end_ns,
                Verdicts& v) {
   const DriverProfile& d = o.driver;
-  const double cycle_ns = trace.frequency_hz ? 1e9 / trace.frequency_hz : 0;
   const std::string p001 = Id(prefix, "PIN-001"), p002 = Id(prefix, "PIN-002"),
                     p003 = Id(prefix, "PIN-003"), p004 = Id(prefix, "PIN-004"),
                     p005 = Id(prefix, "PIN-005"), p006 = Id(prefix, "PIN-006"),
@@ -179,12 +181,13 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
         continue;
       }
       const int64_t offset = base_value - base_count;
-      // Moving: stepping on both sides of the report and not at a turning point
-      // (a stop, or a stop and a new move, within the reporting window).
-      const auto [lo, hi] = m.RangeOver(e.t_ns - period_ns, e.t_ns + period_ns);
+      // Moving: still pulsing within kRestWindowNs after the report, whatever
+      // came before. A sketch reports the planned end of the chunk its timer
+      // is still stepping out (FACTS DFMoco), at a start, a stop or a turn as
+      // well as mid-move, and PIN-002 judges such a report; PIN-001 judges
+      // the reports after which the motor makes no step.
       const int64_t now = m.CountAt(e.t_ns);
-      const bool moving = m.RiseWithin(e.t_ns + 1, e.t_ns + kRestWindowNs) &&
-                          m.RiseWithin(e.t_ns - kRestWindowNs, e.t_ns) && lo < now && now < hi;
+      const bool moving = m.RiseWithin(e.t_ns + 1, e.t_ns + kRestWindowNs);
       if (!moving) {
         // Not stepping on both sides: the position was taken at most a queued line before t.
         const auto [lo_rest, hi_rest] = m.RangeOver(e.t_ns - kRestWindowNs, e.t_ns);
@@ -228,20 +231,54 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
                         "", se[k].t_ns};
       });
     }
-    // Over kRatePulses intervals, so that one late interrupt (a few us) is not a rate.
-    const double min_span_ns =
-        kRatePulses * 1e9 / o.board.max_step_rate_hz - kLatencyAllowanceNs - cycle_ns;
-    for (size_t k = kRatePulses; k < m.rises.size(); ++k) {
-      const TimeNs span = m.rises[k] - m.rises[k - kRatePulses];
-      v.Check(p005, static_cast<double>(span) >= min_span_ns, [&] {
-        char text[200];
-        std::snprintf(text, sizeof text, "%s: %zu STEP pulses in %lld ns (%.0f steps/s) up to %s",
-                      mn.c_str(), kRatePulses, static_cast<long long>(span),
-                      kRatePulses * 1e9 / static_cast<double>(span), Seconds(m.rises[k]).c_str());
-        return Evidence{mn + " at most " +
-                            std::to_string(static_cast<int64_t>(o.board.max_step_rate_hz)) +
-                            " steps/s (board " + o.board.name + ")",
-                        text, "", m.rises[k]};
+    // The most pulses any window of kRateWindowsNs holds; judged once per
+    // motor, with the worst window (the most pulses over its allowance) as the
+    // evidence, not the first.
+    if (!m.rises.empty()) {
+      struct Worst {
+        TimeNs window_ns = 0;
+        int64_t pulses = 0, allowed = 1, windows_over = 0;
+        size_t last = 0;  // index of the window's last rise
+      } worst;
+      for (const TimeNs w : kRateWindowsNs) {
+        const int64_t allowed = static_cast<int64_t>(std::floor(
+                                    o.board.max_step_rate_hz * static_cast<double>(w) / 1e9 +
+                                    1e-9)) +
+                                1;
+        int64_t over = 0;
+        size_t j = 0;
+        for (size_t k = 0; k < m.rises.size(); ++k) {
+          while (m.rises[k] - m.rises[j] >= w) ++j;
+          const auto n = static_cast<int64_t>(k - j + 1);
+          over += n > allowed;
+          // n / allowed > worst.pulses / worst.allowed, in integers.
+          if (n * worst.allowed > worst.pulses * allowed) {
+            worst = Worst{w, n, allowed, 0, k};
+          }
+        }
+        if (worst.window_ns == w) worst.windows_over = over;
+      }
+      v.Check(p005, worst.pulses <= worst.allowed, [&] {
+        const TimeNs from = m.rises[worst.last + 1 - static_cast<size_t>(worst.pulses)];
+        const TimeNs to = m.rises[worst.last];
+        char text[260];
+        std::snprintf(text, sizeof text,
+                      "%lld STEP pulses within %.0f ms (%.0f steps/s) from %s to %s; %lld "
+                      "pulses ended a %.0f ms window over the rate",
+                      static_cast<long long>(worst.pulses),
+                      static_cast<double>(worst.window_ns) / 1e6,
+                      static_cast<double>(worst.pulses - 1) * 1e9 /
+                          static_cast<double>(std::max<TimeNs>(1, to - from)),
+                      Seconds(from).c_str(), Seconds(to).c_str(),
+                      static_cast<long long>(worst.windows_over),
+                      static_cast<double>(worst.window_ns) / 1e6);
+        char want[200];
+        std::snprintf(want, sizeof want,
+                      "%s at most %lld steps/s (board %s): at most %lld pulses in any %.0f ms",
+                      mn.c_str(), static_cast<long long>(o.board.max_step_rate_hz),
+                      o.board.name.c_str(), static_cast<long long>(worst.allowed),
+                      static_cast<double>(worst.window_ns) / 1e6);
+        return Evidence{want, text, "", to};
       });
     }
 

@@ -103,6 +103,74 @@ TEST(PinJudge, StepsFasterThanTheBoardsTopRateFailPin005) {
   EXPECT_EQ(StatusOf(over, "DFM-PIN-005"), Status::kFail);
 }
 
+// Motor 1 steps forward at `rate_hz` from `t0` for `n` pulses, each pulse
+// `late` later than its tick when `late_every` > 0 says it is one (a step
+// entered late after a long interrupt).
+PinTrace Steady(int n, sim::TimeNs t0, double rate_hz, int late_every = 0,
+                sim::TimeNs late = 0) {
+  PinTrace t = PinTrace::For(OneMotorBoard());
+  t.frequency_hz = 16'000'000;
+  t.signals[1].edges.push_back({t0 - 10 * kUs, 0, true});
+  for (int i = 0; i < n; ++i) {
+    sim::TimeNs r = t0 + static_cast<sim::TimeNs>(i * 1e9 / rate_hz);
+    if (late_every > 0 && i % late_every == 0 && i > 0) r += late;
+    t.signals[0].edges.push_back({r, 0, true});
+    t.signals[0].edges.push_back({r + 2 * kUs, 0, false});
+  }
+  return t;
+}
+
+// Measured on Dragonframe's DFMoco 2.0.0 with a correct clock: at 20 kHz, the
+// step after each 50 ms chunk load is entered ~12.4 us late (the long
+// interrupt), so 8 intervals take 387.6 us against 400. That is latency, not
+// a rate: no window holds more pulses than 20 kHz allows.
+TEST(PinJudge, AStepEnteredLateAfterALongInterruptIsNotARate) {
+  Verdicts v;
+  JudgePins("DFM-", Steady(4000, 1000 * kUs, 20000, 1000, 12400), {}, A4988(),
+            sim::kNsPerSecond, v);
+  EXPECT_EQ(StatusOf(v, "DFM-PIN-005"), Status::kPass);
+}
+
+// A rate just 1 % over the board's 20 kHz, sustained, is caught over 10 ms.
+TEST(PinJudge, ASustainedRateJustOverTheTopFailsPin005) {
+  Verdicts v;
+  JudgePins("DFM-", Steady(4000, 1000 * kUs, 20200), {}, A4988(), sim::kNsPerSecond, v);
+  ASSERT_EQ(StatusOf(v, "DFM-PIN-005"), Status::kFail);
+  EXPECT_NE(v.outcomes().at("DFM-PIN-005").evidence.at(0).observed.find("within 10 ms"),
+            std::string::npos)
+      << v.outcomes().at("DFM-PIN-005").evidence.at(0).observed;
+}
+
+// The evidence is the worst window of the case, not the first over the rate:
+// 21 kHz for a while, then 41 kHz.
+TEST(PinJudge, Pin005ShowsTheWorstWindowNotTheFirst) {
+  PinTrace t = Steady(2000, 1000 * kUs, 21000);
+  const PinTrace fast = Steady(400, 200 * sim::kNsPerMs, 41000);
+  for (size_t i = 0; i < fast.signals[0].edges.size(); ++i) {
+    t.signals[0].edges.push_back(fast.signals[0].edges[i]);
+  }
+  Verdicts v;
+  JudgePins("DFM-", t, {}, A4988(), sim::kNsPerSecond, v);
+  ASSERT_EQ(StatusOf(v, "DFM-PIN-005"), Status::kFail);
+  const Evidence& e = v.outcomes().at("DFM-PIN-005").evidence.at(0);
+  EXPECT_GE(e.t_ns, 200 * sim::kNsPerMs) << e.observed;
+  EXPECT_NE(e.observed.find("(41"), std::string::npos) << e.observed;
+}
+
+// The sketch reports the planned end of the chunk its timer is about to step
+// out (FACTS DFMoco): an `mp` at the start of a move, with every pulse of the
+// chunk still to come, is a report while moving (PIN-002), not at rest.
+TEST(PinJudge, AReportOfTheChunkStillBeingSteppedOutIsJudgedAsMoving) {
+  using K = PinPositionEvent::Kind;
+  // 250 steps at 5 kHz from 1 ms: the first 50 ms chunk ends at 250.
+  const PinTrace t = Steady(250, 1000 * kUs, 5000);
+  Verdicts v;
+  JudgePins("DFM-", t, {{K::kReport, 900 * kUs, 1, 250}, {K::kReport, 600 * sim::kNsPerMs, 1, 250}},
+            A4988(), sim::kNsPerSecond, v);
+  EXPECT_EQ(StatusOf(v, "DFM-PIN-001"), Status::kPass);
+  EXPECT_EQ(StatusOf(v, "DFM-PIN-002"), Status::kPass);
+}
+
 TEST(PinJudge, DfmocoLinesBecomeReportsResetsAndPulseRates) {
   std::vector<Chunk> traffic = {{0, true, {'n', 'p', ' ', '1', ' ', '7', '\r', '\n'}},
                                 {10, false, {'m', 'p', ' ', '1', ' ', '7', '\r', '\n'}},

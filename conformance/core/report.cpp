@@ -120,8 +120,16 @@ std::string ConsoleSummary(const RunReport& report, bool verbose) {
        std::to_string(count(Status::kNotApplicable)) + " not applicable, " +
        std::to_string(count(Status::kNotExercised)) + " not exercised\n";
   for (const auto& [id, r] : report.rules) {
-    if (r.status == Status::kFail || (verbose && r.status != Status::kPass)) {
-      s += "  " + std::string(StatusName(r.status)) + " " + id + "\n";
+    if (r.status == Status::kNotExercised) {
+      // Always with its reason: a rule nobody judged is as much a finding as
+      // one that failed.
+      s += "  " + std::string(StatusName(r.status)) + " " + id + ": " + r.why_not_exercised + "\n";
+    } else if (r.status == Status::kFail || (verbose && r.status != Status::kPass)) {
+      const Rule* rule = FindRule(id);
+      s += "  " + std::string(StatusName(r.status)) + " " + id +
+           (r.status == Status::kFail && rule ? " [" + std::string(LevelName(rule->level)) + "]"
+                                              : std::string()) +
+           "\n";
     }
   }
   char wall[64];
@@ -137,8 +145,12 @@ std::string ConsoleSummary(const RunReport& report, bool verbose) {
               : ", during " + report.interrupted_case + " (cut short: no verdict)") +
          "; the rest did not run\n";
   }
+  if (report.target_error.empty() && report.interrupted_by == 0 && !report.JudgedAnyRule()) {
+    s += report.NoVerdictReason() + "\n";
+  }
   const char* verdict = !report.target_error.empty() ? "TARGET ERROR (no verdict on the device)"
                         : report.interrupted_by != 0 ? "INTERRUPTED (no verdict)"
+                        : !report.JudgedAnyRule()    ? "NO VERDICT (no rule was judged)"
                         : report.MustFailed()        ? "FAIL (a MUST rule failed)"
                                                      : "PASS";
   s += std::string("result: ") + verdict + " in " + wall + "\n";
@@ -203,11 +215,13 @@ nlohmann::json JsonReport(const RunReport& report) {
   json rules = json::array();
   for (const auto& [id, r] : report.rules) {
     const Rule* rule = FindRule(id);
-    rules.push_back({{"id", id},
-                     {"level", rule ? LevelName(rule->level) : "?"},
-                     {"status", StatusName(r.status)},
-                     {"cases_passed", r.cases_passed},
-                     {"cases_failed", r.cases_failed}});
+    json jr = {{"id", id},
+               {"level", rule ? LevelName(rule->level) : "?"},
+               {"status", StatusName(r.status)},
+               {"cases_passed", r.cases_passed},
+               {"cases_failed", r.cases_failed}};
+    if (r.status == Status::kNotExercised) jr["why_not_exercised"] = r.why_not_exercised;
+    rules.push_back(std::move(jr));
   }
   j["rules"] = rules;
   j["must_failed"] = report.MustFailed();
@@ -215,13 +229,15 @@ nlohmann::json JsonReport(const RunReport& report) {
   j["interrupted_by_signal"] = report.interrupted_by;
   j["interrupted_case"] =
       report.interrupted_case.empty() ? json(nullptr) : json(report.interrupted_case);
+  const std::string no_verdict = report.NoVerdictReason();
+  j["no_verdict"] = no_verdict.empty() ? json(nullptr) : json(no_verdict);
   j["exit_code"] = ExitCode(report);
   j["wall_s"] = report.wall_s;
   return j;
 }
 
 std::string JunitReport(const RunReport& report) {
-  size_t tests = 0, failures = 0, skipped = 0;
+  size_t tests = 0, failures = 0, must_failures = 0, skipped = 0;
   std::string body;
   for (const CaseResult& c : report.cases) {
     const std::string cls = "mococheck." + report.protocol + "." + c.suite + "." + c.name;
@@ -240,10 +256,15 @@ std::string JunitReport(const RunReport& report) {
       const std::string level(r ? LevelName(r->level) : "?");
       body += "    <testcase classname=\"" + XmlEscape(cls) + "\" name=\"" + XmlEscape(id) +
               "\" time=\"" + std::to_string(c.wall_s) + "\">\n";
-      if (o.status == Status::kFail && r && r->level == Level::kMust) {
+      if (o.status == Status::kFail && r && r->level != Level::kNote) {
+        // Both MUST and SHOULD failures are <failure> elements, where CI
+        // dashboards look; the type says which (docs/files.md): only MUST
+        // failures set the exit code, and the suite's must_failures property
+        // counts them.
         ++failures;
-        body +=
-            "      <failure message=\"" + XmlEscape(level + " " + std::string(r->title)) + "\">";
+        must_failures += r->level == Level::kMust;
+        body += "      <failure type=\"" + level + "\" message=\"" +
+                XmlEscape(level + " " + std::string(r->title)) + "\">";
         for (const Evidence& e : o.evidence) body += XmlEscape(EvidenceText(e)) + "\n";
         body += "</failure>\n";
       } else if (o.status != Status::kPass) {
@@ -257,13 +278,7 @@ std::string JunitReport(const RunReport& report) {
   }
   // A run without a verdict is an error of the whole suite, not a passing one.
   size_t errors = 0;
-  const std::string no_verdict =
-      !report.target_error.empty() ? "target error: " + report.target_error
-      : report.interrupted_by != 0
-          ? "interrupted by signal " + std::to_string(report.interrupted_by) +
-                (report.interrupted_case.empty() ? std::string()
-                                                 : " during " + report.interrupted_case)
-          : std::string();
+  const std::string no_verdict = report.NoVerdictReason();
   if (!no_verdict.empty()) {
     ++tests;
     ++errors;
@@ -280,7 +295,10 @@ std::string JunitReport(const RunReport& report) {
        "\">\n";
   s += "    <properties><property name=\"target\" value=\"" + XmlEscape(report.target) +
        "\"/><property name=\"seed\" value=\"" + std::to_string(report.options.random.seed) +
-       "\"/></properties>\n";
+       "\"/><property name=\"must_failures\" value=\"" + std::to_string(must_failures) +
+       "\"/><property name=\"should_failures\" value=\"" +
+       std::to_string(failures - must_failures) + "\"/><property name=\"exit_code\" value=\"" +
+       std::to_string(ExitCode(report)) + "\"/></properties>\n";
   s += body;
   s += "  </testsuite>\n</testsuites>\n";
   return s;

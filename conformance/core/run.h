@@ -14,8 +14,11 @@
 //     static constexpr std::string_view kLacking;
 //     static const std::vector<Case>& Cases();
 //     static const std::vector<Rule>& Rules();
-//     // Asks the device what it is; nullopt when it did not answer.
+//     // Asks the device what it is (twice, as a host retries); nullopt when
+//     // it did not answer.
 //     static std::optional<Device> Discover(Host& probe);
+//     // Optional: the rule a missed first introduction fails ("DMC-HI-016").
+//     static constexpr std::string_view kIntroductionRule;
 //     // The console line and JSON fields of report.device / device_info.
 //     static void Describe(const Device& device, RunReport& report);
 //     // Whether a rule or case with `needs` applies to the device.
@@ -27,12 +30,17 @@
 //     static PositionSeries Positions(const std::vector<Chunk>& traffic);
 //   };
 //
-// A device that did not introduce itself is treated the same for every
-// protocol: the cases and rules that need nothing still run (their greeting
-// goes unanswered, which fails the run), the others are not applicable. When
-// such a device has still sent no byte after kSilentCasesBeforeGivingUp cases,
-// the rest are not run (each says why), so a dead link ends the run in a few
-// answer timeouts instead of one per case.
+// The introduction is sent twice, as a host retries after its answer timeout;
+// a device that answers only the second fails the protocol's introduction
+// rule (Traits::kIntroductionRule, judged in a "connect/introduction" entry)
+// and is judged on everything else. A device that sent nothing at all to
+// either is a target error (exit 2): no case runs, whatever the subset or
+// shard. A device that sent bytes but no introduction is treated the same
+// for every protocol: the cases and rules that need nothing still run (their
+// greeting goes unanswered, which fails the run), the others are not
+// applicable. When such a device has still sent no byte after
+// kSilentCasesBeforeGivingUp cases, the rest are not run (each says why), so
+// a dead link ends the run in a few answer timeouts instead of one per case.
 #ifndef MOCO_CONFORMANCE_CORE_RUN_H_
 #define MOCO_CONFORMANCE_CORE_RUN_H_
 
@@ -68,6 +76,18 @@ inline constexpr size_t kSilentCasesBeforeGivingUp = 2;
 inline constexpr const char* kGaveUpOnSilence =
     "not run: the device has sent nothing (no introduction, and no byte in the first cases); "
     "check the port, the cable, the baud rate and that the device is powered";
+
+// What a run whose device sent nothing to its introductions reports.
+inline constexpr std::string_view kNoIntroduction =
+    "the device sent nothing in answer to two introductions (the second after the answer "
+    "timeout); no rule can be judged: check the port, the cable, the baud rate, that the "
+    "device is powered and that no other program is reading the port";
+
+// Whether the device sent any byte in `traffic`.
+inline bool DeviceSpoke(const std::vector<Chunk>& traffic) {
+  return std::any_of(traffic.begin(), traffic.end(),
+                     [](const Chunk& c) { return !c.from_host && !c.bytes.empty(); });
+}
 
 // The same, where Needs::kPins asks the target: it must watch pins.
 template <typename Traits>
@@ -114,13 +134,54 @@ RunReport Run(Target& target, const RunOptions& options) {
   report.options = options;
 
   std::optional<Device> device;
+  bool device_spoke = false;
   {
-    Verdicts probe;
+    Verdicts probe(options.rules);
     Host host(target, probe, options.host);
+    const TimeNs t0 = host.Now();
+    const auto c0 = std::chrono::steady_clock::now();
     device = Traits::Discover(host);
     host.Close();
+    device_spoke = DeviceSpoke(host.traffic());
+    // The introduction's own rule (the first HI answered) is judged here,
+    // where the host's first request is; the rest of what the probe saw is
+    // judged again by every case's greeting.
+    if constexpr (requires { Traits::kIntroductionRule; }) {
+      const auto it = probe.outcomes().find(Traits::kIntroductionRule);
+      if (device && it != probe.outcomes().end() && it->second.status == Status::kFail) {
+        CaseResult intro;
+        intro.suite = "connect";
+        intro.name = "introduction";
+        intro.summary = "How the device answered the host's first introduction";
+        intro.outcomes.emplace(it->first, it->second);
+        intro.log.push_back("the first introduction went unanswered; the second, sent after the "
+                            "answer timeout, was answered and the run goes on");
+        intro.target_ns = std::max<TimeNs>(0, host.Now() - t0);
+        intro.wall_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+        intro.KeepTraffic(host.traffic());
+        report.cases.push_back(std::move(intro));
+      }
+    }
   }
   if (device) Traits::Describe(*device, report);
+  // A device that sent nothing at all to two introductions gives the run
+  // nothing to judge: that is a target error in every subset and shard, never
+  // a PASS of the cases that need nothing.
+  if (!device && !device_spoke) {
+    if (const int sig = StopRequested(); sig != 0) {
+      report.interrupted_by = sig;
+    } else {
+      report.target_error = std::string(kNoIntroduction);
+    }
+    if (options.on_progress) options.on_progress(report);
+    SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
+      return !(rule.needs == Needs::kPins && !options.pins);
+    });
+    report.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    return report;
+  }
 
   if (options.on_progress) options.on_progress(report);
   const std::vector<Case>& cases = Traits::Cases();
@@ -178,10 +239,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     }
     result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-    const bool device_spoke =
-        std::any_of(host.traffic().begin(), host.traffic().end(),
-                    [](const Chunk& c) { return !c.from_host && !c.bytes.empty(); });
-    silent_cases = device_spoke ? 0 : silent_cases + 1;
+    silent_cases = DeviceSpoke(host.traffic()) ? 0 : silent_cases + 1;
     result.outcomes = verdicts.outcomes();
     result.KeepTraffic(host.traffic());
     result.positions = Traits::Positions(result.traffic);

@@ -80,6 +80,9 @@ struct RuleSummary {
   Status status = Status::kNotExercised;
   uint32_t cases_failed = 0;
   uint32_t cases_passed = 0;
+  // Why an applicable rule was not exercised (kNotExercised only): what the
+  // cases that could judge it said, or why they did not run.
+  std::string why_not_exercised;
 };
 
 struct RunReport {
@@ -104,6 +107,12 @@ struct RunReport {
   std::string interrupted_case;
 
   bool MustFailed() const;
+  // True when at least one rule passed, failed or was noted: a run that
+  // judged nothing has no verdict.
+  bool JudgedAnyRule() const;
+  // Why the run has no verdict ("" when it has one): the target error, the
+  // interrupting signal, or no rule judged.
+  std::string NoVerdictReason() const;
   // Counts of rules by status.
   std::map<Status, size_t> RuleCounts() const;
 };
@@ -114,8 +123,9 @@ struct RunReport {
 void SummarizeRules(RunReport& report, const std::vector<Rule>& rules,
                     const std::function<bool(const Rule&)>& applies);
 
-// 2 when the run has no verdict (a target error, or it was interrupted),
-// else 0 when every MUST rule passed, 1 when one failed (docs/exit-codes.md).
+// 2 when the run has no verdict (a target error, it was interrupted, or it
+// judged no rule), else 0 when every MUST rule passed, 1 when one failed
+// (docs/exit-codes.md).
 int ExitCode(const RunReport& report);
 
 }  // namespace moco::conformance

@@ -7,6 +7,7 @@
 
 #include <set>
 #include <string>
+#include <vector>
 
 namespace moco::conformance {
 namespace {
@@ -20,14 +21,19 @@ class SilentTarget final : public Target {
   std::optional<std::string> Open() override { return std::nullopt; }
   void Restart() override { now_ = 0; }
   TimeNs Now() const override { return now_; }
-  bool Send(wire::ByteView) override { return true; }
+  bool Send(wire::ByteView) override {
+    ++sends_;
+    return true;
+  }
   bool Receive(TimeNs deadline_ns, wire::Bytes&) override {
     now_ = std::max(now_, deadline_ns);
     return true;
   }
+  size_t sends() const { return sends_; }
 
  private:
   TimeNs now_ = 0;
+  size_t sends_ = 0;
 };
 
 TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
@@ -45,19 +51,81 @@ TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
   EXPECT_EQ(FindRunner(Protocol::kStackshotDfmoco), nullptr);
 }
 
-// A device that does not introduce itself fails certification under every
-// protocol: the cases that need nothing run and find their greeting
-// unanswered; the others are not applicable, and say why. Once two cases
-// have drawn no byte from it, the rest are not run, and say why.
-TEST(Registry, ASilentDeviceFailsUnderEveryProtocolAlike) {
+// A device that sends nothing at all to the introduction (asked twice) gives
+// no verdict under any protocol: a target error (exit 2) in every subset and
+// every shard, with no case run and no rule judged, never a PASS.
+TEST(Registry, ASilentDeviceIsATargetErrorInEverySubsetAndShard) {
   for (const ProtocolRunner& r : Runners()) {
     SCOPED_TRACE(std::string(ProtocolName(r.protocol)));
-    SilentTarget target;
+    std::vector<RunOptions> runs(1);
+    runs.emplace_back().cases = r.cases().front().suite + "/*";
+    for (uint32_t i = 0; i < 8; ++i) {
+      RunOptions& o = runs.emplace_back();
+      o.shard_index = i;
+      o.shard_count = 8;
+    }
+    for (RunOptions& options : runs) {
+      SCOPED_TRACE("cases '" + options.cases + "', shard " +
+                   std::to_string(options.shard_index + 1) + "/" +
+                   std::to_string(options.shard_count));
+      SilentTarget target;
+      ASSERT_FALSE(target.Open());
+      options.random.steps = 5;
+      const RunReport report = r.run(target, options);
+      EXPECT_TRUE(report.device.empty());
+      EXPECT_EQ(report.target_error, kNoIntroduction);
+      EXPECT_EQ(ExitCode(report), 2);
+      EXPECT_TRUE(report.cases.empty());
+      EXPECT_FALSE(report.JudgedAnyRule());
+      // Asked twice, as a host retries after its answer timeout.
+      EXPECT_EQ(target.sends(), 2u);
+    }
+  }
+}
+
+// A device that sends bytes but never an introduction fails certification
+// under every protocol: the cases that need nothing run and find their
+// greeting unanswered; the others are not applicable, and say why. Once two
+// cases have drawn no byte from it, the rest are not run, and say why.
+class MumblingTarget final : public Target {
+ public:
+  std::string Name() const override { return "mumbling"; }
+  bool VirtualClock() const override { return true; }
+  bool CanRestart() const override { return true; }
+  std::optional<std::string> Open() override { return std::nullopt; }
+  void Restart() override {}
+  TimeNs Now() const override { return now_; }
+  bool Send(wire::ByteView) override {
+    pending_ = ++sends_ <= 2;  // a byte that is no answer, to the introductions only
+    return true;
+  }
+  bool Receive(TimeNs deadline_ns, wire::Bytes& out) override {
+    if (pending_) {
+      pending_ = false;
+      out.push_back(0x7f);
+      now_ += 1000;
+      return true;
+    }
+    now_ = std::max(now_, deadline_ns);
+    return true;
+  }
+
+ private:
+  size_t sends_ = 0;
+  bool pending_ = false;
+  TimeNs now_ = 0;
+};
+
+TEST(Registry, ADeviceThatNeverIntroducesItselfFailsUnderEveryProtocolAlike) {
+  for (const ProtocolRunner& r : Runners()) {
+    SCOPED_TRACE(std::string(ProtocolName(r.protocol)));
+    MumblingTarget target;
     ASSERT_FALSE(target.Open());
     RunOptions options;
     options.random.steps = 5;
     const RunReport report = r.run(target, options);
     EXPECT_TRUE(report.device.empty());
+    EXPECT_TRUE(report.target_error.empty());
     EXPECT_EQ(ExitCode(report), 1);
     size_t ran = 0, not_applicable = 0, given_up = 0;
     for (const CaseResult& c : report.cases) {

@@ -171,6 +171,11 @@ const std::vector<Rule> kRules = {
      "Go-motion, looping and camera-trigger capabilities come with real-time moves (0x0001)",
      "MSG_RT_SHOOT_FRAME ... FRAME DWORD A frame in the uploaded move",
      "MSG_RT_SHOOT_FRAME; MSG_RT_RUN_MOVE FLAGS"},
+    {"DMC-HI-016", L::kMust, N::kNothing,
+     "The first HI a host sends is answered (not only a repeat after the host's timeout)",
+     "Request basic information about the device. Dragonframe always starts with this "
+     "request. ... The device must respond to every message it receives.",
+     "MSG_HI; MSG_FLAG_ACK"},
 
     // --- Motor control ("Motor Control" capability, MSG_MOTOR_*) ---
     {"DMC-STAT-001", L::kMust, N::kNothing,
@@ -339,11 +344,13 @@ const std::vector<Rule> kRules = {
      "Document Revision History; docs/protocol-notes (trailing bytes)"},
 
     // --- Soft limits ---
-    {"DMC-LIM-001", L::kShould, N::kMotors,
-     "A move above an enabled upper soft limit is refused with ERR_SOFT_UP",
+    {"DMC-LIM-001", L::kNote, N::kMotors,
+     "A move above an enabled upper soft limit is refused with ERR_SOFT_UP (no clause says a "
+     "device refuses it; dmc-lite completes it)",
      "ERR_SOFT_UP 0x0020 Software upper limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
-    {"DMC-LIM-002", L::kShould, N::kMotors,
-     "A move below an enabled lower soft limit is refused with ERR_SOFT_LOW",
+    {"DMC-LIM-002", L::kNote, N::kMotors,
+     "A move below an enabled lower soft limit is refused with ERR_SOFT_LOW (no clause says a "
+     "device refuses it; dmc-lite completes it)",
      "ERR_SOFT_LOW 0x0021 Software lower limit hit", "MSG_FLAG_ACK; MSG_MOTOR_SET_LIMITS"},
     {"DMC-LIM-003", L::kMust, N::kMotors,
      "A move the device refuses (ERR_SOFT_UP / ERR_SOFT_LOW) leaves the motor where it was",
@@ -354,8 +361,9 @@ const std::vector<Rule> kRules = {
      "MSG_MOTOR_SET_LIMITS"},
     {"DMC-LIM-005", L::kMust, N::kMotors, "Disabled soft limits do not restrict moves",
      "LOWER ENABLE BYTE 0x01 enabled, 0x00 not", "MSG_MOTOR_SET_LIMITS"},
-    {"DMC-LIM-006", L::kShould, N::kMotors,
-     "A jog towards a point past an enabled soft limit never passes the limit",
+    {"DMC-LIM-006", L::kNote, N::kMotors,
+     "A jog towards a point past an enabled soft limit stops at the limit (no clause says how a "
+     "jog meets one; dmc-lite completes it)",
      "UPPER LIMIT DWORD The upper software step limit", "MSG_MOTOR_SET_LIMITS; MSG_MOTOR_JOG"},
     {"DMC-LIM-007", L::kShould, N::kHwLimits,
      "A hardware limit switch that closes while its bound motor moves towards it halts the motor "

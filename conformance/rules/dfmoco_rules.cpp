@@ -62,6 +62,11 @@ const std::vector<Rule> kRules = {
      "The device is none of the known sketches (1.2.7, 1.3.0, 1.3.1, 2.0.0 with 4 or 8 axes)",
      "Version 1.x answers `hi 1 4 1.3.0` / `hi 1 4 1.2.7`. ... Uno drives 4 motors ...; Mega 8.",
      "FACTS DFMoco"},
+    {"DFM-HI-008", L::kMust, N::kNothing,
+     "The first `hi` a host sends is answered (not only a repeat after the host's timeout)",
+     "Hello (hi) - initiate communication ... IN: hi OUT: hi <major version> <number of axes> "
+     "<full version string>",
+     "Hello (hi)"},
 
     // --- One reply per command ---
     {"DFM-REPLY-001", L::kMust, N::kNothing,

@@ -414,6 +414,8 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   if (avr_ == nullptr) return false;
   const uint64_t deadline = NsToCycles(deadline_ns);
   bool alive = true;
+  uint32_t polls = 0;
+  bool stop_requested = false;
   for (;;) {
     bool delivered = false;
     while (!from_device_.empty() && from_device_.front().ready_cycle <= avr_->cycle) {
@@ -435,6 +437,12 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
     const size_t written = from_device_.size();
     int stalls = 0;  // avr_run() calls in a row that left the cycle count alone
     while (avr_->cycle < stop && from_device_.size() == written) {
+      // A stop request ends a long run of the core (a firmware spinning for
+      // seconds of its time) as it ends every other wait.
+      if ((++polls & 0xFFF) == 0 && StopRequested() != 0) {
+        stop_requested = true;
+        break;
+      }
       const uint64_t before = avr_->cycle;
       const int state = avr_run(avr_);
       if (state != cpu_Running && state != cpu_Sleeping) break;
@@ -445,9 +453,10 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
         break;
       }
     }
+    if (stop_requested) break;
   }
   ArmWake(0);
-  return alive;
+  return alive && !stop_requested;
 }
 
 }  // namespace moco::conformance

@@ -7,6 +7,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <termios.h>
@@ -211,6 +212,21 @@ std::optional<std::string> FdTarget::Open() {
       close(fd_);
       fd_ = -1;
       return NotADevice(st);
+    }
+    // Two hosts on one port steal each other's answers, and each would judge
+    // the device by the half it saw: a second mococheck (or any program that
+    // locks the port the same way) is refused instead.
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      close(fd_);
+      fd_ = -1;
+      if (err == EWOULDBLOCK) {
+        return scheme_ + ":" + address_ +
+               " is in use by another program that holds it locked (another mococheck?); two "
+               "hosts on one port steal each other's answers: wait for it to end, or give each "
+               "run its own device";
+      }
+      return "cannot lock " + address_ + ": " + std::strerror(err);
     }
     termios t{};
     if (tcgetattr(fd_, &t) == 0) {

@@ -533,7 +533,16 @@ const DfmLine* DfmHost::Await(int index) {
   const TimeNs give_up = commands_[i].sent_ns + options_.answer_timeout_ns;
   if (!link_.ReadUntil(give_up, [&] { return commands_[i].answer >= 0; })) {
     const DfmCommand& c = commands_[i];
-    verdicts_.Fail("DFM-REPLY-001",
+    // A missing answer is judged under the rule of its command's clause where
+    // one exists for exactly that: `go` (DFM-GO-004) and the host's first `hi`
+    // (DFM-HI-008, asked again as a host does after its timeout).
+    const std::string_view word = std::string_view(c.line).substr(0, 2);
+    bool first_hi = word == "hi" && c.line.size() == 2;
+    for (size_t k = 0; first_hi && k < i; ++k) first_hi = commands_[k].line != "hi";
+    const std::string_view rule = first_hi                     ? "DFM-HI-008"
+                                  : word == "go" && c.line == "go" ? "DFM-GO-004"
+                                                                   : "DFM-REPLY-001";
+    verdicts_.Fail(rule,
                    Evidence{"an answer to " + Quote(c.line),
                             link_.lost() ? "the link closed"
                                          : "nothing after " + Ms(options_.answer_timeout_ns),
@@ -541,6 +550,7 @@ const DfmLine* DfmHost::Await(int index) {
     return nullptr;
   }
   verdicts_.Pass("DFM-REPLY-001");
+  if (commands_[i].line == "hi") verdicts_.Pass("DFM-HI-008");
   return &lines_[static_cast<size_t>(commands_[i].answer)];
 }
 

@@ -80,6 +80,21 @@ TEST(DfmocoProofsGoMotion, AGoRefusedIsCaughtByGo004) {
   EXPECT_EQ(r.rules.at("DFM-GO-005").status, Status::kPass);
 }
 
+// `go` never answered at all (1.2.7 as FACTS has it): the rule of exactly
+// that clause fails, not only the generic "every command answered".
+TEST(DfmocoProofsGoMotion, AGoNeverAnsweredIsCaughtByGo004NotReply001) {
+  const RunReport r = RunBroken(
+      [](const std::string& line, const std::string& last_command, sim::Scheduler& s,
+         devices::ByteSink& out) {
+        if (line == "go" && last_command == "go") return;
+        PassThrough(line, last_command, s, out);
+      },
+      Only("gomotion/blur"));
+  ExpectCaught(r, "DFM-GO-004");
+  EXPECT_EQ(FailedMusts(r), Lines{"DFM-GO-004"});
+  EXPECT_NE(r.rules.at("DFM-REPLY-001").status, Status::kFail);
+}
+
 // The sketch takes motor 1's next-frame position (field 6) 100 steps further
 // on: its exposure and slow-down run past where they should end. The
 // pre-position depends on p0 and p1 only and stays right.

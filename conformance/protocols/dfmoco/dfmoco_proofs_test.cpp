@@ -92,6 +92,27 @@ TEST(DfmocoProofs, NoUnpromptedHiAtBootIsCaughtByHi001) {
   EXPECT_TRUE(FailedMusts(r).empty());
 }
 
+// A sketch that waits for a newline in setup() and so swallows the first line
+// after every start: its first `hi` goes unanswered. The host asks again
+// after its timeout, as Dragonframe does; the miss fails the introduction's
+// own rule and everything else is judged.
+TEST(DfmocoProofs, AFirstHiSwallowedAtStartIsCaughtByHi008AndTheRestIsJudged) {
+  const RunReport r = RunBroken(PassThrough, Only("connect/*"), {},
+                                [swallowed = false](const std::string& line) mutable {
+                                  if (swallowed) return line;
+                                  swallowed = true;
+                                  return std::string();
+                                });
+  ExpectCaught(r, "DFM-HI-008");
+  EXPECT_EQ(FailedMusts(r), Lines{"DFM-HI-008"});
+  EXPECT_FALSE(r.device.empty());
+  EXPECT_EQ(r.rules.at("DFM-HI-002").status, Status::kPass);
+  EXPECT_NE(r.rules.at("DFM-REPLY-001").status, Status::kFail);
+  ASSERT_FALSE(r.cases.empty());
+  EXPECT_EQ(r.cases.front().suite + "/" + r.cases.front().name, "connect/introduction");
+  for (const CaseResult& c : r.cases) EXPECT_TRUE(c.applicable) << c.suite << "/" << c.name;
+}
+
 // Every `hi` line rewritten to `to`.
 LineBreakage HiAs(std::string to) {
   return [to](const std::string& line, const std::string&, sim::Scheduler&,

@@ -38,6 +38,7 @@ std::string DfmocoDialectExcludes(std::string_view rule_or_case, const DfmDevice
 struct DfmocoProtocol {
   static constexpr Protocol kProtocol = Protocol::kDfmoco;
   static constexpr std::string_view kLacking = "the device does not advertise ";
+  static constexpr std::string_view kIntroductionRule = "DFM-HI-008";
   using Host = DfmHost;
   using Device = DfmDevice;
   using Case = DfmCase;

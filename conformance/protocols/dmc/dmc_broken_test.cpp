@@ -488,6 +488,67 @@ TEST(BrokenDevice, AMotorStatusThatNeverShowsMotionIsCaughtByStat004) {
   EXPECT_EQ(ExitCode(r), 1);
 }
 
+// A device that sends its position updates on its own tick, as dmc-lite does
+// on its 20 ms velocity tick (calibration): each unsolicited update is held to
+// the next 60 ms boundary of the device's clock, and only the newest held one
+// goes out. A move's final update then arrives up to 60 ms after the motor
+// stopped and after a correct "not moving" MOTOR_STATUS: the motion's end
+// reported late, not a stale status.
+RunOptions MotorMoveOnly() {
+  RunOptions o;
+  o.cases = "motor/move";
+  return o;
+}
+
+Breakage UpdatesOnATick(sim::TimeNs tick_ns) {
+  struct Held {
+    wire::Bytes raw;
+    bool armed = false;
+  };
+  return [tick_ns, held = std::shared_ptr<Held>()](const dmc::FrameRef& f, wire::Bytes raw,
+                                                   sim::Scheduler& s,
+                                                   devices::ByteSink& out) mutable {
+    if (!held) held = std::make_shared<Held>();  // one per device: each copy starts empty
+    if (f.type != ToWire(MsgType::kMotorGetPosition) || f.id >= DmcHost::kFirstHostId) {
+      out.Write(raw);
+      return;
+    }
+    held->raw = std::move(raw);
+    if (held->armed) return;
+    held->armed = true;
+    const sim::TimeNs wait = tick_ns - s.Now() % tick_ns;
+    s.After(wait, [h = held, &out] {
+      h->armed = false;
+      out.Write(h->raw);
+    });
+  };
+}
+
+TEST(BrokenDevice, AFinalUpdateOnTheDevicesOwnTickIsNoStaleStatus) {
+  const RunReport r = RunBroken(UpdatesOnATick(60 * sim::kNsPerMs), MotorMoveOnly());
+  ASSERT_TRUE(r.rules.count("DMC-STAT-004"));
+  EXPECT_EQ(r.rules.at("DMC-STAT-004").status, Status::kPass) << ConsoleReport(r, false);
+}
+
+// The same device whose MOTOR_STATUS says "not moving" while it still moves:
+// the updates after the status go on changing, and DMC-STAT-004 fails.
+TEST(BrokenDevice, AStatusOfRestWhileUpdatesGoOnChangingIsCaughtByStat004) {
+  const Breakage tick = UpdatesOnATick(60 * sim::kNsPerMs);
+  auto moved = std::make_shared<bool>(false);
+  const RunReport r = RunBroken(
+      [tick, moved](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler& s,
+                    devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorStatus) && f.data.size() == 5 && f.data[0] != 0) {
+          // Says "at rest" from the second moving status on.
+          if (*moved) raw = dmc::Encode(f.id, dmc::DeviceMessage{dmc::MotorStatusResponse{0, 0}});
+          *moved = true;
+        }
+        tick(f, std::move(raw), s, out);
+      },
+      MotorMoveOnly());
+  ExpectCaught(r, "DMC-STAT-004");
+}
+
 TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   const std::filesystem::path session = std::filesystem::temp_directory_path() /
                                         ("mococheck_shrunk_" + std::to_string(getpid()) + ".jsonl");

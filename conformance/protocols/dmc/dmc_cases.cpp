@@ -378,9 +378,23 @@ void Reset(DmcCaseContext& c) {
   const DeviceRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
   const auto* rep = As<dmc::MotorPositionReport>(u);
   c.v.Check("DMC-RST-002", rep != nullptr && At(rep->positions_steps, 0) == value, [&] {
-    return EvOf(h, u,
-                "MOTOR_GET_POSITION with motor 1 = " + std::to_string(value) + " within 500 ms",
-                Show(u));
+    const std::string want = "MOTOR_GET_POSITION with motor 1 = " + std::to_string(value) +
+                             " after the ACK, within 500 ms";
+    if (u == nullptr) {
+      // A confirming message sent before the answer is not "after ...
+      // responding": say so, rather than "no answer".
+      for (size_t k = mark; k < after && k < h.records().size(); ++k) {
+        const DeviceRecord& before = h.records()[k];
+        const auto* early = As<dmc::MotorPositionReport>(&before);
+        if (IsUnsolicited(before, MsgType::kMotorGetPosition) && early != nullptr &&
+            At(early->positions_steps, 0) == value) {
+          return EvOf(h, &before, want,
+                      "sent " + std::to_string((ack->t_ns - before.t_ns) / 1000) +
+                          " us before the ACK, none after it: " + Show(&before));
+        }
+      }
+    }
+    return EvOf(h, u, want, Show(u));
   });
   const auto p1 = GetPositions(h);
   const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
@@ -968,6 +982,19 @@ bool IsQuery(uint16_t type) {
          type == ToWire(MsgType::kHi) || (type & dmc::kFlagAck) != 0;
 }
 
+// How long after a command a device may take to start its motion (two of
+// dmc-lite's 20 ms motion ticks, and a margin): a MOTOR_STATUS of 0 asked
+// before then is not stale.
+constexpr TimeNs kStartLatency = 50 * kMs;
+
+// When the host last sent a request other than a query; 0 when none.
+TimeNs LastCommandSent(const DmcHost& h) {
+  for (auto it = h.requests().rbegin(); it != h.requests().rend(); ++it) {
+    if (!IsQuery(it->type)) return it->sent_ns;
+  }
+  return 0;
+}
+
 // When the device last showed or was told of motion before record `end`:
 // its last position update, or the host's last request other than a query.
 TimeNs LastActivity(const DmcHost& h, size_t end) {
@@ -1029,7 +1056,21 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       host.Idle(quiet_at - host.Now());
       const DeviceRecord* moved = MovedSince(host, mark, LastPositions(host, mark));
       if (moved == nullptr) return w.rested = true, w;
-      if (w.stale_status == nullptr) {
+      // The status was stale only if the motor went on moving after it: the
+      // updates after it change from one to the next. One last update that
+      // carries the rest position is the end of the motion reported on the
+      // device's own update tick, up to a period after it stopped (dmc-lite:
+      // 15-113 ms after a correct status, calibration). A status asked
+      // within kStartLatency of a command that starts motion may rightly be
+      // 0: nothing moves before the device's next motion tick (dmc-lite: 20
+      // ms). Either way the host asks again.
+      size_t moved_at = mark;
+      while (&host.records()[moved_at] != moved) ++moved_at;
+      const bool went_on =
+          MovedSince(host, moved_at + 1, As<dmc::MotorPositionReport>(moved)) != nullptr;
+      const bool just_commanded = r->t_ns - LastCommandSent(host) < kStartLatency;
+      if (!went_on && !just_commanded) return w.rested = true, w;
+      if (went_on && !just_commanded && w.stale_status == nullptr) {
         w.stale_status = r;
         w.moved_after = moved;
       }

@@ -143,7 +143,10 @@ void LiveRun(DmcCaseContext& c) {
       prev_t = -1;
       continue;
     }
-    if (prev_t >= 0) {
+    // Timed from frame 1 on: a device may give the pre-roll's updates the
+    // start frame's MOVE TIME (FACTS DMC v2), so when frame 0 was reached is
+    // not known from its reports.
+    if (prev_t >= 0 && k >= 2) {
       const TimeNs dt = first->t_ns - prev_t;
       c.v.Check("DMC-RT-007",
                 dt >= static_cast<TimeNs>(interval_ns * 0.5) - slack &&
@@ -277,10 +280,12 @@ void StopLoop(DmcCaseContext& c) {
   WaitRest(c, kRestTimeout);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-LOOP-001", Go(c));
+  // An update of the run at frame k: MOVE TIME is "in thousandths of a
+  // frame", and a device reporting on its own tick gives fractions (dmc-lite:
+  // 10080, 10520); the nearest whole frame is the one it is at.
   const auto frame_report = [](const DeviceRecord& r, auto pred) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
-    return r.request < 0 && p != nullptr && p->move_time_x1000 % 1000 == 0 &&
-           pred(p->move_time_x1000 / 1000);
+    return r.request < 0 && p != nullptr && pred((p->move_time_x1000 + 500) / 1000);
   };
   const int at_end = h.WaitFor(mark, 10'000 * kMs, [&](const DeviceRecord& r) {
     return frame_report(r, [&](uint32_t k) { return k == end; });
@@ -308,17 +313,32 @@ void StopLoop(DmcCaseContext& c) {
     WaitRest(c, kRestTimeout);
     return;
   }
-  // The end point it stopped at: the last frame reported before RT_END.
-  std::optional<uint32_t> last;
+  // The end point it stopped at: the last update before RT_END, at frame 0
+  // by its MOVE TIME (to the nearest frame) or by where the rig is (every
+  // motor within 2 steps of frame 0's upload: a device whose playback runs
+  // offset from the upload, which DMC-RT-008 judges, still stops at the end
+  // point).
+  const dmc::MotorPositionReport* last = nullptr;
   for (size_t i = stop_mark; i < static_cast<size_t>(e); ++i) {
     const auto* p = As<dmc::MotorPositionReport>(&h.records()[i]);
-    if (h.records()[i].request < 0 && p != nullptr && p->move_time_x1000 % 1000 == 0) {
-      last = p->move_time_x1000 / 1000;
-    }
+    if (h.records()[i].request < 0 && p != nullptr) last = p;
   }
-  Expect(c, "DMC-LOOP-001", last && *last == 0, "the run ends at frame 0, its next end point",
-         last ? "last frame reported " + std::to_string(*last) : "no frame reported");
   WaitRest(c, kRestTimeout);
+  const auto rest = GetPositions(h);
+  bool at_start = rest.has_value();
+  for (size_t m = 0; at_start && m < u->path.size(); ++m) {
+    at_start = std::abs(int64_t{At(*rest, m)} - u->path[m][0]) <= 2;
+  }
+  const bool frame0 = last != nullptr && (last->move_time_x1000 + 500) / 1000 == 0;
+  std::string start_positions;
+  for (size_t m = 0; m < u->path.size(); ++m) {
+    start_positions += (m ? ", " : "") + std::to_string(u->path[m][0]);
+  }
+  Expect(c, "DMC-LOOP-001", frame0 || at_start,
+         "the run ends at frame 0, its next end point (MOVE TIME near 0, or the rig at [" +
+             start_positions + "])",
+         (last ? "last MOVE TIME " + std::to_string(last->move_time_x1000) : "no update") +
+             ", at rest at " + (rest ? Vec(*rest) : "no position"));
 }
 
 void VirtPosition(DmcCaseContext& c) {

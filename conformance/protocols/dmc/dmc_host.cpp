@@ -560,7 +560,13 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
   if (!link_.ReadUntil(give_up,
                        [&] { return requests_[static_cast<size_t>(index)].answer >= 0; })) {
     const Request& req = requests_[static_cast<size_t>(index)];
-    verdicts_.Fail("DMC-ACK-001",
+    // The host's first HI has a rule of its own (a device that misses it is
+    // asked again, as Dragonframe does after its timeout).
+    bool first_hi = req.type == dmc::ToWire(dmc::MsgType::kHi);
+    for (int i = 0; first_hi && i < index; ++i) {
+      first_hi = requests_[static_cast<size_t>(i)].type != dmc::ToWire(dmc::MsgType::kHi);
+    }
+    verdicts_.Fail(first_hi ? "DMC-HI-016" : "DMC-ACK-001",
                    Evidence{"an answer to " + dmc::TypeName(req.type) + " id=" + std::to_string(id),
                             link_.lost() ? "the link closed"
                                          : "nothing after " +
@@ -569,6 +575,9 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
     return nullptr;
   }
   verdicts_.Pass("DMC-ACK-001");
+  if (requests_[static_cast<size_t>(index)].type == dmc::ToWire(dmc::MsgType::kHi)) {
+    verdicts_.Pass("DMC-HI-016");
+  }
   return &records_[static_cast<size_t>(requests_[static_cast<size_t>(index)].answer)];
 }
 

@@ -338,6 +338,33 @@ TEST(DmcLinkProofs, AHiAnsweredWithAnAckIsCaughtByHi001) {
   ExpectMustsFailed(r, {"DMC-HI-001"});
 }
 
+// A device that misses the very first HI after it starts (still booting, its
+// input not yet read): the host asks again after its timeout, as Dragonframe
+// does; the miss fails the introduction's own rule and the rest is judged.
+TEST(DmcLinkProofs, AFirstHiMissedIsCaughtByHi016AndTheRestIsJudged) {
+  auto missed = std::make_shared<bool>(false);
+  const RunReport r = RunBroken(PassThrough, Only("connect/*"), "",
+                                [missed](wire::ByteView bytes) -> wire::Bytes {
+                                  bool hi = false;
+                                  dmc::FrameDecoder dec;
+                                  dec.Feed(bytes, [&](const dmc::FrameEvent& e) {
+                                    const auto* f = std::get_if<dmc::FrameRef>(&e);
+                                    hi = hi || (f != nullptr && f->type == ToWire(MsgType::kHi));
+                                  });
+                                  if (hi && !*missed) {
+                                    *missed = true;
+                                    return {};
+                                  }
+                                  return wire::Bytes(bytes.begin(), bytes.end());
+                                });
+  ExpectCaught(r, "DMC-HI-016");
+  ExpectMustsFailed(r, {"DMC-HI-016"});
+  EXPECT_FALSE(r.device.empty());
+  EXPECT_NE(r.rules.at("DMC-ACK-001").status, Status::kFail);
+  ASSERT_FALSE(r.cases.empty());
+  EXPECT_EQ(r.cases.front().suite + "/" + r.cases.front().name, "connect/introduction");
+}
+
 TEST(DmcLinkProofs, AHiResponseOfFiftyBytesIsCaughtByHi002) {
   // PROTOCOL VERSION written as one byte.
   const RunReport r = RunBroken(

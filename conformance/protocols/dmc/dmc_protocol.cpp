@@ -61,7 +61,11 @@ bool Applies(Needs needs, const dmc::HiResponse& hi) {
 }
 
 std::optional<dmc::HiResponse> DmcProtocol::Discover(DmcHost& probe) {
-  if (const auto* hi = As<dmc::HiResponse>(probe.Call(dmc::HiRequest{}))) return *hi;
+  // Asked twice, as a host does after its answer timeout: a device that
+  // missed the first HI (DMC-HI-016) is still judged on everything else.
+  for (int attempt = 0; attempt < 2 && !probe.link_lost(); ++attempt) {
+    if (const auto* hi = As<dmc::HiResponse>(probe.Call(dmc::HiRequest{}))) return *hi;
+  }
   return std::nullopt;
 }
 

@@ -22,6 +22,7 @@ inline bool Applies(const Rule& rule, const dmc::HiResponse& hi) { return Applie
 struct DmcProtocol {
   static constexpr Protocol kProtocol = Protocol::kDmc;
   static constexpr std::string_view kLacking = "the device does not advertise ";
+  static constexpr std::string_view kIntroductionRule = "DMC-HI-016";
   using Host = DmcHost;
   using Device = dmc::HiResponse;
   using Case = DmcCase;

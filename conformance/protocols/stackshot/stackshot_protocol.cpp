@@ -11,9 +11,12 @@ namespace moco::conformance {
 namespace {}  // namespace
 
 std::optional<SsDeviceInfo> StackshotProtocol::Discover(SsHost& probe) {
-  SsDeviceInfo d = DiscoverStackshot(probe);
-  if (!d.answered) return std::nullopt;
-  return d;
+  // Asked twice, as a host does after its answer timeout.
+  for (int attempt = 0; attempt < 2 && !probe.link_lost(); ++attempt) {
+    SsDeviceInfo d = DiscoverStackshot(probe);
+    if (d.answered) return d;
+  }
+  return std::nullopt;
 }
 
 void StackshotProtocol::Describe(const SsDeviceInfo& d, RunReport& report) {
