@@ -178,7 +178,7 @@ while True:
   sim_pid=$!
   pids="$pids $sim_pid"
   wait_for test -L "$work/dmc" || fail "no PTY"
-  "$m" run --target "pty:$work/dmc" --cases 'connect/*' -q >first.txt 2>first-err.txt &
+  "$m" run --target "pty:$work/dmc" --cases 'connect/*' >first.txt 2>first-err.txt &
   first=$!
   pids="$pids $first"
   wait_for grep -q '^mococheck: \[1/' first-err.txt || fail "the first run did not start"

@@ -386,11 +386,16 @@ int DfmHost::Match(const DeviceReply& reply) const {
     }
     return fallback;
   }
+  // The oldest unanswered command it fits, those the host gave up on last (a
+  // `hi` asked again after a swallowed one is answered by this line).
+  int abandoned = -1;
   for (size_t i = 0; i < commands_.size(); ++i) {
     const DfmCommand& c = commands_[i];
-    if (c.answers == 0 && Fits(c, reply)) return static_cast<int>(i);
+    if (c.answers != 0 || !Fits(c, reply)) continue;
+    if (!c.abandoned) return static_cast<int>(i);
+    if (abandoned < 0) abandoned = static_cast<int>(i);
   }
-  return -1;
+  return abandoned;
 }
 
 void DfmHost::CheckAnswer(DfmCommand& c, const DfmLine& line) {
@@ -532,7 +537,8 @@ const DfmLine* DfmHost::Await(int index) {
   const auto i = static_cast<size_t>(index);
   const TimeNs give_up = commands_[i].sent_ns + options_.answer_timeout_ns;
   if (!link_.ReadUntil(give_up, [&] { return commands_[i].answer >= 0; })) {
-    const DfmCommand& c = commands_[i];
+    DfmCommand& c = commands_[i];
+    c.abandoned = true;
     // A missing answer is judged under the rule of its command's clause where
     // one exists for exactly that: `go` (DFM-GO-004) and the host's first `hi`
     // (DFM-HI-008, asked again as a host does after its timeout).

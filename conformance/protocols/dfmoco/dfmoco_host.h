@@ -56,6 +56,9 @@ struct DfmCommand {
   bool timed = true;  // judged by the DFM-DL rules (ended by "\r\n")
   int answer = -1;    // index into lines()
   int answers = 0;
+  // The host stopped waiting for its answer (Await timed out) and may have
+  // sent it again: a later fitting line answers a newer command first.
+  bool abandoned = false;
 };
 
 class DfmHost : public HostBase {

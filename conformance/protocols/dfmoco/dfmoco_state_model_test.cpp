@@ -58,8 +58,16 @@ struct Move : Cmd {
   int32_t motor = *rc::gen::inRange<int32_t>(1, kMotors + 1);
   int32_t to_steps = *rc::gen::inRange(-3000, 3001);
   void apply(Model& m) const override {
-    m.rest_steps[static_cast<size_t>(motor - 1)] = to_steps;
-    m.settled[static_cast<size_t>(motor - 1)] = false;
+    const auto i = static_cast<size_t>(motor - 1);
+    // A motor in motion may be at p when it reads this (it has not left its
+    // start yet, or it passes through): the sketch answers `mp m p`, keeps
+    // its destination (FACTS DFMoco) and comes to rest elsewhere.
+    if (m.settled[i]) {
+      m.rest_steps[i] = to_steps;
+    } else {
+      m.rest_steps[i].reset();
+    }
+    m.settled[i] = false;
   }
   void run(const Model& m, Sut& s) const override {
     const DfmLine* l = s.host->Call("mm " + std::to_string(motor) + " " + std::to_string(to_steps));

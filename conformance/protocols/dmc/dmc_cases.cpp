@@ -1066,6 +1066,9 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       // ms). Either way the host asks again.
       size_t moved_at = mark;
       while (&host.records()[moved_at] != moved) ++moved_at;
+      // Whether another update follows within the quiet period after it (a
+      // deque's records stay where they are as more arrive).
+      if (const TimeNs wait = moved->t_ns + kQuietForRest - host.Now(); wait > 0) host.Idle(wait);
       const bool went_on =
           MovedSince(host, moved_at + 1, As<dmc::MotorPositionReport>(moved)) != nullptr;
       const bool just_commanded = r->t_ns - LastCommandSent(host) < kStartLatency;
