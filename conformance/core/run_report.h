@@ -102,6 +102,10 @@ struct RunReport {
   // The case (suite/name) the signal cut short: its outcomes are dropped, as
   // a half-run case proves nothing; "" when none was under way.
   std::string interrupted_case;
+  // What the target says it does not reproduce of the device (Target::Caveats():
+  // e.g. simavr timer features the firmware used that are not modelled, a timer
+  // interrupt enabled but never fired), set by the caller after the run.
+  std::vector<std::string> target_caveats;
 
   bool MustFailed() const;
   // Counts of rules by status.
