@@ -33,14 +33,14 @@ struct ModeInfo {
 
 // 16-bit Timer/Counter1 (3, 4, 5): ATmega328P table 16-4, ATmega2560 table 17-2.
 constexpr ModeInfo kModes16[16] = {
-    {Kind::kNormal, TopFrom::kFixed, 0xFFFF},   {Kind::kPhase, TopFrom::kFixed, 0x00FF},
-    {Kind::kPhase, TopFrom::kFixed, 0x01FF},    {Kind::kPhase, TopFrom::kFixed, 0x03FF},
-    {Kind::kCtc, TopFrom::kOcrA, 0},            {Kind::kFast, TopFrom::kFixed, 0x00FF},
-    {Kind::kFast, TopFrom::kFixed, 0x01FF},     {Kind::kFast, TopFrom::kFixed, 0x03FF},
-    {Kind::kPhaseFreq, TopFrom::kIcr, 0},       {Kind::kPhaseFreq, TopFrom::kOcrA, 0},
-    {Kind::kPhase, TopFrom::kIcr, 0},           {Kind::kPhase, TopFrom::kOcrA, 0},
-    {Kind::kCtc, TopFrom::kIcr, 0},             {Kind::kReserved, TopFrom::kFixed, 0},
-    {Kind::kFast, TopFrom::kIcr, 0},            {Kind::kFast, TopFrom::kOcrA, 0},
+    {Kind::kNormal, TopFrom::kFixed, 0xFFFF}, {Kind::kPhase, TopFrom::kFixed, 0x00FF},
+    {Kind::kPhase, TopFrom::kFixed, 0x01FF},  {Kind::kPhase, TopFrom::kFixed, 0x03FF},
+    {Kind::kCtc, TopFrom::kOcrA, 0},          {Kind::kFast, TopFrom::kFixed, 0x00FF},
+    {Kind::kFast, TopFrom::kFixed, 0x01FF},   {Kind::kFast, TopFrom::kFixed, 0x03FF},
+    {Kind::kPhaseFreq, TopFrom::kIcr, 0},     {Kind::kPhaseFreq, TopFrom::kOcrA, 0},
+    {Kind::kPhase, TopFrom::kIcr, 0},         {Kind::kPhase, TopFrom::kOcrA, 0},
+    {Kind::kCtc, TopFrom::kIcr, 0},           {Kind::kReserved, TopFrom::kFixed, 0},
+    {Kind::kFast, TopFrom::kIcr, 0},          {Kind::kFast, TopFrom::kOcrA, 0},
 };
 // 8-bit Timer/Counter0 and 2: ATmega328P tables 15-8 and 18-8.
 constexpr ModeInfo kModes8[8] = {
@@ -182,9 +182,8 @@ enum Reg {
   kGtccrReg,
 };
 
-const char* const kFlagNames[AvrTimers::kFlagCount] = {"overflow", "compare match A",
-                                                       "compare match B", "compare match C",
-                                                       "input capture"};
+const char* const kFlagNames[AvrTimers::kFlagCount] = {
+    "overflow", "compare match A", "compare match B", "compare match C", "input capture"};
 
 }  // namespace
 
@@ -372,8 +371,9 @@ void AvrTimers::Reconfigure(Timer& t) {
   if (t.timer2 && t.hw->as2.reg != 0) {
     const uint8_t assr = avr_->data[t.hw->as2.reg];
     if ((assr & (kAs2 | kExclk)) != 0) {
-      Note(t.name + " asynchronous clock (ASSR.AS2/EXCLK, TOSC1/TOSC2) is not modelled: the "
-                    "timer does not count under simavr");
+      Note(t.name +
+           " asynchronous clock (ASSR.AS2/EXCLK, TOSC1/TOSC2) is not modelled: the "
+           "timer does not count under simavr");
       t.divider = 0;
     }
   }
@@ -504,8 +504,9 @@ void AvrTimers::OnWrite(avr_t* avr, uint16_t addr, uint8_t v, void* param) {
   if (hook->timer == nullptr) {  // GTCCR
     avr->data[addr] = v;
     if (v != 0) {
-      self->Note("GTCCR (timer synchronization mode TSM, prescaler resets PSRSYNC/PSRASY) is "
-                 "not modelled");
+      self->Note(
+          "GTCCR (timer synchronization mode TSM, prescaler resets PSRSYNC/PSRASY) is "
+          "not modelled");
     }
     return;
   }
@@ -518,7 +519,7 @@ void AvrTimers::OnWrite(avr_t* avr, uint16_t addr, uint8_t v, void* param) {
       self->Sync(t, now);
       uint8_t value = v;
       if (hook->reg == kRegB && !t.wide) value &= 0x3F;  // FOCnA/B: strobes, read as 0
-      if (hook->reg == kAssr) value &= kAs2 | kExclk;     // busy flags stay 0
+      if (hook->reg == kAssr) value &= kAs2 | kExclk;    // busy flags stay 0
       avr->data[addr] = value;
       self->Reconfigure(t);
       self->Reschedule(t);

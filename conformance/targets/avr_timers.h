@@ -54,7 +54,7 @@ namespace moco::conformance {
 //    correct) counts 0 up to TOP and down to 0; at or above TOP while counting
 //    up it turns down; with TOP 0 it stays at 0.
 //  - Flags: a flag belonging to counter value V is set on the tick that ends V
-//    (the timing diagrams, 16.12: the flag rises as TCNT leaves the value).
+//    (16.10 "Timer/Counter Timing Diagrams": the flag rises as TCNT leaves the value).
 //      TOVn: normal, CTC: V == MAX; fast PWM: V == TOP; dual slope: V == 0.
 //      OCFnx: V == OCRnx, on the way up and (dual slope) on the way down;
 //             not on the first tick after a CPU write to TCNTn (16.7 "compare
@@ -80,8 +80,9 @@ namespace moco::conformance {
 //    output pins OCnx (COMnx bits; the pins are not driven), external clocks,
 //    the asynchronous Timer2, reserved modes, GTCCR, ICNCn. A core reset
 //    (watchdog) inside simavr is not followed (the target builds a fresh core
-//    to restart). The analog comparator as input capture source (ACIC) is not
-//    modelled.
+//    to restart). Not modelled and not named either: the analog comparator as
+//    input capture source (ACIC), the power reduction bits (PRR PRTIMn: a
+//    powered-down timer still counts here), FOCnx strobes.
 class AvrTimers {
  public:
   // Takes over every timer simavr built for `avr`: their registers' write and

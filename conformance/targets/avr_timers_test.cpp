@@ -23,8 +23,7 @@ constexpr const char* kElf328p = MOCO_TIMER_MODES_328P_ELF;
 constexpr const char* kElf2560 = MOCO_TIMER_MODES_2560_ELF;
 
 // Interrupt-enable bits of TIMSKn (the same on every timer of both MCUs).
-constexpr uint8_t kToie = 1 << 0, kOcieA = 1 << 1, kOcieB = 1 << 2, kOcieC = 1 << 3,
-                  kIcie = 1 << 5;
+constexpr uint8_t kToie = 1 << 0, kOcieA = 1 << 1, kOcieB = 1 << 2, kOcieC = 1 << 3, kIcie = 1 << 5;
 // The firmware's pins: PC0 overflow, PC1..PC3 compare A..C, PC4 input capture.
 enum Pin { kPinTov = 0, kPinA, kPinB, kPinC, kPinIcf };
 
@@ -43,10 +42,12 @@ TimerRegs Regs(int timer) {
     default: {
       const uint16_t base[] = {0, 0x80, 0, 0x90, 0xA0, 0x120};
       const uint16_t b = base[timer];
+      // clang-format off
       return {true, b, static_cast<uint16_t>(b + 1), static_cast<uint16_t>(b + 4),
               static_cast<uint16_t>(b + 8), static_cast<uint16_t>(b + 10),
               static_cast<uint16_t>(b + 12), static_cast<uint16_t>(b + 6),
               static_cast<uint16_t>(0x6E + timer), static_cast<uint16_t>(0x35 + timer)};
+      // clang-format on
     }
   }
 }
@@ -64,9 +65,9 @@ Board TimerBoard() {
 class Rig {
  public:
   explicit Rig(const char* elf, SimavrTarget::Options options = {})
-      : target_(SimavrSpec{elf, elf == std::string(kElf2560) ? "atmega2560" : "atmega328p",
-                           16'000'000},
-                options) {
+      : target_(
+            SimavrSpec{elf, elf == std::string(kElf2560) ? "atmega2560" : "atmega328p", 16'000'000},
+            options) {
     EXPECT_EQ(target_.WatchPins(TimerBoard()), std::nullopt);
     EXPECT_EQ(target_.Open(), std::nullopt) << elf;
     EXPECT_EQ(Read(1), std::vector<uint8_t>{'>'}) << target_.Name();
@@ -206,8 +207,8 @@ TEST_P(SimavrTimerModes, InterruptsComeAtTheDatasheetPeriod) {
       // Alternating: each interval is one of the two, and they alternate.
       const std::set<uint64_t> allowed(intervals.begin(), intervals.end());
       for (size_t i = 0; i < seen.size(); ++i) {
-        EXPECT_TRUE(allowed.count(seen[i])) << c.name << " pin PC" << pin << " interval " << i
-                                            << " = " << seen[i];
+        EXPECT_TRUE(allowed.count(seen[i]))
+            << c.name << " pin PC" << pin << " interval " << i << " = " << seen[i];
         if (i > 0) {
           EXPECT_EQ(seen[i] + seen[i - 1], intervals[0] + intervals[1]) << c.name;
         }
@@ -216,6 +217,7 @@ TEST_P(SimavrTimerModes, InterruptsComeAtTheDatasheetPeriod) {
   }
 }
 
+// clang-format off
 const ModeCase kModeCases[] = {
     // ---- ATmega328P Timer0 (8-bit; prescalers 1, 8, 64, 256, 1024) ----
     {"m328p_t0_mode0_normal_n8", false, 0, 0, 2, 100, 0, 0, 0, kToie | kOcieA,
@@ -317,6 +319,7 @@ const ModeCase kModeCases[] = {
     {"m2560_t2_mode1_pc8_n32", true, 2, 1, 3, 0, 0, 0, 0, kToie,
      {{kPinTov, {DualSlope(32, 0xFF)}}}},
 };
+// clang-format on
 
 INSTANTIATE_TEST_SUITE_P(Modes, SimavrTimerModes, ::testing::ValuesIn(kModeCases),
                          [](const ::testing::TestParamInfo<ModeCase>& param_info) {
@@ -381,8 +384,8 @@ TEST(SimavrTimers, TcntReadsFollowTheCounter) {
   // Dual slope, mode 10 with ICR1 = 300 at N = 1: along 0..300..0 (period 600).
   rig.Write16(t1.icr, 300);
   rig.Write16(t1.tcnt, 0);
-  rig.Write(t1.tccra, 2);                 // WGM11
-  rig.Write(t1.tccrb, (1 << 4) | 1);      // WGM13, CS10
+  rig.Write(t1.tccra, 2);             // WGM11
+  rig.Write(t1.tccrb, (1 << 4) | 1);  // WGM13, CS10
   auto phases = [](uint32_t c) { return std::set<uint32_t>{c, (600 - c) % 600}; };
   for (int i = 0; i < 8; ++i) {
     const auto [a, b] = rig.TimedRead(t1.tcnt);
@@ -418,12 +421,12 @@ TEST(SimavrTimers, UnmodelledFeaturesAndSilentInterruptsAreNamed) {
   Rig rig(kElf328p);
   const TimerRegs t1 = Regs(1), t0 = Regs(0), t2 = Regs(2);
   rig.Write16(t1.ocra, 999);
-  rig.Write(t1.timsk, kToie);                  // overflow enabled ...
-  rig.Write(t1.tccra, 1 << 6);                 // COM1A0: toggle OC1A
-  rig.Write(t1.tccrb, (1 << 3) | 1);           // ... but CTC (mode 4) never reaches MAX
+  rig.Write(t1.timsk, kToie);         // overflow enabled ...
+  rig.Write(t1.tccra, 1 << 6);        // COM1A0: toggle OC1A
+  rig.Write(t1.tccrb, (1 << 3) | 1);  // ... but CTC (mode 4) never reaches MAX
   rig.Write(t0.timsk, kToie);
-  rig.Write(t0.tccrb, 7);                      // external clock T0, rising edge
-  rig.Write(t2.timsk, kOcieA);                 // Timer2 compare A enabled, clock stopped
+  rig.Write(t0.tccrb, 7);       // external clock T0, rising edge
+  rig.Write(t2.timsk, kOcieA);  // Timer2 compare A enabled, clock stopped
   rig.Run(200000);
   const std::vector<std::string> notes = rig.target().Unmodelled();
   const std::vector<std::string> caveats = rig.target().Caveats();
@@ -432,17 +435,21 @@ TEST(SimavrTimers, UnmodelledFeaturesAndSilentInterruptsAreNamed) {
   };
   EXPECT_TRUE(has(notes, "Timer1 output compare pin OC1A (COM1A bits) is not driven under simavr"))
       << ::testing::PrintToString(notes);
-  EXPECT_TRUE(has(notes, "Timer0 external clock on pin T0 (CS0 = 7) is not modelled: the timer "
-                         "does not count under simavr"))
+  EXPECT_TRUE(has(notes,
+                  "Timer0 external clock on pin T0 (CS0 = 7) is not modelled: the timer "
+                  "does not count under simavr"))
       << ::testing::PrintToString(notes);
-  EXPECT_TRUE(has(caveats, "Timer1 overflow interrupt is enabled in TIMSK1 but never fired: in "
-                           "CTC mode (WGM1 = 4) the counter never reaches MAX, its TOP being 999"))
+  EXPECT_TRUE(has(caveats,
+                  "Timer1 overflow interrupt is enabled in TIMSK1 but never fired: in "
+                  "CTC mode (WGM1 = 4) the counter never reaches MAX, its TOP being 999"))
       << ::testing::PrintToString(caveats);
-  EXPECT_TRUE(has(caveats, "Timer0 overflow interrupt is enabled in TIMSK0 but never fired: its "
-                           "clock or mode is not modelled (see the notes above)"))
+  EXPECT_TRUE(has(caveats,
+                  "Timer0 overflow interrupt is enabled in TIMSK0 but never fired: its "
+                  "clock or mode is not modelled (see the notes above)"))
       << ::testing::PrintToString(caveats);
-  EXPECT_TRUE(has(caveats, "Timer2 compare match A interrupt is enabled in TIMSK2 but never "
-                           "fired: its clock is stopped (CS2 = 0)"))
+  EXPECT_TRUE(has(caveats,
+                  "Timer2 compare match A interrupt is enabled in TIMSK2 but never "
+                  "fired: its clock is stopped (CS2 = 0)"))
       << ::testing::PrintToString(caveats);
   // Notes survive a restart (the run's report lists what any case used).
   rig.target().Restart();
