@@ -397,6 +397,80 @@ TEST(SimavrTimers, TcntReadsFollowTheCounter) {
   }
 }
 
+// OCRnA as TOP is double buffered in fast PWM (16.7.1): a new TOP takes effect
+// when the running period ends, so no period is cut short.
+TEST(SimavrTimers, ANewTopTakesEffectAtTheEndOfThePeriod) {
+  Rig rig(kElf328p);
+  ModeCase c = kModeCases[28];  // m328p_t1_mode15_fast_ocra_n1, TOP 499
+  ASSERT_STREQ(c.name, "m328p_t1_mode15_fast_ocra_n1");
+  c.cs = 2;  // N = 8: a period of 4000 cycles
+  c.timsk = kToie;
+  Configure(rig, c);
+  rig.Run(20000);
+  rig.Write16(Regs(1).ocra, 249);                // new TOP: 2000 cycles
+  const uint64_t write = rig.target().cycles();  // just after the write's answer
+  rig.Run(20000);
+  const std::vector<uint64_t> edges = rig.Edges(kPinTov, 0);
+  ASSERT_GE(edges.size(), 10u);
+  int long_periods_after_write = 0;
+  for (size_t i = 2; i < edges.size(); ++i) {
+    const uint64_t d = edges[i] - edges[i - 1];
+    if (edges[i] <= write) {
+      EXPECT_EQ(d, SingleSlope(8, 499));
+    } else if (d == SingleSlope(8, 499)) {
+      ++long_periods_after_write;  // the period under way when OCR1A was written
+    } else {
+      EXPECT_EQ(d, SingleSlope(8, 249));
+    }
+  }
+  EXPECT_LE(long_periods_after_write, 1);
+}
+
+// An edge on ICP1 (PB0 on the 328P; ICES1: rising) copies TCNT1 into ICR1 and
+// raises the input capture interrupt.
+TEST(SimavrTimers, AnEdgeOnTheCapturePinLatchesTcnt) {
+  Rig rig(kElf328p);
+  const TimerRegs t1 = Regs(1);
+  constexpr uint16_t kDdrb = 0x24, kPortb = 0x25;
+  rig.Write(kDdrb, 1);
+  rig.Write(t1.timsk, kIcie);
+  rig.Write(t1.tccrb, (1 << 6) | 2);  // ICES1, N = 8
+  rig.Run(1000);
+  const uint64_t before = rig.target().cycles();
+  rig.Write(kPortb, 1);  // rising edge on ICP1
+  rig.Run(1000);
+  EXPECT_EQ(rig.Edges(kPinIcf, before).size(), 1u);
+  const auto [icr_a, icr_b] = rig.TimedRead(t1.icr);
+  EXPECT_EQ(icr_a, icr_b);  // latched, not counting
+  const auto [tcnt, tcnt_later] = rig.TimedRead(t1.tcnt);
+  // Captured a little earlier: the 1000-cycle run, the reads' bytes on the line.
+  EXPECT_GT(icr_a, 0);
+  EXPECT_LT(static_cast<uint16_t>(tcnt - icr_a), 20000 / 8);
+  EXPECT_EQ(tcnt_later - tcnt, 128 / 8);
+  rig.Write(kPortb, 0);  // falling edge: not the selected one
+  rig.Run(1000);
+  EXPECT_EQ(rig.Edges(kPinIcf, before).size(), 1u);
+}
+
+// A CPU write to TCNTn blocks the compare match on the next timer tick (16.7.3):
+// writing TCNT1 = OCR1A does not raise OCF1A.
+TEST(SimavrTimers, WritingTcntBlocksTheNextCompareMatch) {
+  Rig rig(kElf328p);
+  const TimerRegs t1 = Regs(1);
+  rig.Write16(t1.ocra, 5);
+  rig.Write16(t1.tcnt, 1000);
+  rig.Write(t1.timsk, kOcieA);
+  rig.Write(t1.tccrb, 5);  // normal, N = 1024: the next match is 64 Mi cycles away
+  rig.Run(100);
+  const uint64_t before = rig.target().cycles();
+  rig.Write16(t1.tcnt, 5);
+  rig.Run(20000);  // well past the next tick
+  EXPECT_TRUE(rig.Edges(kPinA, before).empty());
+  rig.Write16(t1.tcnt, 4);  // not blocked: the match comes as the counter leaves 5
+  rig.Run(5000);
+  EXPECT_EQ(rig.Edges(kPinA, before).size(), 1u);
+}
+
 // TIFRn: writing 1 clears that flag only; TIMSKn set over a raised flag pends it.
 TEST(SimavrTimers, FlagsClearByWritingOneAndPendWhenEnabled) {
   Rig rig(kElf328p);
