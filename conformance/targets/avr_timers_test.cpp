@@ -342,6 +342,7 @@ TEST(SimavrTimers, PlainSimavrGetsMode8Wrong) {
     const std::vector<uint64_t> edges = rig.Edges(kPinTov, start);
     ASSERT_GE(edges.size(), 3u);
     EXPECT_LT(edges[2] - edges[1], DualSlope(1, 200));
+    RecordProperty("plain_simavr_mode8_uno_cycles", std::to_string(edges[2] - edges[1]));
   }
   {
     Rig rig(kElf2560, plain);
