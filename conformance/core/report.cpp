@@ -213,10 +213,10 @@ nlohmann::json JsonReport(const RunReport& report) {
   j["rules"] = rules;
   j["must_failed"] = report.MustFailed();
   j["target_error"] = report.target_error.empty() ? json(nullptr) : json(report.target_error);
+  j["target_caveats"] = report.target_caveats;
   j["interrupted_by_signal"] = report.interrupted_by;
   j["interrupted_case"] =
       report.interrupted_case.empty() ? json(nullptr) : json(report.interrupted_case);
-  j["target_caveats"] = report.target_caveats;
   j["exit_code"] = ExitCode(report);
   j["wall_s"] = report.wall_s;
   return j;
