@@ -21,9 +21,10 @@ struct avr_int_vector_t;
 
 namespace moco::conformance {
 
-// simavr 1.6 counts phase-correct and phase-and-frequency-correct PWM single
-// slope (interrupts twice as often as on hardware), has no entry for Timer1
-// modes 1-3 and 8-11 (8-11 and the 2560's 1-3 never overflow), clears every
+// simavr 1.6 counts the dual-slope modes it knows single slope (ATmega328P
+// Timer1 modes 8 and 9: interrupts twice as often as on the chip), has no
+// entry for 16-bit modes 1-3 and 10-11 (and, on the ATmega2560, 8-9) nor for
+// the 8-bit phase correct modes 1 and 5, so those never count, clears every
 // flag of a timer on any write to TIFRn, and never pends an interrupt whose
 // flag was already set when its TIMSKn bit is written. AvrTimers replaces
 // simavr's timer arithmetic while keeping its register addresses and its
