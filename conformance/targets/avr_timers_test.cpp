@@ -201,6 +201,12 @@ TEST_P(SimavrTimerModes, InterruptsComeAtTheDatasheetPeriod) {
     ASSERT_GE(edges.size(), 7u) << c.name << " pin PC" << pin;
     std::vector<uint64_t> seen;
     for (size_t i = 1; i < edges.size(); ++i) seen.push_back(edges[i] - edges[i - 1]);
+    // The distinct intervals measured, for the test report (--gtest_output=xml).
+    std::string measured;
+    for (uint64_t m : std::set<uint64_t>(seen.begin(), seen.end())) {
+      measured += (measured.empty() ? "" : " ") + std::to_string(m);
+    }
+    RecordProperty("PC" + std::to_string(pin) + "_cycles", measured);
     if (intervals.size() == 1) {
       for (uint64_t s : seen) EXPECT_EQ(s, intervals[0]) << c.name << " pin PC" << pin;
     } else {
