@@ -299,6 +299,7 @@ int Run(const RunArgs& a) {
   RunReport report = runner->run(*target, options);
   options.on_progress(report);  // whatever the runner did not announce
   if (const auto lost = target->LinkLost()) report.target_error = *lost;
+  report.target_caveats = target->Caveats();
   if (!report.target_error.empty()) {
     std::cerr << "mococheck: target error: " << target->Name() << ": " << report.target_error
               << "; the outcomes prove nothing about the device" << std::endl;

@@ -193,6 +193,11 @@ std::string HtmlReport(const RunReport& report) {
        " noted, " + std::to_string(count(Status::kNotApplicable)) + " not applicable, " +
        std::to_string(count(Status::kNotExercised)) + " not exercised</td></tr>\n";
   s += "<tr><th>time</th><td>" + Num(report.wall_s) + " s</td></tr></table>\n";
+  if (!report.target_caveats.empty()) {
+    s += "<h2>Target caveats</h2>\n<ul>\n";
+    for (const std::string& caveat : report.target_caveats) s += "<li>" + Esc(caveat) + "</li>\n";
+    s += "</ul>\n";
+  }
 
   // Rules: failures first.
   s += "<h2>Rules</h2>\n<table><tr><th>id</th><th>level</th><th>status</th><th>cases "

@@ -137,6 +137,7 @@ std::string ConsoleSummary(const RunReport& report, bool verbose) {
   if (!report.target_error.empty()) {
     s += "target error: " + report.target_error + "\n";
   }
+  for (const std::string& caveat : report.target_caveats) s += "target caveat: " + caveat + "\n";
   if (report.interrupted_by != 0) {
     s += "interrupted by signal " + std::to_string(report.interrupted_by) + " after " +
          std::to_string(report.cases.size()) + " case(s)" +
@@ -226,6 +227,7 @@ nlohmann::json JsonReport(const RunReport& report) {
   j["rules"] = rules;
   j["must_failed"] = report.MustFailed();
   j["target_error"] = report.target_error.empty() ? json(nullptr) : json(report.target_error);
+  j["target_caveats"] = report.target_caveats;
   j["interrupted_by_signal"] = report.interrupted_by;
   j["interrupted_case"] =
       report.interrupted_case.empty() ? json(nullptr) : json(report.interrupted_case);

@@ -99,6 +99,10 @@ struct RunReport {
   // Set by the caller when the link to the device was lost for good (what
   // happened); the outcomes then prove nothing about the device.
   std::string target_error;
+  // What the target says it does not reproduce of the device (Target::Caveats():
+  // e.g. simavr timer features the firmware used that are not modelled, a timer
+  // interrupt enabled but never fired), set by the caller after the run.
+  std::vector<std::string> target_caveats;
   // The signal (SIGINT, SIGTERM, SIGHUP) that stopped the run before every
   // case ran; 0 when it ran to the end.
   int interrupted_by = 0;

@@ -108,7 +108,11 @@ std::string SimavrTarget::Name() const {
   return name;
 }
 
-std::optional<std::string> SimavrTarget::Open() { return Build(); }
+std::optional<std::string> SimavrTarget::Open() {
+  Teardown();
+  unmodelled_.clear();
+  return Build();
+}
 
 void SimavrTarget::Restart() {
   if (auto err = Build()) stopped_ = *err;
@@ -126,6 +130,14 @@ void SimavrTarget::Teardown() {
     avr_irq_unregister_notify(hook->irq, &OnPin, hook.get());
   }
   pin_hooks_.clear();
+  if (timers_ != nullptr) {
+    for (const std::string& note : timers_->Unmodelled()) {
+      if (std::find(unmodelled_.begin(), unmodelled_.end(), note) == unmodelled_.end()) {
+        unmodelled_.push_back(note);
+      }
+    }
+    timers_.reset();
+  }
   // simavr 1.6's avr_terminate() leaves the core's IRQs allocated (a few KB per core).
   avr_terminate(avr_);
   std::free(avr_);
@@ -201,6 +213,7 @@ std::optional<std::string> SimavrTarget::Build() {
   avr_load_firmware(avr_, &fw);
   FreeFirmware(fw);
   avr_->frequency = frequency_hz_;
+  if (options_.timer_model) timers_ = std::make_unique<AvrTimers>(avr_);
 
   uart_ = FindUart0(avr_);
   if (uart_ == nullptr) {
@@ -280,6 +293,24 @@ const PinTrace* SimavrTarget::Pins() const {
     timed_[i] = edges.size();
   }
   return &trace_;
+}
+
+std::vector<std::string> SimavrTarget::Unmodelled() const {
+  std::vector<std::string> notes = unmodelled_;
+  if (timers_ != nullptr) {
+    for (const std::string& note : timers_->Unmodelled()) {
+      if (std::find(notes.begin(), notes.end(), note) == notes.end()) notes.push_back(note);
+    }
+  }
+  return notes;
+}
+
+std::vector<std::string> SimavrTarget::Caveats() const {
+  std::vector<std::string> caveats = Unmodelled();
+  if (timers_ != nullptr) {
+    for (std::string& silent : timers_->SilentInterrupts()) caveats.push_back(std::move(silent));
+  }
+  return caveats;
 }
 
 uint64_t SimavrTarget::cycles() const { return avr_ == nullptr ? 0 : avr_->cycle; }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "conformance/targets/avr_timers.h"
 #include "conformance/targets/target.h"
 
 struct avr_t;
@@ -49,11 +50,17 @@ namespace moco::conformance {
 // exact to one CPU cycle and nothing polls. All levels start low (the reset
 // state of PORTx). A case keeps at most kMaxPinEdges edges; later ones are
 // dropped and PinTrace::complete_until_ns says from when.
+//
+// Timer model (Options::timer_model, on by default): simavr 1.6's timers run at
+// wrong periods in several modes (FACTS "simavr"); AvrTimers (avr_timers.h)
+// replaces them, and what it does not model is named by Unmodelled().
 class SimavrTarget final : public Target {
  public:
   struct Options {
     // Test only: false leaves simavr's UDRE0 behaviour as it is.
     bool udre_fix = true;
+    // Test only: false leaves simavr's own timer/counters in charge.
+    bool timer_model = true;
   };
 
   explicit SimavrTarget(SimavrSpec spec) : SimavrTarget(std::move(spec), Options()) {}
@@ -89,6 +96,13 @@ class SimavrTarget final : public Target {
   std::optional<std::string> WatchPins(const Board& board) override;
   // Edge times (t_ns) are filled in here, from their cycles, off the firmware's hot path.
   const PinTrace* Pins() const override;
+
+  // Timer features the firmware used that the model does not reproduce, since
+  // Open() (across restarts), one sentence each (AvrTimers::Unmodelled()).
+  std::vector<std::string> Unmodelled() const;
+  // Unmodelled(), then each timer interrupt enabled now that has never fired
+  // since the last Open() / Restart(), with the reason.
+  std::vector<std::string> Caveats() const override;
 
  private:
   struct OutByte {
@@ -141,6 +155,8 @@ class SimavrTarget final : public Target {
   mutable std::vector<size_t> timed_;  // per signal: edges whose t_ns is filled in
   size_t trace_edges_ = 0;
   std::vector<std::unique_ptr<PinHook>> pin_hooks_;
+  std::unique_ptr<AvrTimers> timers_;
+  std::vector<std::string> unmodelled_;  // notes of cores already torn down
 };
 
 }  // namespace moco::conformance

@@ -11,6 +11,7 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include <sys/stat.h>
 
@@ -89,6 +90,11 @@ class Target {
   }
   // The watched pins since the last Open() / Restart(); nullptr when none are.
   virtual const PinTrace* Pins() const { return nullptr; }
+
+  // What the run report should say about how far this target reproduces the
+  // device (e.g. hardware a simulator does not model that the firmware used,
+  // a timer interrupt that is enabled but never fired), one sentence each.
+  virtual std::vector<std::string> Caveats() const { return {}; }
 };
 
 // Asks a running conformance run to stop (from a SIGINT, SIGTERM or SIGHUP
