@@ -241,6 +241,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
     silent_cases = DeviceSpoke(host.traffic()) ? 0 : silent_cases + 1;
     result.outcomes = verdicts.outcomes();
+    result.not_exercised = verdicts.not_exercised();
     result.KeepTraffic(host.traffic());
     result.positions = Traits::Positions(result.traffic);
     report.cases.push_back(std::move(result));

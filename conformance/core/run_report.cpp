@@ -63,11 +63,16 @@ int ExitCode(const RunReport& report) {
 
 namespace {
 
-// Why `rule` was not exercised, from what the run's cases said: a case log
-// naming the rule, or one saying what the target could not exercise; else
-// the cases that did not run; else the selection.
+// Why `rule` was not exercised: the reason a case gave for it
+// (Verdicts::NotExercised), or a case log naming it; else how many cases ran
+// without reaching it and which did not run.
 std::string WhyNotExercised(const RunReport& report, const Rule& rule) {
   const std::string id(rule.id);
+  for (const CaseResult& c : report.cases) {
+    if (auto it = c.not_exercised.find(id); it != c.not_exercised.end()) {
+      return c.suite + "/" + c.name + ": " + it->second;
+    }
+  }
   for (const CaseResult& c : report.cases) {
     for (const std::string& line : c.log) {
       if (line.find(id) != std::string::npos && line.size() < 400) {
@@ -75,33 +80,25 @@ std::string WhyNotExercised(const RunReport& report, const Rule& rule) {
       }
     }
   }
-  std::string not_exercised, not_run;
-  size_t not_run_count = 0;
+  size_t ran = 0, not_run = 0;
+  std::string first_not_run;
   for (const CaseResult& c : report.cases) {
-    if (!c.applicable) {
-      if (not_run_count++ == 0) {
-        not_run = c.suite + "/" + c.name + ": " + c.not_applicable_because;
-      }
-      continue;
-    }
-    for (const std::string& line : c.log) {
-      if (not_exercised.empty() && line.find("not exercised") != std::string::npos &&
-          line.size() < 400) {
-        not_exercised = c.suite + "/" + c.name + ": " + line;
-      }
+    if (c.applicable) {
+      ++ran;
+    } else if (not_run++ == 0) {
+      first_not_run = c.suite + "/" + c.name + ": " + c.not_applicable_because;
     }
   }
-  std::string why;
-  if (!not_exercised.empty()) why = "possibly " + not_exercised;
-  if (not_run_count > 0) {
-    why += std::string(why.empty() ? "" : "; ") + std::to_string(not_run_count) +
-           " case(s) did not run (" + not_run + (not_run_count > 1 ? ", ..." : "") + ")";
+  std::string why = "the " + std::to_string(ran) +
+                    " case(s) that ran never reached the situation it judges";
+  if (not_run > 0) {
+    why += "; " + std::to_string(not_run) + " did not run (" + first_not_run +
+           (not_run > 1 ? ", ..." : "") + ")";
   }
-  if (!why.empty()) return why;
   if (!report.options.cases.empty() || report.options.shard_count > 1) {
-    return "no selected case reached it (--cases / --shard select part of the suite)";
+    why += "; --cases / --shard selected part of the suite";
   }
-  return "no case reached the situation it judges on this device";
+  return why;
 }
 
 }  // namespace

@@ -60,6 +60,8 @@ struct CaseResult {
   bool applicable = true;
   std::string not_applicable_because;
   std::map<std::string, RuleOutcome, std::less<>> outcomes;
+  // Why rules could not be judged in this case (Verdicts::NotExercised).
+  std::map<std::string, std::string, std::less<>> not_exercised;
   TimeNs target_ns = 0;  // the case's length on the target's clock
   double wall_s = 0;
   std::vector<std::string> log;

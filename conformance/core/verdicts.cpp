@@ -31,6 +31,14 @@ RuleOutcome* Verdicts::Slot(std::string_view id) {
   return &it->second;
 }
 
+void Verdicts::NotExercised(std::string_view id, std::string why) {
+  assert(FindRule(id) != nullptr && "rule id missing from the catalogue");
+  if (muted_) return;
+  if (!filter_.empty() && !GlobMatch(filter_, id)) return;
+  if (excluded_ && excluded_(id)) return;
+  not_exercised_.emplace(std::string(id), std::move(why));
+}
+
 void Verdicts::Record(RuleOutcome& o, std::string_view id, Evidence e) {
   const Rule* rule = FindRule(id);
   ++o.failures;

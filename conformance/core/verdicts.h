@@ -60,6 +60,15 @@ class Verdicts {
     return Check(id, false, [&] { return std::move(e); });
   }
 
+  // Records why rule `id` could not be judged in this case (the target cannot
+  // press an e-stop, the device never gave occasion), kept with the rule when
+  // no case judged it; the first reason given is kept. Muted, filtered and
+  // excluded rules are ignored as for Check. REQUIRES: FindRule(id) != nullptr.
+  void NotExercised(std::string_view id, std::string why);
+  const std::map<std::string, std::string, std::less<>>& not_exercised() const {
+    return not_exercised_;
+  }
+
   // While muted, checks are not recorded: the runner's preparation of the
   // device before a case (settling it, enabling motors) is not a verdict.
   void set_muted(bool muted) { muted_ = muted; }
@@ -81,6 +90,7 @@ class Verdicts {
 
   std::string filter_;
   std::map<std::string, RuleOutcome, std::less<>> outcomes_;
+  std::map<std::string, std::string, std::less<>> not_exercised_;
   bool muted_ = false;
   std::function<bool(std::string_view)> excluded_;
 };

@@ -135,7 +135,13 @@ using namespace dmc_cases;  // NOLINT: the shared checks of every DMC case
 // ---------------------------------------------------------------- connect
 
 void BootHi(DmcCaseContext& c) {
-  if (!c.target.CanRestart()) return;  // the start-up of an external device is not observed
+  if (!c.target.CanRestart()) {
+    // The start-up of an external device is not observed.
+    c.v.NotExercised("DMC-HI-011",
+                     "the runner cannot restart this target, so it never sees the device start "
+                     "(simavr and in-process targets restart it)");
+    return;
+  }
   bool seen = false;
   for (const DeviceRecord& r : c.host.records()) {
     seen = seen || (IsUnsolicited(r, MsgType::kHi) && r.t_ns <= 1000 * kMs);
@@ -541,6 +547,9 @@ void EStop(DmcCaseContext& c) {
   const size_t mark = h.records().size();
   if (!c.target.SetEStop(true)) {
     c.log.push_back("the target has no e-stop the runner can press: MOTOR_HARD_STOP not exercised");
+    c.v.NotExercised("DMC-UNS-003",
+                     "the target has no e-stop the runner can press (an external device: press it "
+                     "by hand, or certify the emulation in-process)");
     h.Call(dmc::MotorStopAll{});
     WaitRest(c, kRestTimeout);
     MoveAndRest(c, 1, At(*p0, 0));
@@ -681,7 +690,11 @@ void Unadvertised(DmcCaseContext& c) {
 
 void Io(DmcCaseContext& c) {
   DmcHost& h = c.host;
-  h.Call(dmc::GioInRequest{});
+  if (As<dmc::GioInReport>(h.Call(dmc::GioInRequest{})) == nullptr) {
+    c.v.NotExercised("DMC-GIO-002",
+                     "the device answered GIO_IN without its inputs (DMC-GIO-001), so no TRIGGERS "
+                     "bits could be judged");
+  }
   if (c.device.gio_out_count > 0) ExpectOk(c, "DMC-GIO-003", h.Call(dmc::GioOut{1}));
   if (c.device.gio_out_count > 0) ExpectOk(c, "DMC-GIO-003", h.Call(dmc::GioOut{0}));
   ExpectOk(c, "DMC-GIO-004", h.Call(dmc::GioCam{dmc::kGioCamShutter}));
@@ -746,6 +759,10 @@ void SoftLimits(DmcCaseContext& c) {
   if (up && low) {
     Expect(c, "DMC-LIM-003", p && At(*p, 0) == s, "motor 1 still at " + std::to_string(s),
            p ? Vec(*p) : "no position");
+  } else {
+    c.v.NotExercised("DMC-LIM-003",
+                     "the device refused neither move past its soft limits (DMC-LIM-001/002), so "
+                     "no refused move could leave the motor in place");
   }
   if (p && At(*p, 0) != s) MoveAndRest(c, 1, s);
   // Carried out: on the target within a step, by either of the device's
@@ -853,6 +870,8 @@ void GioInputChange(DmcCaseContext& c) {
     if (!c.target.SetGioInput(0, level)) {
       c.log.push_back(
           "the target has no input the runner can drive: GIO_IN on change not exercised");
+      c.v.NotExercised("DMC-GIO-005",
+                       "the target has no input the runner can drive (in-process targets do)");
       return;
     }
     const int i = h.WaitFor(

@@ -503,6 +503,9 @@ void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
     verdicts_.Check("DMC-HI-009", *hi.protocol_version == 2, [&] {
       return Ev(rec, "PROTOCOL VERSION 2", std::to_string(*hi.protocol_version));
     });
+  } else {
+    verdicts_.NotExercised("DMC-HI-009",
+                           "the HI response ends without PROTOCOL VERSION (49 bytes, DMC-HI-003)");
   }
   size_t end = 0;
   while (end < hi.name.size() && hi.name[end] != 0) ++end;

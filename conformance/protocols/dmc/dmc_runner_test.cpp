@@ -129,9 +129,14 @@ TEST(Runner, TheReferenceFirmwareWithoutAControlChannelFailsNothingMore) {
     EXPECT_TRUE(may_fail.count(id)) << id << " failed\n" << ConsoleReport(r, false);
   }
   EXPECT_EQ(r.rules.at("DMC-CFG-005").status, Status::kPass) << ConsoleReport(r, false);
-  // The control channel's rules are left unjudged, never failed.
+  // The control channel's rules are left unjudged, never failed, and say why.
   EXPECT_EQ(r.rules.at("DMC-LIM-007").status, Status::kNotExercised);
   EXPECT_EQ(r.rules.at("DMC-GIO-005").status, Status::kNotExercised);
+  EXPECT_NE(r.rules.at("DMC-GIO-005").why_not_exercised.find("no input the runner can drive"),
+            std::string::npos)
+      << r.rules.at("DMC-GIO-005").why_not_exercised;
+  EXPECT_NE(r.rules.at("DMC-UNS-003").why_not_exercised.find("no e-stop"), std::string::npos)
+      << r.rules.at("DMC-UNS-003").why_not_exercised;
 }
 
 TEST(Runner, EveryRuleHoldsForTheEmulatedDmc16) {
@@ -338,6 +343,60 @@ TEST(Reports, JsonAndJunitCarryEveryCaseAndRule) {
   size_t expected = 0;
   for (const CaseResult& c : r.cases) expected += c.applicable ? c.outcomes.size() : 1;
   EXPECT_EQ(testcases, expected);
+}
+
+// SHOULD failures are <failure> elements where CI dashboards look, typed
+// SHOULD; the properties keep the exit code's meaning (only MUST failures set
+// it). The reference firmware's profile fails both kinds.
+TEST(Reports, JunitShowsMustAndShouldFailuresByTypeAndKeepsTheExitCode) {
+  const RunReport r = RunInProcess({}, SourceDir() + "/fixtures/profiles/dmc-lite.json");
+  const std::string x = JunitReport(r);
+  size_t must = 0, should = 0;
+  for (const auto& [id, s] : r.rules) {
+    if (s.status != Status::kFail) continue;
+    (FindRule(id)->level == Level::kMust ? must : should) += s.cases_failed;
+  }
+  ASSERT_GT(must, 0u);
+  ASSERT_GT(should, 0u);
+  size_t typed_must = 0, typed_should = 0;
+  for (size_t p = 0; (p = x.find("<failure type=\"MUST\"", p)) != std::string::npos; ++p) ++typed_must;
+  for (size_t p = 0; (p = x.find("<failure type=\"SHOULD\"", p)) != std::string::npos; ++p) {
+    ++typed_should;
+  }
+  EXPECT_EQ(typed_must, must);
+  EXPECT_EQ(typed_should, should);
+  EXPECT_NE(x.find("failures=\"" + std::to_string(must + should) + "\""), std::string::npos);
+  EXPECT_NE(x.find("<property name=\"must_failures\" value=\"" + std::to_string(must) + "\"/>"),
+            std::string::npos);
+  EXPECT_NE(x.find("<property name=\"exit_code\" value=\"1\"/>"), std::string::npos);
+  // Noted rules stay out of the failures.
+  EXPECT_EQ(x.find("<failure type=\"NOTE\""), std::string::npos);
+}
+
+// Every rule not exercised says why, on the console and in the JSON.
+TEST(Reports, EveryRuleNotExercisedSaysWhy) {
+  const RunReport r = RunInProcess({}, SourceDir() + "/fixtures/profiles/dmc-lite.json");
+  const std::string console = ConsoleSummary(r, false);
+  const nlohmann::json j = JsonReport(r);
+  size_t n = 0;
+  for (const auto& [id, s] : r.rules) {
+    if (s.status != Status::kNotExercised) continue;
+    ++n;
+    EXPECT_FALSE(s.why_not_exercised.empty()) << id;
+    EXPECT_NE(console.find("not exercised " + id + ": " + s.why_not_exercised), std::string::npos)
+        << id << "\n"
+        << console;
+  }
+  for (const auto& jr : j["rules"]) {
+    if (jr["status"] == "not exercised") {
+      EXPECT_TRUE(jr.contains("why_not_exercised")) << jr.dump();
+    }
+  }
+  EXPECT_GT(n, 0u);
+  // The reason a case gave for exactly that rule.
+  EXPECT_NE(r.rules.at("DMC-LIM-003").why_not_exercised.find("limits/soft: the device refused"),
+            std::string::npos)
+      << r.rules.at("DMC-LIM-003").why_not_exercised;
 }
 
 TEST(Reports, WrittenAtomically) {
