@@ -768,6 +768,41 @@ void Blur(DfmCaseContext& c) {
   Rest(c);
 }
 
+// A host in a hurry: after `bf` it polls `ms` back to back and sends `go` the
+// moment every digit is 0, with no position query in between. The sketch's
+// `ms` shows rest once the last chunk of the pre-position is loaded, while
+// that chunk may still have a step to make (FACTS DFMoco); a `go` at that
+// moment must not lose it. The motor ends at the end of its slow-down
+// (DFM-GO-005), and with --board its pulses add up to what it reports
+// (DFM-PIN-001).
+void GoAtOnce(DfmCaseContext& c) {
+  DfmHost& h = c.host;
+  Rest(c);
+  const auto from = DfmPosition(h, 1);
+  if (!from) return;
+  const int32_t p1 = *from;
+  const BlurPlan plan = PlanOf(800, 500, p1 - 450, p1, p1 + 450);
+  const DfmLine* r = h.Call(Cmd("bf", {800, 500, 1, p1 - 450, p1, p1 + 450}));
+  if (As<dfmoco::BlurReply>(r) == nullptr || As<dfmoco::BlurReply>(r)->value < 0) return;
+  const TimeNs until = h.Now() + kRestTimeout;
+  for (;;) {
+    const DfmLine* l = h.Call("ms");
+    const auto* st = As<dfmoco::MotorStatusReply>(l);
+    if (st == nullptr || h.Now() >= until || h.link_lost()) return;
+    if (std::none_of(st->moving.begin(), st->moving.end(), [](bool m) { return m; })) break;
+  }
+  h.Call("go");
+  Rest(c);
+  const auto p = DfmPosition(h, 1);
+  if (!p) return;
+  Expect(c, "DFM-GO-005", std::fabs(*p - plan.end_steps) <= 2.0,
+         "motor 1 at the end of the slow-down " + Str(std::llround(plan.end_steps)) +
+             " after a go sent the moment ms showed rest",
+         "rests on " + Str(*p));
+  h.Call(Cmd("mm", {1, p1}));
+  Rest(c);
+}
+
 void BlurTooFast(DfmCaseContext& c) {
   DfmHost& h = c.host;
   Rest(c);
@@ -1055,6 +1090,8 @@ std::vector<DfmCase> MakeCases() {
       {"errors", "unknown", N::kNothing, "unknown words get no reply", Unknown},
       {"gomotion", "blur", N::kDfmGoMotion,
        "bf, pre-position, go, exposure timing, bf while moving", Blur},
+      {"gomotion", "go-at-once", N::kDfmGoMotion,
+       "bf, ms polled back to back, go the moment it shows rest", GoAtOnce},
       {"gomotion", "too-fast", N::kDfmBlurRefusal, "bf faster than 20000 steps/s: bf -1",
        BlurTooFast},
       {"shoot", "frames", N::kDfmMotors, "a shoot of 6 frames on up to 2 motors", Shoot},
