@@ -119,7 +119,15 @@ std::string ConsoleSummary(const RunReport& report, bool verbose) {
        std::to_string(count(Status::kNoted)) + " noted, " +
        std::to_string(count(Status::kNotApplicable)) + " not applicable, " +
        std::to_string(count(Status::kNotExercised)) + " not exercised\n";
+  // Without a verdict (a target error, an interrupted run) what was not
+  // exercised says nothing of the rules: one line, not one per rule.
+  const bool no_verdict = !report.target_error.empty() || report.interrupted_by != 0;
+  if (no_verdict && count(Status::kNotExercised) > 0) {
+    s += "  " + std::to_string(count(Status::kNotExercised)) +
+         " rule(s) not exercised: the run has no verdict (below)\n";
+  }
   for (const auto& [id, r] : report.rules) {
+    if (r.status == Status::kNotExercised && no_verdict) continue;
     if (r.status == Status::kNotExercised) {
       // Always with its reason: a rule nobody judged is as much a finding as
       // one that failed.

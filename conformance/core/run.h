@@ -134,7 +134,7 @@ RunReport Run(Target& target, const RunOptions& options) {
   report.options = options;
 
   std::optional<Device> device;
-  bool device_spoke = false;
+  bool device_spoke = false, probe_lost = false;
   {
     Verdicts probe(options.rules);
     Host host(target, probe, options.host);
@@ -143,6 +143,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     device = Traits::Discover(host);
     host.Close();
     device_spoke = DeviceSpoke(host.traffic());
+    probe_lost = host.link_lost();
     // The introduction's own rule (the first HI answered) is judged here,
     // where the host's first request is; the rest of what the probe saw is
     // judged again by every case's greeting.
@@ -171,6 +172,11 @@ RunReport Run(Target& target, const RunOptions& options) {
   if (!device && !device_spoke) {
     if (const int sig = StopRequested(); sig != 0) {
       report.interrupted_by = sig;
+    } else if (probe_lost) {
+      // A firmware that crashed or halted, a port that closed: the target's
+      // name says what happened.
+      report.target_error = "the link to the device was lost before it introduced itself (" +
+                            target.Name() + ")";
     } else {
       report.target_error = std::string(kNoIntroduction);
     }

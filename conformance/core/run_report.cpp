@@ -67,6 +67,7 @@ namespace {
 // (Verdicts::NotExercised), or a case log naming it; else how many cases ran
 // without reaching it and which did not run.
 std::string WhyNotExercised(const RunReport& report, const Rule& rule) {
+  if (!report.target_error.empty()) return "no verdict: " + report.target_error;
   const std::string id(rule.id);
   for (const CaseResult& c : report.cases) {
     if (auto it = c.not_exercised.find(id); it != c.not_exercised.end()) {
