@@ -80,6 +80,24 @@ print(c["last_positions"]["1"], c["position_range"]["1"][1])
   [ "$1 $2" = "$reported" ] || fail "sigrok counts $steps (final, highest, edges); mp 1 said $reported"
   [ "$3" = 12000 ] || fail "sigrok counts $3 STEP pulses, not 12000 (6000 out, 6000 back)"
   ;;
+# sigterm_mid_case: SIGTERM while a long case runs the firmware ends the run at
+#   once (the case's waits end, not only the run between cases), with the
+#   reports written and exit 2.
+sigterm_mid_case)
+  "$m" run --target "simavr:$elf" --protocol dfmoco --cases 'random/*' --steps 100000 \
+    --json run.json --junit run.xml >out.txt 2>err.txt &
+  check=$!
+  pids="$pids $check"
+  wait_for grep -q 'random/sequence' err.txt || fail "the case did not start"
+  kill -TERM "$check"
+  wait_for sh -c "! kill -0 $check 2>/dev/null" || fail "still running 60 s after SIGTERM"
+  wait "$check"
+  rc=$?
+  [ "$rc" = 2 ] || fail "exit $rc, not 2"
+  grep -q '^result: INTERRUPTED' out.txt || fail "no INTERRUPTED verdict"
+  grep -q '"interrupted_case": "random/sequence"' run.json || fail "the case is not named"
+  grep -q '<error message="interrupted by signal' run.xml || fail "JUnit has no error"
+  ;;
 *)
   fail "unknown test $test_name"
   ;;
