@@ -417,6 +417,34 @@ TEST(BrokenDevice, AStopLoopAckedButIgnoredIsCaughtByLoop001) {
   ExpectCaught(r, "DMC-LOOP-001");
 }
 
+// A device whose live-run reports fall on its own tick carries fractional
+// MOVE TIMEs ("in thousandths of a frame": dmc-lite's 10080, 10520): every
+// unsolicited update of a run here is 80 thousandths past its frame. The
+// ping-pong still runs, and STOP_LOOP still ends it at frame 0.
+TEST(BrokenDevice, FractionalMoveTimesAreStillALoopStoppedAtItsEndPoint) {
+  const RunReport r = RunBroken(
+      [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+        if (f.type == ToWire(MsgType::kMotorGetPosition) && f.id < DmcHost::kFirstHostId) {
+          auto m = dmc::DecodeDeviceMessage(f.type, f.data);
+          if (m.ok()) {
+            if (auto* p = std::get_if<dmc::MotorPositionReport>(&m.value());
+                p != nullptr && p->move_time_x1000 > 0 && p->move_time_x1000 % 1000 == 0) {
+              p->move_time_x1000 += 80;
+              raw = dmc::Encode(f.id, dmc::DeviceMessage{*p});
+            }
+          }
+        }
+        out.Write(raw);
+      },
+      [] {
+        RunOptions o;
+        o.cases = "rt/stop-loop";
+        return o;
+      }());
+  ASSERT_TRUE(r.rules.count("DMC-LOOP-001"));
+  EXPECT_EQ(r.rules.at("DMC-LOOP-001").status, Status::kPass) << ConsoleReport(r, false);
+}
+
 TEST(BrokenDevice, GoMotionThatDoesNotMoveIsCaughtByTheGoMotionRules) {
   // The device reads every blur motor's POS A and POS B as the frame's
   // position: the shutter opens on a rig that stands still.
