@@ -149,8 +149,7 @@ int Run(const RunArgs& a) {
   }
   for (const std::string& glob : SplitGlobs(a.cases_glob)) {
     bool any = false;
-    for (const CaseInfo& k : runner->cases())
-      any = any || GlobMatch(glob, k.suite + "/" + k.name);
+    for (const CaseInfo& k : runner->cases()) any = any || GlobMatch(glob, k.suite + "/" + k.name);
     if (!any) {
       return Fail("--cases " + a.cases_glob + ": '" + glob + "' selects no " + title +
                   " case; see the case names with 'mococheck cases --protocol " +

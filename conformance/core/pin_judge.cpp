@@ -241,10 +241,10 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
         size_t last = 0;  // index of the window's last rise
       } worst;
       for (const TimeNs w : kRateWindowsNs) {
-        const int64_t allowed = static_cast<int64_t>(std::floor(
-                                    o.board.max_step_rate_hz * static_cast<double>(w) / 1e9 +
-                                    1e-9)) +
-                                1;
+        const int64_t allowed =
+            static_cast<int64_t>(
+                std::floor(o.board.max_step_rate_hz * static_cast<double>(w) / 1e9 + 1e-9)) +
+            1;
         int64_t over = 0;
         size_t j = 0;
         for (size_t k = 0; k < m.rises.size(); ++k) {
@@ -262,16 +262,15 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
         const TimeNs from = m.rises[worst.last + 1 - static_cast<size_t>(worst.pulses)];
         const TimeNs to = m.rises[worst.last];
         char text[260];
-        std::snprintf(text, sizeof text,
-                      "%lld STEP pulses within %.0f ms (%.0f steps/s) from %s to %s; %lld "
-                      "pulses ended a %.0f ms window over the rate",
-                      static_cast<long long>(worst.pulses),
-                      static_cast<double>(worst.window_ns) / 1e6,
-                      static_cast<double>(worst.pulses - 1) * 1e9 /
-                          static_cast<double>(std::max<TimeNs>(1, to - from)),
-                      Seconds(from).c_str(), Seconds(to).c_str(),
-                      static_cast<long long>(worst.windows_over),
-                      static_cast<double>(worst.window_ns) / 1e6);
+        std::snprintf(
+            text, sizeof text,
+            "%lld STEP pulses within %.0f ms (%.0f steps/s) from %s to %s; %lld "
+            "pulses ended a %.0f ms window over the rate",
+            static_cast<long long>(worst.pulses), static_cast<double>(worst.window_ns) / 1e6,
+            static_cast<double>(worst.pulses - 1) * 1e9 /
+                static_cast<double>(std::max<TimeNs>(1, to - from)),
+            Seconds(from).c_str(), Seconds(to).c_str(), static_cast<long long>(worst.windows_over),
+            static_cast<double>(worst.window_ns) / 1e6);
         char want[200];
         std::snprintf(want, sizeof want,
                       "%s at most %lld steps/s (board %s): at most %lld pulses in any %.0f ms",

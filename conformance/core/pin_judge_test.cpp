@@ -106,8 +106,7 @@ TEST(PinJudge, StepsFasterThanTheBoardsTopRateFailPin005) {
 // Motor 1 steps forward at `rate_hz` from `t0` for `n` pulses, each pulse
 // `late` later than its tick when `late_every` > 0 says it is one (a step
 // entered late after a long interrupt).
-PinTrace Steady(int n, sim::TimeNs t0, double rate_hz, int late_every = 0,
-                sim::TimeNs late = 0) {
+PinTrace Steady(int n, sim::TimeNs t0, double rate_hz, int late_every = 0, sim::TimeNs late = 0) {
   PinTrace t = PinTrace::For(OneMotorBoard());
   t.frequency_hz = 16'000'000;
   t.signals[1].edges.push_back({t0 - 10 * kUs, 0, true});
@@ -126,8 +125,8 @@ PinTrace Steady(int n, sim::TimeNs t0, double rate_hz, int late_every = 0,
 // a rate: no window holds more pulses than 20 kHz allows.
 TEST(PinJudge, AStepEnteredLateAfterALongInterruptIsNotARate) {
   Verdicts v;
-  JudgePins("DFM-", Steady(4000, 1000 * kUs, 20000, 1000, 12400), {}, A4988(),
-            sim::kNsPerSecond, v);
+  JudgePins("DFM-", Steady(4000, 1000 * kUs, 20000, 1000, 12400), {}, A4988(), sim::kNsPerSecond,
+            v);
   EXPECT_EQ(StatusOf(v, "DFM-PIN-005"), Status::kPass);
 }
 

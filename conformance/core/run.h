@@ -155,11 +155,11 @@ RunReport Run(Target& target, const RunOptions& options) {
         intro.name = "introduction";
         intro.summary = "How the device answered the host's first introduction";
         intro.outcomes.emplace(it->first, it->second);
-        intro.log.push_back("the first introduction went unanswered; the second, sent after the "
-                            "answer timeout, was answered and the run goes on");
+        intro.log.push_back(
+            "the first introduction went unanswered; the second, sent after the "
+            "answer timeout, was answered and the run goes on");
         intro.target_ns = std::max<TimeNs>(0, host.Now() - t0);
-        intro.wall_s =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+        intro.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
         intro.KeepTraffic(host.traffic());
         report.cases.push_back(std::move(intro));
       }
@@ -175,8 +175,8 @@ RunReport Run(Target& target, const RunOptions& options) {
     } else if (probe_lost) {
       // A firmware that crashed or halted, a port that closed: the target's
       // name says what happened.
-      report.target_error = "the link to the device was lost before it introduced itself (" +
-                            target.Name() + ")";
+      report.target_error =
+          "the link to the device was lost before it introduced itself (" + target.Name() + ")";
     } else {
       report.target_error = std::string(kNoIntroduction);
     }
@@ -184,8 +184,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
       return !(rule.needs == Needs::kPins && !options.pins);
     });
-    report.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     return report;
   }
 

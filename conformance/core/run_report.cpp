@@ -90,8 +90,8 @@ std::string WhyNotExercised(const RunReport& report, const Rule& rule) {
       first_not_run = c.suite + "/" + c.name + ": " + c.not_applicable_because;
     }
   }
-  std::string why = "the " + std::to_string(ran) +
-                    " case(s) that ran never reached the situation it judges";
+  std::string why =
+      "the " + std::to_string(ran) + " case(s) that ran never reached the situation it judges";
   if (not_run > 0) {
     why += "; " + std::to_string(not_run) + " did not run (" + first_not_run +
            (not_run > 1 ? ", ..." : "") + ")";

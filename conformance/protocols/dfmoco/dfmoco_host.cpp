@@ -545,14 +545,13 @@ const DfmLine* DfmHost::Await(int index) {
     const std::string_view word = std::string_view(c.line).substr(0, 2);
     bool first_hi = word == "hi" && c.line.size() == 2;
     for (size_t k = 0; first_hi && k < i; ++k) first_hi = commands_[k].line != "hi";
-    const std::string_view rule = first_hi                     ? "DFM-HI-008"
+    const std::string_view rule = first_hi                         ? "DFM-HI-008"
                                   : word == "go" && c.line == "go" ? "DFM-GO-004"
                                                                    : "DFM-REPLY-001";
-    verdicts_.Fail(rule,
-                   Evidence{"an answer to " + Quote(c.line),
-                            link_.lost() ? "the link closed"
-                                         : "nothing after " + Ms(options_.answer_timeout_ns),
-                            "", c.sent_ns});
+    verdicts_.Fail(rule, Evidence{"an answer to " + Quote(c.line),
+                                  link_.lost() ? "the link closed"
+                                               : "nothing after " + Ms(options_.answer_timeout_ns),
+                                  "", c.sent_ns});
     return nullptr;
   }
   verdicts_.Pass("DFM-REPLY-001");

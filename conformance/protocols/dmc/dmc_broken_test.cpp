@@ -533,23 +533,23 @@ Breakage UpdatesOnATick(sim::TimeNs tick_ns) {
     wire::Bytes raw;
     bool armed = false;
   };
-  return [tick_ns, held = std::shared_ptr<Held>()](const dmc::FrameRef& f, wire::Bytes raw,
-                                                   sim::Scheduler& s,
-                                                   devices::ByteSink& out) mutable {
-    if (!held) held = std::make_shared<Held>();  // one per device: each copy starts empty
-    if (f.type != ToWire(MsgType::kMotorGetPosition) || f.id >= DmcHost::kFirstHostId) {
-      out.Write(raw);
-      return;
-    }
-    held->raw = std::move(raw);
-    if (held->armed) return;
-    held->armed = true;
-    const sim::TimeNs wait = tick_ns - s.Now() % tick_ns;
-    s.After(wait, [h = held, &out] {
-      h->armed = false;
-      out.Write(h->raw);
-    });
-  };
+  return
+      [tick_ns, held = std::shared_ptr<Held>()](const dmc::FrameRef& f, wire::Bytes raw,
+                                                sim::Scheduler& s, devices::ByteSink& out) mutable {
+        if (!held) held = std::make_shared<Held>();  // one per device: each copy starts empty
+        if (f.type != ToWire(MsgType::kMotorGetPosition) || f.id >= DmcHost::kFirstHostId) {
+          out.Write(raw);
+          return;
+        }
+        held->raw = std::move(raw);
+        if (held->armed) return;
+        held->armed = true;
+        const sim::TimeNs wait = tick_ns - s.Now() % tick_ns;
+        s.After(wait, [h = held, &out] {
+          h->armed = false;
+          out.Write(h->raw);
+        });
+      };
 }
 
 TEST(BrokenDevice, AFinalUpdateOnTheDevicesOwnTickIsNoStaleStatus) {

@@ -820,8 +820,8 @@ void HardLimit(DmcCaseContext& c) {
   // with STOP_ALL instead would put a device with a STOP_ALL lockout (the
   // reference firmware's 2 s) into it, and the case's own SET_LIMITS after
   // would be refused for the runner's doing.
-  const bool reachable = c.target.SetLimitInput(1, true, false) &&
-                         c.target.SetLimitInput(1, false, false);
+  const bool reachable =
+      c.target.SetLimitInput(1, true, false) && c.target.SetLimitInput(1, false, false);
   if (!reachable) {
     c.log.push_back(
         "the target has no limit switch the runner can close: hardware limits not exercised");

@@ -7,8 +7,8 @@
 // (Target::Outputs(), in-process), and are otherwise not exercised. Listed by
 // the table in dmc_cases.cpp.
 #include <algorithm>
-#include <initializer_list>
 #include <cstdlib>
+#include <initializer_list>
 #include <map>
 #include <string>
 #include <vector>
@@ -512,7 +512,8 @@ void RollLimits(DmcCaseContext& c) {
   if (!u) return;
   const uint32_t end = std::min<uint32_t>(10, u->end);
   if (end < 10) {
-    const std::string why = "the device holds fewer than 11 frames: pre-/post-roll limits not exercised";
+    const std::string why =
+        "the device holds fewer than 11 frames: pre-/post-roll limits not exercised";
     c.log.push_back(why);
     for (const char* id : {"DMC-RT-026", "DMC-RT-027", "DMC-RT-028", "DMC-RT-029"}) {
       c.v.NotExercised(id, why);

@@ -343,20 +343,20 @@ TEST(DmcLinkProofs, AHiAnsweredWithAnAckIsCaughtByHi001) {
 // does; the miss fails the introduction's own rule and the rest is judged.
 TEST(DmcLinkProofs, AFirstHiMissedIsCaughtByHi016AndTheRestIsJudged) {
   auto missed = std::make_shared<bool>(false);
-  const RunReport r = RunBroken(PassThrough, Only("connect/*"), "",
-                                [missed](wire::ByteView bytes) -> wire::Bytes {
-                                  bool hi = false;
-                                  dmc::FrameDecoder dec;
-                                  dec.Feed(bytes, [&](const dmc::FrameEvent& e) {
-                                    const auto* f = std::get_if<dmc::FrameRef>(&e);
-                                    hi = hi || (f != nullptr && f->type == ToWire(MsgType::kHi));
-                                  });
-                                  if (hi && !*missed) {
-                                    *missed = true;
-                                    return {};
-                                  }
-                                  return wire::Bytes(bytes.begin(), bytes.end());
-                                });
+  const RunReport r =
+      RunBroken(PassThrough, Only("connect/*"), "", [missed](wire::ByteView bytes) -> wire::Bytes {
+        bool hi = false;
+        dmc::FrameDecoder dec;
+        dec.Feed(bytes, [&](const dmc::FrameEvent& e) {
+          const auto* f = std::get_if<dmc::FrameRef>(&e);
+          hi = hi || (f != nullptr && f->type == ToWire(MsgType::kHi));
+        });
+        if (hi && !*missed) {
+          *missed = true;
+          return {};
+        }
+        return wire::Bytes(bytes.begin(), bytes.end());
+      });
   ExpectCaught(r, "DMC-HI-016");
   ExpectMustsFailed(r, {"DMC-HI-016"});
   EXPECT_FALSE(r.device.empty());
