@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 
 namespace moco::conformance {
 namespace dmc_cases {
@@ -1043,16 +1044,17 @@ const dmc::MotorPositionReport* LastPositions(const DmcHost& h, size_t end) {
   return nullptr;
 }
 
-// An unsolicited update from record `from` on whose positions differ from `base`.
-const DeviceRecord* MovedSince(const DmcHost& h, size_t from,
-                               const dmc::MotorPositionReport* base) {
+// The index of the first unsolicited update from record `from` on whose
+// positions differ from `base`, or nullopt.
+std::optional<size_t> MovedSince(const DmcHost& h, size_t from,
+                                 const dmc::MotorPositionReport* base) {
   for (size_t i = from; i < h.records().size(); ++i) {
     const DeviceRecord& r = h.records()[i];
     if (r.request >= 0) continue;
     const auto* p = As<dmc::MotorPositionReport>(&r);
-    if (p != nullptr && (base == nullptr || p->positions_steps != base->positions_steps)) return &r;
+    if (p != nullptr && (base == nullptr || p->positions_steps != base->positions_steps)) return i;
   }
-  return nullptr;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -1073,8 +1075,10 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       const TimeNs quiet_at = LastActivity(host, mark) + kQuietForRest;
       if (r->t_ns >= quiet_at) return w.rested = true, w;
       host.Idle(quiet_at - host.Now());
-      const DeviceRecord* moved = MovedSince(host, mark, LastPositions(host, mark));
-      if (moved == nullptr) return w.rested = true, w;
+      const std::optional<size_t> moved_at = MovedSince(host, mark, LastPositions(host, mark));
+      if (!moved_at) return w.rested = true, w;
+      // A deque's records stay where they are as more arrive.
+      const DeviceRecord* moved = &host.records()[*moved_at];
       // The status was stale only if the motor went on moving after it: the
       // updates after it change from one to the next. One last update that
       // carries the rest position is the end of the motion reported on the
@@ -1083,13 +1087,10 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       // within kStartLatency of a command that starts motion may rightly be
       // 0: nothing moves before the device's next motion tick (dmc-lite: 20
       // ms). Either way the host asks again.
-      size_t moved_at = mark;
-      while (&host.records()[moved_at] != moved) ++moved_at;
-      // Whether another update follows within the quiet period after it (a
-      // deque's records stay where they are as more arrive).
+      // Whether another update follows within the quiet period after it.
       if (const TimeNs wait = moved->t_ns + kQuietForRest - host.Now(); wait > 0) host.Idle(wait);
       const bool went_on =
-          MovedSince(host, moved_at + 1, As<dmc::MotorPositionReport>(moved)) != nullptr;
+          MovedSince(host, *moved_at + 1, As<dmc::MotorPositionReport>(moved)).has_value();
       const bool just_commanded = r->t_ns - LastCommandSent(host) < kStartLatency;
       if (!went_on && !just_commanded) return w.rested = true, w;
       if (went_on && !just_commanded && w.stale_status == nullptr) {
