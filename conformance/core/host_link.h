@@ -7,7 +7,9 @@
 
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -26,6 +28,18 @@ struct HostOptions {
   TimeNs answer_timeout_ns = 2000 * sim::kNsPerMs;  // DMC-ACK-001: no answer after this
   TimeNs position_gap_ns = 200 * sim::kNsPerMs;     // DMC-POS-002: largest update gap
   TimeNs quiet_ns = 50 * sim::kNsPerMs;             // listened for after a case
+  // Once the device has left this many requests of a kind unanswered in a
+  // row (with no answer of that kind in between), or this many requests of
+  // any kind, the hosts of the run stop waiting for answers it has shown it
+  // does not give: such a request is judged unanswered at once, as it would
+  // be after the answer timeout, until the device answers again. A broken
+  // device is then judged in about the time of a good one, with the same
+  // rules failing. 0: every answer is waited out (mococheck run
+  // --wait-every-answer).
+  int give_up_after_unanswered = 3;
+  // What the hosts of one run learned of the device's unanswered requests
+  // (the runner shares one per run); null: each host keeps its own.
+  std::shared_ptr<struct UnansweredRequests> unanswered;
   // DFMoco only (--dialect): "auto" (the StackShot 3X dialect when `hi` is
   // exactly the StackShot's, else the sketch's), "sketch" or "stackshot3x".
   std::string dfmoco_dialect = "auto";
@@ -33,6 +47,14 @@ struct HostOptions {
 
 // The request kinds of HostOptions::deadline_by_kind_ns.
 inline constexpr const char* kDeadlineKinds[] = {"hi", "query", "command", "upload", "rt"};
+
+// The requests the device left unanswered, shared by the hosts of a run:
+// per kind ("MOTOR_STATUS", "mm", "CC_RAIL_MOVE write"), and of any kind, how
+// many in a row.
+struct UnansweredRequests {
+  std::map<std::string, int, std::less<>> by_kind;
+  int in_a_row = 0;
+};
 
 // One chunk of traffic as it crossed the link.
 struct Chunk {
@@ -113,18 +135,43 @@ class HostBase {
   const HostOptions& options() const { return options_; }
   // Reads for `duration_ns`.
   void Idle(TimeNs duration_ns) { link_.Idle(duration_ns); }
+  // The answers this host did not wait for, the device having shown it does
+  // not give them: "" or "answers not waited for (...): MOTOR_STATUS x12, HI x1".
+  std::string NotWaitedForSummary() const;
+  // While a case greets the device (the runner's preparation and the
+  // introduction), only a kind's own unanswered requests make it hopeless, not
+  // a run of unanswered requests of any kind: the greeting is how the run
+  // learns whether the device still answers at all.
+  void set_greeting(bool greeting) { greeting_ = greeting; }
 
  protected:
   // `target` and `verdicts` must outlive the host; `on_bytes` gets every byte
   // the device sends (it is first called after construction).
   HostBase(Target& target, Verdicts& verdicts, HostOptions options,
-           std::function<void(wire::ByteView)> on_bytes)
-      : link_(target, std::move(on_bytes)), verdicts_(verdicts), options_(std::move(options)) {}
+           std::function<void(wire::ByteView)> on_bytes);
   ~HostBase() = default;
+
+  // Whether the host stops waiting for answers the device does not give
+  // (options().give_up_after_unanswered > 0).
+  bool gives_up() const { return options_.give_up_after_unanswered > 0; }
+  // Why waiting for the answer to a request of `kind` is pointless ("" when it
+  // is not). When it is, the host judges the request unanswered at once and
+  // calls NotWaitedFor(kind) and Unanswered(kind).
+  std::string Hopeless(std::string_view kind) const;
+  // Records that a request of `kind` went unanswered (its rule judged).
+  void Unanswered(std::string_view kind);
+  // Records that a request of `kind` was answered (late answers too).
+  void Answered(std::string_view kind);
+  // Records a request of `kind` whose answer was not waited for.
+  void NotWaitedFor(std::string_view kind) { ++not_waited_for_[std::string(kind)]; }
 
   HostLink link_;
   Verdicts& verdicts_;
   HostOptions options_;
+
+ private:
+  std::map<std::string, int, std::less<>> not_waited_for_;  // by kind
+  bool greeting_ = false;
 };
 
 }  // namespace moco::conformance

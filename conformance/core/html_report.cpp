@@ -231,6 +231,9 @@ std::string HtmlReport(const RunReport& report) {
     s += std::string("<details") + (case_failed ? " open" : "") + "><summary><span class=\"" +
          (case_failed ? "fail\">FAIL" : "pass\">ok") + "</span> " + Esc(full) + " &mdash; " +
          Esc(c.summary) + " (" + Esc(base::Ms(c.target_ns, 3)) + ")</summary>\n";
+    if (!c.not_waited_for.empty()) {
+      s += "<p class=\"note\">" + Esc(c.not_waited_for) + "</p>\n";
+    }
     const std::vector<TrafficLine> lines =
         DecodeTraffic(wire::ParseProtocol(report.protocol).value_or(Protocol::kDmc), c.traffic);
     for (const auto& [id, o] : c.outcomes) {

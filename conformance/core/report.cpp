@@ -64,6 +64,7 @@ std::string ConsoleCase(const CaseResult& c, bool verbose) {
          (failed ? ", " + std::to_string(failed) + " failed" : "") +
          (noted ? ", " + std::to_string(noted) + " noted" : "") + "; " + base::Ms(c.target_ns, 3) +
          ")\n";
+    if (!c.not_waited_for.empty()) s += "        " + c.not_waited_for + "\n";
     for (const auto& [id, o] : c.outcomes) {
       if (o.status == Status::kPass) {
         if (verbose) s += "        pass " + id + "\n";
@@ -194,6 +195,7 @@ nlohmann::json JsonReport(const RunReport& report) {
     } else {
       jc["status"] = c.MustFailed() ? "fail" : "pass";
       jc["target_ms"] = static_cast<double>(c.target_ns) / 1e6;
+      if (!c.not_waited_for.empty()) jc["not_waited_for"] = c.not_waited_for;
       jc["wall_s"] = c.wall_s;
       json rules = json::array();
       for (const auto& [id, o] : c.outcomes) {

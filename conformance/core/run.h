@@ -133,13 +133,19 @@ RunReport Run(Target& target, const RunOptions& options) {
   report.protocol = std::string(wire::ProtocolName(Traits::kProtocol));
   report.options = options;
 
+  // The hosts of the run share what they learn of the requests the device
+  // leaves unanswered (HostOptions::give_up_after_unanswered).
+  HostOptions host_options = options.host;
+  host_options.unanswered = std::make_shared<UnansweredRequests>();
+
   std::optional<Device> device;
   bool device_spoke = false, probe_lost = false;
   {
     Verdicts probe(options.rules);
-    Host host(target, probe, options.host);
+    Host host(target, probe, host_options);
     const TimeNs t0 = host.Now();
     const auto c0 = std::chrono::steady_clock::now();
+    host.set_greeting(true);
     device = Traits::Discover(host);
     host.Close();
     device_spoke = DeviceSpoke(host.traffic());
@@ -223,12 +229,14 @@ RunReport Run(Target& target, const RunOptions& options) {
     const auto c0 = std::chrono::steady_clock::now();
     if (target.CanRestart()) target.Restart();
     Verdicts verdicts(options.rules);
-    Host host(target, verdicts, options.host);
+    Host host(target, verdicts, host_options);
     const TimeNs t0 = host.Now();
+    host.set_greeting(true);
     const std::optional<Device> seen = Traits::Greet(host, target, device.value_or(Device{}));
+    host.set_greeting(false);
     if (seen && !host.link_lost()) {
       typename Case::Context ctx{host,         verdicts,       *seen,     target,
-                                 options.host, options.random, result.log};
+                                 host_options, options.random, result.log};
       k.run(ctx);
     }
     host.Close();
@@ -238,6 +246,7 @@ RunReport Run(Target& target, const RunOptions& options) {
       result.pins = std::make_shared<const PinTrace>(*pins);
     }
     if (host.link_lost()) result.log.push_back("the link to the device was lost");
+    result.not_waited_for = host.NotWaitedForSummary();
     // The random suite saves a shrunk session of its own instead.
     if (verdicts.MustFailed() && k.suite != "random") {
       result.log.push_back("transcript:\n" + Transcript(Traits::kProtocol, host.traffic()));

@@ -59,6 +59,10 @@ struct CaseResult {
   std::string summary;
   bool applicable = true;
   std::string not_applicable_because;
+  // The answers the case did not wait for, the device having left the last
+  // requests of their kind unanswered (HostOptions::give_up_after_unanswered);
+  // "" when it waited for every answer.
+  std::string not_waited_for;
   std::map<std::string, RuleOutcome, std::less<>> outcomes;
   // Why rules could not be judged in this case (Verdicts::NotExercised).
   std::map<std::string, std::string, std::less<>> not_exercised;

@@ -87,7 +87,9 @@ void PlayRandomSequence(Context& c, std::vector<Step> steps,
     c.target.Restart();
     Verdicts v;
     Host h(c.target, v, c.host_options);
+    h.set_greeting(true);
     if (!play.greet(h)) return true;
+    h.set_greeting(false);
     play.execute(h, v, fewer);
     h.Close();
     return v.MustFailed();
@@ -96,7 +98,9 @@ void PlayRandomSequence(Context& c, std::vector<Step> steps,
   c.target.Restart();
   Verdicts v;
   Host h(c.target, v, c.host_options);
+  h.set_greeting(true);
   play.greet(h);
+  h.set_greeting(false);
   play.execute(h, v, steps);
   h.Close();
   c.log.push_back("shrunk to " + std::to_string(steps.size()) + " step(s):");

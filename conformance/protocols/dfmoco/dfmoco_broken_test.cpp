@@ -13,8 +13,10 @@
 #include <memory>
 #include <set>
 
+#include "conformance/core/patience_testing.h"
 #include "conformance/core/report.h"
 #include "conformance/core/rule_proof_testing.h"
+#include "conformance/protocols/dfmoco/dfmoco_broken_device_testing.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
 #include "devices/faulty_sink.h"
@@ -268,6 +270,35 @@ TEST(DfmocoBroken, RandomSuitePassesOnTheSketchForManySeeds) {
     const RunReport r = RunFaulty({}, o);
     EXPECT_EQ(ExitCode(r), 0) << "seed " << seed << "\n" << ConsoleReport(r, true);
   }
+}
+
+// A broken sketch is judged in at most twice the good one's time, with the
+// same rules failing as when every answer is waited out.
+TEST(BrokenSketch, NoAnswerToOneCommandIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return dfmoco_testing::RunBroken(dfmoco_testing::PassThrough, o); },
+      [](const RunOptions& o) {
+        return dfmoco_testing::RunBroken(
+            [](const std::string& line, const std::string& last, sim::Scheduler& s,
+               devices::ByteSink& out) {
+              if (line.rfind("ms", 0) != 0) dfmoco_testing::PassThrough(line, last, s, out);
+            },
+            o);
+      });
+}
+
+TEST(BrokenSketch, ASketchThatStopsMidRunIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return dfmoco_testing::RunBroken(dfmoco_testing::PassThrough, o); },
+      [](const RunOptions& o) {
+        auto written = std::make_shared<size_t>(0);
+        return dfmoco_testing::RunBroken(
+            [written](const std::string& line, const std::string& last, sim::Scheduler& s,
+                      devices::ByteSink& out) {
+              if ((*written)++ < 300) dfmoco_testing::PassThrough(line, last, s, out);
+            },
+            o);
+      });
 }
 
 }  // namespace

@@ -78,6 +78,9 @@ void JudgeReports(DfmCaseContext& c, const Motion& m, const DfmRest& rest, int32
   const size_t mi = static_cast<size_t>(m.motor - 1);
   const TimeNs last_moving = mi < rest.last_moving_ns.size() ? rest.last_moving_ns[mi] : -1;
   if (last_moving < 0) return;  // never seen moving
+  // No `ms` showed the motors at rest (unanswered, or moving to the end):
+  // when the motion ended, and so which reports came after it, is unknown.
+  if (!rest.rested) return;
   // The report after the stop can lag it by up to a second (FACTS).
   const TimeNs stop_report_by = last_moving + kPollNs + kReportPeriodNs + Tolerance(c);
   if (h.Now() < stop_report_by) h.Idle(stop_report_by - h.Now());
@@ -1125,13 +1128,43 @@ std::optional<int32_t> DfmPosition(DfmHost& host, int32_t motor) {
   return p->position_steps;
 }
 
+namespace {
+
+// Polls every motor's position until none has changed for kStillForRest, or
+// until `until`.
+void WaitPositionsStill(DfmHost& host, TimeNs until) {
+  constexpr TimeNs kStillForRest = 150 * kMs;
+  std::vector<std::optional<int32_t>> last;
+  TimeNs still_since = host.Now();
+  while (host.Now() < until && !host.link_lost()) {
+    std::vector<std::optional<int32_t>> now;
+    for (int32_t m = 1; m <= host.axes(); ++m) now.push_back(DfmPosition(host, m));
+    if (now != last) {
+      last = std::move(now);
+      still_since = host.Now();
+    } else if (host.Now() - still_since >= kStillForRest) {
+      return;
+    }
+    host.Idle(std::min(kPollNs, until - host.Now()));
+  }
+}
+
+}  // namespace
+
 DfmRest DfmWaitRest(DfmHost& host, TimeNs timeout_ns, const std::function<void()>& while_moving) {
   DfmRest r;
   r.last_moving_ns.assign(static_cast<size_t>(std::max(host.axes(), 0)), -1);
   const TimeNs until = host.Now() + timeout_ns;
   for (;;) {
     const auto* st = As<dfmoco::MotorStatusReply>(host.Call("ms"));
-    if (st == nullptr) return r;
+    if (st == nullptr) {
+      // No status to go by (its answer is missing, already judged): the
+      // positions tell when the motion ended, so that what the case checks
+      // next is judged on a motion that ended whether the host waited out
+      // the answer timeout or not (HostOptions::give_up_after_unanswered).
+      WaitPositionsStill(host, until);
+      return r;
+    }
     bool any = false;
     for (size_t i = 0; i < st->moving.size(); ++i) {
       if (!st->moving[i]) continue;

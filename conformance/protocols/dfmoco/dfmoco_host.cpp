@@ -14,6 +14,9 @@
 namespace moco::conformance {
 namespace {
 
+// A command's kind for HostBase::Unanswered: its word ("mm", "hi").
+std::string CommandWord(const std::string& line) { return line.substr(0, line.find(' ')); }
+
 using dfmoco::DeviceReply;
 
 using base::Ms;
@@ -306,6 +309,7 @@ void DfmHost::OnLine(DfmLine line, bool crlf) {
     DfmCommand& c = commands_[static_cast<size_t>(k)];
     ++c.answers;
     c.answer = static_cast<int>(index);
+    Answered(CommandWord(c.line));
     CheckAnswer(c, stored);
     return;
   }
@@ -535,8 +539,8 @@ void DfmHost::CheckHello(const DfmLine& line, const dfmoco::HelloReply& hi) {
 const DfmLine* DfmHost::Await(int index) {
   if (index < 0 || static_cast<size_t>(index) >= commands_.size()) return nullptr;
   const auto i = static_cast<size_t>(index);
-  const TimeNs give_up = commands_[i].sent_ns + options_.answer_timeout_ns;
-  if (!link_.ReadUntil(give_up, [&] { return commands_[i].answer >= 0; })) {
+  const std::string kind = CommandWord(commands_[i].line);
+  const auto fail = [&](std::string observed) {
     DfmCommand& c = commands_[i];
     c.abandoned = true;
     // A missing answer is judged under the rule of its command's clause where
@@ -548,10 +552,21 @@ const DfmLine* DfmHost::Await(int index) {
     const std::string_view rule = first_hi                         ? "DFM-HI-008"
                                   : word == "go" && c.line == "go" ? "DFM-GO-004"
                                                                    : "DFM-REPLY-001";
-    verdicts_.Fail(rule, Evidence{"an answer to " + Quote(c.line),
-                                  link_.lost() ? "the link closed"
-                                               : "nothing after " + Ms(options_.answer_timeout_ns),
-                                  "", c.sent_ns});
+    verdicts_.Fail(rule,
+                   Evidence{"an answer to " + Quote(c.line), std::move(observed), "", c.sent_ns});
+  };
+  if (commands_[i].answer < 0) {
+    if (const std::string why = Hopeless(kind); !why.empty()) {
+      fail("not waited for: " + why);
+      NotWaitedFor(kind);
+      Unanswered(kind);
+      return nullptr;
+    }
+  }
+  const TimeNs give_up = commands_[i].sent_ns + options_.answer_timeout_ns;
+  if (!link_.ReadUntil(give_up, [&] { return commands_[i].answer >= 0; })) {
+    fail(link_.lost() ? "the link closed" : "nothing after " + Ms(options_.answer_timeout_ns));
+    Unanswered(kind);
     return nullptr;
   }
   verdicts_.Pass("DFM-REPLY-001");

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <set>
 
+#include "conformance/core/patience_testing.h"
 #include "conformance/core/report.h"
 #include "conformance/core/rule_proof_testing.h"
 #include "conformance/protocols/dmc/dmc_broken_device_testing.h"
@@ -613,6 +614,52 @@ TEST(BrokenDevice, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   }
   EXPECT_TRUE(stop_all_sent);
   std::filesystem::remove(session);
+}
+
+// A broken device is judged in at most twice the good device's time, with
+// the same rules failing as when every answer is waited out: the answers it
+// has stopped giving are not waited for (HostOptions::give_up_after_unanswered).
+RunReport RunBrokenWith(const Breakage& b, const RunOptions& o) { return RunBroken(b, o); }
+
+TEST(BrokenDevice, WrongChecksumsAreJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return RunBrokenWith(PassThrough, o); },
+      [](const RunOptions& o) {
+        return RunBrokenWith(
+            [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+              // The introduction intact: the host knows the device and runs every case.
+              if (f.type != ToWire(MsgType::kHi))
+                raw.back() = static_cast<uint8_t>(raw.back() ^ 0x5a);
+              out.Write(raw);
+            },
+            o);
+      });
+}
+
+TEST(BrokenDevice, NoAnswerToOneMessageTypeIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return RunBrokenWith(PassThrough, o); },
+      [](const RunOptions& o) {
+        return RunBrokenWith(
+            [](const dmc::FrameRef& f, wire::Bytes raw, sim::Scheduler&, devices::ByteSink& out) {
+              if (f.type != ToWire(MsgType::kMotorStatus)) out.Write(raw);
+            },
+            o);
+      });
+}
+
+TEST(BrokenDevice, ADeviceThatStopsMidRunIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return RunBrokenWith(PassThrough, o); },
+      [](const RunOptions& o) {
+        auto written = std::make_shared<size_t>(0);
+        return RunBrokenWith(
+            [written](const dmc::FrameRef&, wire::Bytes raw, sim::Scheduler&,
+                      devices::ByteSink& out) {
+              if ((*written)++ < 2000) out.Write(raw);
+            },
+            o);
+      });
 }
 
 }  // namespace

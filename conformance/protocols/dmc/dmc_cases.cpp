@@ -1065,7 +1065,17 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
   for (;;) {
     const DeviceRecord* r = host.Call(dmc::MotorStatusRequest{});
     const auto* st = As<dmc::MotorStatusResponse>(r);
-    if (st == nullptr) return w;
+    if (st == nullptr) {
+      // No status to go by (its answer is missing, already judged): the
+      // position updates tell when the motion ended. What the case checks
+      // next is then judged on a motion that ended, whether the host waited
+      // out the answer timeout or not (HostOptions::give_up_after_unanswered).
+      for (;;) {
+        const TimeNs quiet_at = LastActivity(host, host.records().size()) + kQuietForRest;
+        if (host.Now() >= quiet_at || host.Now() >= until || host.link_lost()) return w;
+        host.Idle(std::min(quiet_at, until) - host.Now());
+      }
+    }
     if (st->moving_bits == 0) {
       // "MOTOR STATUS ... bit set = motor moving" at rest; believed once the
       // position updates have been quiet for an update period: a move's last

@@ -168,6 +168,9 @@ void DmcHost::OnBytes(wire::ByteView bytes) {
       if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
         OnFrame(*f);
       } else if (const auto* c = std::get_if<dmc::ChecksumError>(&e)) {
+        for (Request& r : requests_) {
+          if (r.id == c->id && r.answer < 0) r.garbled_answer = true;
+        }
         const size_t n = std::min(history_.size(), dmc::kHeaderSize + c->length + dmc::kCheckSize);
         const wire::ByteView raw(history_.data() + history_.size() - n, n);
         verdicts_.Fail("DMC-CSUM-001", Evidence{"Fletcher-16 over the frame = 0",
@@ -243,6 +246,7 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
                     "answer number " + std::to_string(req.answers));
         })) {
       req.answer = static_cast<int>(rec_index);
+      Answered(dmc::TypeName(req.type));
       CheckAnswer(req, r);
     }
     return;
@@ -279,6 +283,7 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
       records_.back().request = waiting;
       ++req.answers;
       req.answer = static_cast<int>(rec_index);
+      Answered(dmc::TypeName(req.type));
       CheckAnswer(req, r);
       return;
     }
@@ -558,30 +563,50 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
     }
   }
   if (index < 0) return nullptr;
-  const TimeNs give_up = requests_[static_cast<size_t>(index)].sent_ns +
-                         timeout_ns.value_or(options_.answer_timeout_ns);
-  if (!link_.ReadUntil(give_up,
-                       [&] { return requests_[static_cast<size_t>(index)].answer >= 0; })) {
-    const Request& req = requests_[static_cast<size_t>(index)];
-    // The host's first HI has a rule of its own (a device that misses it is
-    // asked again, as Dragonframe does after its timeout).
-    bool first_hi = req.type == dmc::ToWire(dmc::MsgType::kHi);
-    for (int i = 0; first_hi && i < index; ++i) {
-      first_hi = requests_[static_cast<size_t>(i)].type != dmc::ToWire(dmc::MsgType::kHi);
+  const auto at = static_cast<size_t>(index);
+  const std::string kind = dmc::TypeName(requests_[at].type);
+  const TimeNs timeout = timeout_ns.value_or(options_.answer_timeout_ns);
+  // The host's first HI has a rule of its own (a device that misses it is
+  // asked again, as Dragonframe does after its timeout).
+  const auto unanswered_rule = [&] {
+    bool first_hi = requests_[at].type == dmc::ToWire(dmc::MsgType::kHi);
+    for (size_t i = 0; first_hi && i < at; ++i) {
+      first_hi = requests_[i].type != dmc::ToWire(dmc::MsgType::kHi);
     }
-    verdicts_.Fail(first_hi ? "DMC-HI-016" : "DMC-ACK-001",
+    return first_hi ? "DMC-HI-016" : "DMC-ACK-001";
+  };
+  const auto fail = [&](std::string observed) {
+    const Request& req = requests_[at];
+    verdicts_.Fail(unanswered_rule(),
                    Evidence{"an answer to " + dmc::TypeName(req.type) + " id=" + std::to_string(id),
-                            link_.lost() ? "the link closed"
-                                         : "nothing after " +
-                                               Ms(timeout_ns.value_or(options_.answer_timeout_ns)),
-                            wire::ToHex(req.raw), req.sent_ns});
+                            std::move(observed), wire::ToHex(req.raw), req.sent_ns});
+  };
+  if (requests_[at].answer < 0) {
+    if (const std::string why = Hopeless(kind); !why.empty()) {
+      fail("not waited for: " + why);
+      NotWaitedFor(kind);
+      Unanswered(kind);
+      return nullptr;
+    }
+  }
+  // An answer that came with a bad checksum is as good as none: when the host
+  // gives up on unanswered requests, it does not wait out the timeout for it.
+  const bool stop_at_garbled = gives_up();
+  if (!link_.ReadUntil(requests_[at].sent_ns + timeout,
+                       [&] {
+                         return requests_[at].answer >= 0 ||
+                                (stop_at_garbled && requests_[at].garbled_answer);
+                       }) ||
+      requests_[at].answer < 0) {
+    fail(link_.lost()                   ? "the link closed"
+         : requests_[at].garbled_answer ? "only a frame with this ID whose checksum failed"
+                                        : "nothing after " + Ms(timeout));
+    Unanswered(kind);
     return nullptr;
   }
   verdicts_.Pass("DMC-ACK-001");
-  if (requests_[static_cast<size_t>(index)].type == dmc::ToWire(dmc::MsgType::kHi)) {
-    verdicts_.Pass("DMC-HI-016");
-  }
-  return &records_[static_cast<size_t>(requests_[static_cast<size_t>(index)].answer)];
+  if (requests_[at].type == dmc::ToWire(dmc::MsgType::kHi)) verdicts_.Pass("DMC-HI-016");
+  return &records_[static_cast<size_t>(requests_[at].answer)];
 }
 
 int DmcHost::WaitFor(size_t from, TimeNs timeout_ns,

@@ -41,6 +41,9 @@ struct Request {
   bool well_formed = false;  // a good checksum and a layout that fits its type
   int answer = -1;           // index into records()
   int answers = 0;
+  // The device sent a frame with this request's ID whose checksum failed:
+  // its answer came, unreadable.
+  bool garbled_answer = false;
 };
 
 class DmcHost : public HostBase {

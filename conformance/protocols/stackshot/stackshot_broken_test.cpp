@@ -8,8 +8,10 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "conformance/core/patience_testing.h"
 #include "conformance/core/report.h"
 #include "conformance/core/rule_proof_testing.h"
+#include "conformance/protocols/stackshot/stackshot_broken_device_testing.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
 #include "devices/stackshot3x/stackshot3x.h"
 #include "session/session.h"
@@ -144,6 +146,36 @@ TEST(StackshotBroken, RandomSuiteShrinksAFailingSequenceAndSavesIt) {
   }
   EXPECT_TRUE(stop_sent);
   std::filesystem::remove(session);
+}
+
+// A broken controller is judged in at most twice the good one's time, with
+// the same rules failing as when every answer is waited out.
+TEST(BrokenStackshot, NoReplyToOneCommandIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return ss_testing::RunBroken(ss_testing::PassThrough, o); },
+      [](const RunOptions& o) {
+        return ss_testing::RunBroken(
+            [](const stackshot::Packet* request, stackshot::Packet reply, sim::Scheduler& s,
+               devices::ByteSink& out) {
+              if (!ss_testing::Is(request, Command::kRailStatus))
+                ss_testing::PassThrough(request, std::move(reply), s, out);
+            },
+            o);
+      });
+}
+
+TEST(BrokenStackshot, AControllerThatStopsMidRunIsJudgedFast) {
+  patience_testing::ExpectJudgedFast(
+      [](const RunOptions& o) { return ss_testing::RunBroken(ss_testing::PassThrough, o); },
+      [](const RunOptions& o) {
+        auto written = std::make_shared<size_t>(0);
+        return ss_testing::RunBroken(
+            [written](const stackshot::Packet* request, stackshot::Packet reply, sim::Scheduler& s,
+                      devices::ByteSink& out) {
+              if ((*written)++ < 300) ss_testing::PassThrough(request, std::move(reply), s, out);
+            },
+            o);
+      });
 }
 
 }  // namespace

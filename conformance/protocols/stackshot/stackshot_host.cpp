@@ -11,6 +11,13 @@
 namespace moco::conformance {
 namespace {
 
+// A request's kind for HostBase::Unanswered: its command and action
+// ("CC_RAIL_MOVE write").
+std::string KindOf(const stackshot::Packet& p) {
+  return stackshot::CommandName(p.command) + " " +
+         std::string(stackshot::ActionName(static_cast<stackshot::Action>(p.action)));
+}
+
 using stackshot::Action;
 using stackshot::ChecksumAlgorithm;
 using stackshot::Command;
@@ -164,6 +171,7 @@ void SsHost::OnPacket(const stackshot::DecodedPacket& d) {
   verdicts_.Pass("SS-ANS-002");
   SsRequest& req = requests_[static_cast<size_t>(r.request)];
   req.answer = static_cast<int>(index);
+  Answered(KindOf(req.packet));
   CheckReply(req, r);
 }
 
@@ -312,17 +320,30 @@ void SsHost::CheckReply(const SsRequest& req, const SsRecord& rec) {
 const SsRecord* SsHost::Await(int index) {
   if (index < 0 || static_cast<size_t>(index) >= requests_.size()) return nullptr;
   const size_t i = static_cast<size_t>(index);
+  // The kind of a request is its command and action ("CC_RAIL_MOVE WRITE").
+  const std::string kind = KindOf(requests_[i].packet);
+  const auto fail = [&](std::string observed) {
+    SsRequest& req = requests_[i];
+    if (req.given_up) return false;
+    req.given_up = true;
+    waiting_.erase(std::remove(waiting_.begin(), waiting_.end(), index), waiting_.end());
+    verdicts_.Fail("SS-ANS-001", Evidence{"a reply to " + stackshot::Describe(req.packet),
+                                          std::move(observed), wire::ToHex(req.raw), req.sent_ns});
+    return true;
+  };
+  if (requests_[i].answer < 0) {
+    if (const std::string why = Hopeless(kind); !why.empty()) {
+      fail("not waited for: " + why);
+      NotWaitedFor(kind);
+      Unanswered(kind);
+      return nullptr;
+    }
+  }
   const TimeNs give_up = requests_[i].sent_ns + options_.answer_timeout_ns;
   if (!link_.ReadUntil(give_up, [&] { return requests_[i].answer >= 0; })) {
-    SsRequest& req = requests_[i];
-    if (!req.given_up) {
-      req.given_up = true;
-      waiting_.erase(std::remove(waiting_.begin(), waiting_.end(), index), waiting_.end());
-      verdicts_.Fail("SS-ANS-001",
-                     Evidence{"a reply to " + stackshot::Describe(req.packet),
-                              link_.lost() ? "the link closed"
-                                           : "nothing after " + Ms(options_.answer_timeout_ns),
-                              wire::ToHex(req.raw), req.sent_ns});
+    if (fail(link_.lost() ? "the link closed"
+                          : "nothing after " + Ms(options_.answer_timeout_ns))) {
+      Unanswered(kind);
     }
     return nullptr;
   }
