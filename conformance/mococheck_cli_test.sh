@@ -243,6 +243,23 @@ mococheck_cli_parse_errors_exit_2_and_help_exits_0)
   ;;
 
 # The serial: target keeps its name in the output (it was labelled pty:).
+# One report that cannot be written (a full disk) does not stop the others:
+# each failure is named with its option, the rest are written, exit 2.
+mococheck_cli_a_failing_report_does_not_stop_the_others)
+  [ -w /dev/full ] || fail "no /dev/full on this machine"
+  expect_rc 2 "$m" run --target in-process:dmc16 --cases 'connect/*' -q \
+    --junit /dev/full --json r.json --html r.html
+  grep -q 'could not write --junit /dev/full' err.txt || fail "the failing --junit is not named"
+  grep -q 'written: --html r.html, --json r.json' err.txt || fail "the reports written are not named"
+  test -s r.json && test -s r.html || fail "the other reports were not written"
+  grep -q '"exit_code": 0' r.json || fail "the JSON report does not carry the verdict"
+  grep -q '^result: PASS' out.txt || fail "no verdict on the console"
+  expect_rc 2 "$m" run --target in-process:dmc16 --cases 'connect/hi' -q \
+    --json /dev/full --junit r.xml
+  grep -q 'could not write --json /dev/full' err.txt || fail "the failing --json is not named"
+  test -s r.xml || fail "the JUnit report was not written"
+  ;;
+
 mococheck_cli_serial_target_is_labelled_serial)
   # A PTY from mocosim, reached through the serial: scheme.
   "$sim" dmc16 --pty "$work/dev" --no-pacing >sim.log 2>&1 &

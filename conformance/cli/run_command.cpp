@@ -315,21 +315,30 @@ int Run(const RunArgs& a) {
   } else {
     std::cout << ConsoleSummary(report, a.verbose) << std::flush;
   }
-  if (!a.junit.empty()) {
-    if (auto err = WriteAtomically(a.junit, JunitReport(report)); !err.empty()) return Fail(err);
-  }
-  if (!a.html_path.empty()) {
-    if (auto err = WriteAtomically(a.html_path, HtmlReport(report)); !err.empty()) {
-      return Fail(err);
+  // Every report that can be written is written: one that fails (a full
+  // disk, a folder gone) is named with its option, and the others still land.
+  std::vector<std::string> written, failed;
+  auto write = [&](const char* option, const std::string& path, const auto& render) {
+    if (path.empty()) return;
+    if (auto err = WriteAtomically(path, render()); !err.empty()) {
+      failed.push_back(std::string(option) + " " + path + ": " + err);
+    } else {
+      written.push_back(std::string(option) + " " + path);
     }
-  }
-  if (!a.vcd_path.empty()) {
-    if (auto err = WriteAtomically(a.vcd_path, PinsVcd(report)); !err.empty()) return Fail(err);
-  }
-  if (!a.json_path.empty()) {
-    if (auto err = WriteAtomically(a.json_path, JsonReport(report).dump(2) + "\n"); !err.empty()) {
-      return Fail(err);
-    }
+  };
+  write("--junit", a.junit, [&] { return JunitReport(report); });
+  write("--html", a.html_path, [&] { return HtmlReport(report); });
+  write("--vcd", a.vcd_path, [&] { return PinsVcd(report); });
+  write("--json", a.json_path, [&] { return JsonReport(report).dump(2) + "\n"; });
+  if (!failed.empty()) {
+    for (const std::string& f : failed) std::cerr << "mococheck: could not write " << f << "\n";
+    std::string others;
+    for (const std::string& w : written) others += (others.empty() ? "" : ", ") + w;
+    std::cerr << "mococheck: " << (others.empty() ? "no report was written" : "written: " + others)
+              << "; the verdict above stands, but a report is missing: free space or choose "
+                 "another path and run again"
+              << std::endl;
+    return kExitUsage;
   }
   return ExitCode(report);
 }
