@@ -224,6 +224,9 @@ TEST(PinProfiles, BadBoardsAreRefusedNamingTheProblem) {
   EXPECT_NE(error(R"({"board":"x","motors":[]})").find("1..16"), std::string::npos);
   EXPECT_NE(error(R"({"board":"x","motors":[{"step":"PD4","dir":"PD5"}],"spead":1})").find("spead"),
             std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"PD4","step":"PD6","dir":"PD5"}]})")
+                .find("field \"motors[].step\" is given twice"),
+            std::string::npos);
 }
 
 TEST(PinRules, AreNotApplicableOnATargetThatWatchesNoPins) {

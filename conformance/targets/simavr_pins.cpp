@@ -18,8 +18,18 @@ constexpr std::string_view kBoardDoc = "docs/pins.md";
 std::variant<nlohmann::json, std::string> ParseJsonText(std::string_view text,
                                                         const std::string& name) {
   if (text.empty()) return name + ": empty file; write a JSON object (see docs/pins.md)";
-  nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
-  if (j.is_discarded()) return name + ": not valid JSON; write a JSON object (see docs/pins.md)";
+  std::string duplicate;
+  nlohmann::json j;
+  try {
+    j = base::ParseJsonNotingDuplicateKeys(text, duplicate);
+  } catch (const nlohmann::json::exception&) {
+    return name + ": not valid JSON; write a JSON object (see docs/pins.md)";
+  }
+  if (!duplicate.empty()) {
+    return name + ": field \"" + duplicate +
+           "\" is given twice in one object; only one would count: keep the one you mean and "
+           "delete the other";
+  }
   return j;
 }
 

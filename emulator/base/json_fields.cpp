@@ -345,4 +345,55 @@ void JsonFields::Finish() {
   }
 }
 
+namespace {
+
+std::string PathText(const std::vector<std::string>& path) {
+  std::string out;
+  for (const std::string& k : path) {
+    if (k == "[]" || k.empty()) {
+      out += "[]";
+    } else {
+      out += (out.empty() ? "" : ".") + k;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate,
+                                            std::string* at, bool ignore_comments) {
+  using Event = nlohmann::json::parse_event_t;
+  duplicate.clear();
+  std::vector<std::string> path;               // the keys leading to the value parsed
+  std::vector<std::vector<std::string>> keys;  // the keys of each object open
+  const nlohmann::json::parser_callback_t note = [&](int depth, Event event,
+                                                     nlohmann::json& parsed) {
+    // `depth` counts the containers open around the event.
+    if (event == Event::object_start) {
+      keys.emplace_back();
+    } else if (event == Event::object_end) {
+      if (!keys.empty()) keys.pop_back();
+    } else if (event == Event::key && depth >= 1 && parsed.is_string()) {
+      path.resize(static_cast<size_t>(depth));
+      path.back() = parsed.get<std::string>();
+      if (!keys.empty()) {
+        std::vector<std::string>& seen = keys.back();
+        if (std::find(seen.begin(), seen.end(), path.back()) != seen.end()) {
+          if (duplicate.empty()) duplicate = PathText(path);
+        } else {
+          seen.push_back(path.back());
+        }
+      }
+    } else if (event == Event::array_start && depth >= 0) {
+      path.resize(static_cast<size_t>(depth) + 1);
+      path.back() = "[]";
+    }
+    if (at != nullptr) *at = PathText(path);
+    return true;
+  };
+  return nlohmann::json::parse(text.begin(), text.end(), note, /*allow_exceptions=*/true,
+                               ignore_comments);
+}
+
 }  // namespace moco::base

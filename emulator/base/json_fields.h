@@ -139,6 +139,17 @@ class JsonFields {
   std::shared_ptr<std::optional<FieldProblem>> problem_;
 };
 
+// Parses `text` as nlohmann::json::parse does (throwing its parse_error and,
+// for a number beyond a double, its out_of_range), and notes in `duplicate`
+// the path ("motors[].max_speed") of the first key given twice in one object,
+// which the parser would otherwise settle silently by the last one; "" when
+// none. `at`, when given, is left holding the path of the value the parser
+// reached last (for naming the field of a refused number). With
+// `ignore_comments`, // and /* */ comments are allowed.
+nlohmann::json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate,
+                                            std::string* at = nullptr,
+                                            bool ignore_comments = false);
+
 }  // namespace moco::base
 
 #endif  // MOCO_BASE_JSON_FIELDS_H_

@@ -338,5 +338,26 @@ RC_GTEST_PROP(JsonFieldsProperty, AnyValueIsReadOrRefusedByName, ()) {
   }
 }
 
+// The first key given twice in one object is named by its path; the same key
+// in different objects, or nested under different keys, is not a duplicate.
+TEST(ParseJsonNotingDuplicateKeys, NamesTheFirstDuplicateByItsPath) {
+  std::string dup;
+  ParseJsonNotingDuplicateKeys(R"({"a": 1, "b": {"x": 1, "y": 2}, "c": [{"x": 1}, {"x": 2}]})",
+                               dup);
+  EXPECT_EQ(dup, "");
+  ParseJsonNotingDuplicateKeys(R"({"devices": [], "name": "n", "devices": [1]})", dup);
+  EXPECT_EQ(dup, "devices");
+  ParseJsonNotingDuplicateKeys(R"({"rig": {"motors": [{"max": 1, "max": 2}]}, "rig2": 1})", dup);
+  EXPECT_EQ(dup, "rig.motors[].max");
+  ParseJsonNotingDuplicateKeys(R"({"a": {"k": 1}, "b": {"k": 1, "j": {"k": 2}, "k": 3}})", dup);
+  EXPECT_EQ(dup, "b.k");
+  std::string at;
+  EXPECT_THROW(ParseJsonNotingDuplicateKeys(R"({"a": {"big": 1e400}})", dup, &at),
+               nlohmann::json::exception);
+  EXPECT_EQ(at, "a.big");
+  EXPECT_THROW(ParseJsonNotingDuplicateKeys("{\"a\": 1 // no\n}", dup), nlohmann::json::exception);
+  EXPECT_EQ(ParseJsonNotingDuplicateKeys("{\"a\": 1 // yes\n}", dup, nullptr, true)["a"], 1);
+}
+
 }  // namespace
 }  // namespace moco::base

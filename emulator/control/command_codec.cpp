@@ -3,6 +3,7 @@
 #include "control/command_codec.h"
 
 #include "base/format.h"
+#include "base/json_fields.h"
 
 #include <algorithm>
 #include <charconv>
@@ -541,24 +542,6 @@ json Vocabulary() {
   }
   return out;
 }
-json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate) {
-  duplicate.clear();
-  std::vector<std::set<std::string, std::less<>>> keys;  // per open object
-  const json::parser_callback_t note_keys = [&keys, &duplicate](int, json::parse_event_t event,
-                                                                json& parsed) {
-    if (event == json::parse_event_t::object_start) {
-      keys.emplace_back();
-    } else if (event == json::parse_event_t::object_end) {
-      if (!keys.empty()) keys.pop_back();
-    } else if (event == json::parse_event_t::key && !keys.empty() && parsed.is_string()) {
-      if (!keys.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
-        duplicate = parsed.get<std::string>();
-      }
-    }
-    return true;
-  };
-  return json::parse(text, note_keys);
-}
 std::variant<Command, json> ParseRequestLine(std::string_view line) {
   while (!line.empty() && (line.back() == '\r' || line.back() == '\n')) line.remove_suffix(1);
   if (line.find_first_not_of(" \t") == std::string_view::npos) {
@@ -569,7 +552,7 @@ std::variant<Command, json> ParseRequestLine(std::string_view line) {
   // refused, not settled silently by the last one.
   std::string duplicate;
   try {
-    request = ParseJsonNotingDuplicateKeys(line, duplicate);
+    request = base::ParseJsonNotingDuplicateKeys(line, duplicate);
   } catch (const json::parse_error& e) {
     return ErrorReply("malformed JSON at byte " + std::to_string(e.byte) +
                       ": send one JSON object per line, e.g. {\"cmd\":\"state\"}");

@@ -84,12 +84,6 @@ bool IsAction(const CommandBody& body);
 // given. ParseCommand(ToJson(c)) yields c again.
 nlohmann::json ToJson(const Command& command);
 
-// Parses JSON text like nlohmann::json::parse (throws its exceptions) and
-// reports in `duplicate` the first key given twice in one object ("" when
-// none): the control vocabulary refuses {"engaged":true,"engaged":false}
-// rather than letting the last one win.
-nlohmann::json ParseJsonNotingDuplicateKeys(std::string_view text, std::string& duplicate);
-
 // Parses one request object. Fields `extra_fields` are allowed besides the
 // command's own (a scenario's "at_ms") and ignored. Never throws. On failure
 // returns a message naming the field, what was found and what to write.

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "base/file_io.h"
+#include "base/json_fields.h"
 
 namespace moco::control {
 namespace {
@@ -90,7 +91,7 @@ Scenario Scenario::Parse(std::string_view text, std::string where) {
   json doc;
   std::string duplicate;
   try {
-    doc = ParseJsonNotingDuplicateKeys(text, duplicate);
+    doc = base::ParseJsonNotingDuplicateKeys(text, duplicate);
   } catch (const json::parse_error& e) {
     throw ScenarioError(where + ": malformed JSON at " +
                         LineColumn(text, e.byte > 0 ? e.byte - 1 : 0) +

@@ -75,7 +75,7 @@ TEST(ScenarioLoadTest, ErrorsNameTheEventTheFieldAndTheFix) {
       {R"({"events":[],"evnets":[]})", {"unknown field \"evnets\"", "\"note\""}},
       {R"({"events":[],"note":3})", {"\"note\" must be a string"}},
       {R"({"events":[{"at_ms":0,"cmd":"estop","engaged":true,"engaged":false}]})",
-       {"scenario t.json", "\"engaged\" appears twice"}},
+       {"scenario t.json", "\"events[].engaged\" appears twice"}},
       {R"({"events":[{"at_ms":0,"cmd":"state"},7]})", {"events[1] must be an object"}},
       {R"({"events":[{"cmd":"state"}]})", {"events[0]", "\"at_ms\" is missing", "\"at_ms\": 1500"}},
       {R"({"events":[{"at_ms":-1,"cmd":"state"}]})",

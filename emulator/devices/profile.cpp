@@ -2,10 +2,12 @@
 // (see profile.h); profile files read and parsed.
 #include "devices/profile.h"
 
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "base/file_io.h"
+#include "base/json_fields.h"
 
 namespace moco::devices {
 
@@ -79,23 +81,18 @@ nlohmann::json ReadProfileFile(const std::string& path, std::string* where_out) 
 }
 
 nlohmann::json ParseProfileText(std::string_view text, const std::string& where) {
-  // The keys leading to the value being parsed, so that a value the parser
-  // refuses (1e400, beyond a double) is reported with its field's name.
-  std::vector<std::string> path;
-  const nlohmann::json::parser_callback_t track =
-      [&path](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
-        // `depth` counts the containers open around the event.
-        if (event == nlohmann::json::parse_event_t::key && depth >= 1 && parsed.is_string()) {
-          path.resize(static_cast<size_t>(depth));
-          path.back() = parsed.get<std::string>();
-        } else if (event == nlohmann::json::parse_event_t::array_start && depth >= 0) {
-          path.resize(static_cast<size_t>(depth) + 1);
-          path.back() = "[]";
-        }
-        return true;
-      };
+  // The path of the value being parsed, so that a value the parser refuses
+  // (1e400, beyond a double) is reported with its field's name; a key given
+  // twice in one object is refused (the parser would keep the last silently,
+  // e.g. a second "devices" list or "motor_count" replacing the first).
+  std::string field, duplicate;
   try {
-    nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), track, true, true);
+    nlohmann::json j = base::ParseJsonNotingDuplicateKeys(text, duplicate, &field, true);
+    if (!duplicate.empty()) {
+      throw ProfileError(where + ": field \"" + duplicate +
+                         "\" is given twice in one object; only one would count: keep the one "
+                         "you mean and delete the other");
+    }
     if (!j.is_object()) {
       throw ProfileError(where + ": the file must be a JSON object { ... }, found " +
                          base::JsonTypeName(j));
@@ -106,14 +103,6 @@ nlohmann::json ParseProfileText(std::string_view text, const std::string& where)
                        "; fix the syntax there (" + e.what() + ")");
   } catch (const nlohmann::json::exception&) {
     // out_of_range 406: a number too large for a double, e.g. 1e400.
-    std::string field;
-    for (const std::string& k : path) {
-      if (k == "[]" || k.empty()) {
-        field += "[]";
-      } else {
-        field += (field.empty() ? "" : ".") + k;
-      }
-    }
     throw ProfileError(where + ": " + (field.empty() ? "a value" : "field \"" + field + "\"") +
                        " is a number beyond the range of a double (about 1.8e308); write a "
                        "finite number within the field's range");

@@ -89,6 +89,28 @@ TEST(ParseProfileText, SyntaxErrorGivesOffset) {
   EXPECT_EQ(ParseProfileText("// comment\n{\"a\": 1}", "p")["a"], 1);
 }
 
+// A key given twice in one object is refused by its path, at any depth (a run
+// file's second "devices" list, a profile's second "motor_count"); the same
+// key in two different objects is fine.
+TEST(ParseProfileText, AKeyGivenTwiceInOneObjectIsRefusedByItsPath) {
+  std::string msg = ErrorOf([] {
+    ParseProfileText(R"({"motor_count": 4, "name": "x", "motor_count": 32})", "profile x.json");
+  });
+  EXPECT_NE(msg.find("profile x.json: field \"motor_count\" is given twice"), std::string::npos)
+      << msg;
+  msg = ErrorOf([] {
+    ParseProfileText(R"({"devices": [{"model": "dmc16"}], "devices": [{"model": "dfmoco"}]})",
+                     "run r.json");
+  });
+  EXPECT_NE(msg.find("field \"devices\" is given twice"), std::string::npos) << msg;
+  msg = ErrorOf(
+      [] { ParseProfileText(R"({"motors": [{"a": 1}, {"max_speed": 1, "max_speed": 2}]})", "p"); });
+  EXPECT_NE(msg.find("field \"motors[].max_speed\" is given twice"), std::string::npos) << msg;
+  const auto j =
+      ParseProfileText(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 3}, {"x": 4}]})", "p");
+  EXPECT_EQ(j["c"][1]["x"], 4);
+}
+
 TEST(ParseProfileText, NumberBeyondADoubleNamesTheFileAndTheField) {
   std::string msg =
       ErrorOf([] { ParseProfileText(R"({"motor_count": 1e400})", "profile x.json"); });

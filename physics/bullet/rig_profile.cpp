@@ -154,10 +154,18 @@ double JointSpec::PullOutTorque(double speed_rev_s) const {
 }
 
 RigProfileResult ParseRigProfile(std::string_view json_text, std::string_view where) {
-  json doc = json::parse(json_text, nullptr, /*allow_exceptions=*/false);
-  if (doc.is_discarded()) {
+  json doc;
+  std::string duplicate;
+  try {
+    doc = base::ParseJsonNotingDuplicateKeys(json_text, duplicate);
+  } catch (const json::exception&) {
     return RigProfileError{
         "(root)", std::string(where) + ": not valid JSON; check brackets, commas and quotes"};
+  }
+  if (!duplicate.empty()) {
+    return RigProfileError{duplicate, std::string(where) + ": field \"" + duplicate +
+                                          "\" is given twice in one object; only one would "
+                                          "count: keep the one you mean and delete the other"};
   }
   JsonFields root(doc);
   RigProfile p;
