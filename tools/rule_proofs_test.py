@@ -90,11 +90,12 @@ class RuleProofsCheck(unittest.TestCase):
         with open(self.log, "w") as f:
             f.write("".join(l + "\n" for l in lines))
 
-    def check(self, broken=""):
+    def check(self, broken="", extra=(), binary=None):
         env = dict(os.environ, RUNS=self.runs, BROKEN=broken)
         env.pop("MOCO_PROOF_LOG", None)
         p = subprocess.run([sys.executable, os.path.join(self.root, "tools", "rule-proofs"),
-                            "check", "--log", self.log, self.mococheck, self.binary],
+                            "check", "--log", self.log, *extra, self.mococheck,
+                            binary or self.binary],
                            capture_output=True, text=True, env=env)
         runs = []
         if os.path.exists(self.runs):
@@ -157,6 +158,21 @@ class RuleProofsCheck(unittest.TestCase):
         rc, out, runs = self.check()
         self.assertEqual(rc, 1, out)
         self.assertIn("DMC-A-002 (MUST) has no proving test", out)
+
+    def test_a_suite_named_unbuilt_that_is_built_is_refused(self):
+        # Its broken proof would otherwise count as proven.
+        self.write_log(["Proofs.CatchesA1\tDMC-A-001"])
+        rc, out, runs = self.check(broken="Proofs.CatchesA2", extra=("--unbuilt", "Proofs"))
+        self.assertEqual(rc, 2, out)
+        self.assertIn("--unbuilt Proofs: the suite is in the binaries given", out)
+        self.assertEqual(runs, [], out)
+
+    def test_a_binary_that_cannot_list_its_tests_is_a_usage_error(self):
+        bad = self.script("crashing_test", "#!/bin/sh\necho 'cannot load' >&2\nexit 3\n")
+        rc, out, runs = self.check(binary=bad)
+        self.assertEqual(rc, 2, out)
+        self.assertIn("--gtest_list_tests failed (exit 3: cannot load)", out)
+        self.assertNotIn("Traceback", out)
 
 
 if __name__ == "__main__":
