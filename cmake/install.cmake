@@ -3,7 +3,7 @@
 #   (cd build/release && cpack -G DEB)
 # installs mocosim, mococheck and dmc-host, their man pages (made at build
 # time from each program's --help by cmake/help_to_man.cmake), the device
-# and rig profiles and the Wireshark dissector. The programs need nothing
+# and rig profiles, the Wireshark dissector and the documents (docs/). The programs need nothing
 # from the source tree at run time: every device model has its profile
 # built in; the installed profiles are for --profile.
 include(GNUInstallDirs)
@@ -16,6 +16,10 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/rigs/
 install(FILES ${PROJECT_SOURCE_DIR}/tools/wireshark/mocosim.lua
         DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/wireshark)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# The documents reports and evidence cite ("docs/device-facts.md, DMC v2",
+# docs/rules.md), beside the README as in the source tree.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs
+        FILES_MATCHING PATTERN "*.md" PATTERN "*.svg")
 
 set(moco_man_pages)
 foreach(program mocosim mococheck dmc-host)

@@ -33,7 +33,7 @@ const std::vector<Rule> kRules = {
      "Device frame types have no bits outside 0x83FF (the reference parser drops such frames)",
      "the reference parser ... drops the frame and hunts again when ... the type has bits outside "
      "0x83FF",
-     "FACTS DMC v2"},
+     "docs/device-facts.md, DMC v2"},
     {"DMC-FRAME-005", L::kMust, N::kNothing,
      "Every device frame's data section fits the layout of its type",
      "Most messages have different data sections depending on if the message is coming from "
@@ -77,12 +77,12 @@ const std::vector<Rule> kRules = {
      "code.",
      "ERRATA 1.4"},
     {"DMC-ACK-005", L::kMust, N::kNothing,
-     "An ACK's data section is the response code WORD (or the 32-bit form of FACTS)",
+     "An ACK's data section is the response code WORD (or the 32-bit form some firmware writes)",
      "Response Code WORD OK (0x0010) or appropriate Error Code", "MSG_FLAG_ACK"},
     {"DMC-ACK-006", L::kNote, N::kNothing, "ACK response codes written as 32-bit values",
      "A published DMC firmware built on dmc-lite writes the ACK response code as a 32-bit value "
-     "(the spec says a 16-bit WORD)",
-     "FACTS DMC v2"},
+     "(the spec says a 16-bit WORD; the low two bytes are the same)",
+     "docs/device-facts.md, DMC v2"},
     {"DMC-ACK-007", L::kMust, N::kNothing,
      "An ACK's response code is one the spec lists (0x0010-0x0018, 0x0020-0x0023)",
      "OK 0x0010 ... ERR_HARD_LOW 0x0023", "MSG_FLAG_ACK"},
@@ -106,7 +106,7 @@ const std::vector<Rule> kRules = {
      "OK 0x0010 Received, understood, and acted on message", "MSG_FLAG_ACK"},
     {"DMC-ACK-012", L::kNote, N::kNothing,
      "ACK code 0x0019 (the reference firmware's aim-point failure), which the spec does not list",
-     "an extra error code 0x0019 for an aim-point failure", "FACTS DMC v2"},
+     "an extra error code 0x0019 for an aim-point failure", "docs/device-facts.md, DMC v2"},
 
     // --- Reply deadlines (runner options; the spec gives no number) ---
     {"DMC-DL-001", L::kShould, N::kNothing,
@@ -140,7 +140,7 @@ const std::vector<Rule> kRules = {
     {"DMC-HI-003", L::kNote, N::kNothing,
      "The HI response ends without PROTOCOL VERSION (49 bytes)",
      "Older devices end the HI reply without the PROTOCOL VERSION word (49 bytes instead of 51).",
-     "FACTS DMC v2"},
+     "docs/device-facts.md, DMC v2"},
     {"DMC-HI-004", L::kMust, N::kNothing, "MOTOR COUNT is 0-32",
      "MOTOR COUNT BYTE 0-32: Number of motors the device supports", "MSG_HI"},
     {"DMC-HI-005", L::kMust, N::kNothing, "DMX COUNT is 0-512",
@@ -213,10 +213,9 @@ const std::vector<Rule> kRules = {
      "The device should send these out, about every 0.10 seconds, if any of the motors are moving",
      "MSG_MOTOR_GET_POSITION"},
     {"DMC-POS-003", L::kNote, N::kMotors,
-     "Position updates come much more often than every 100 ms (dmc-lite sends every 50 ms)",
-     "dmc-lite sends unsolicited MOTOR_GET_POSITION about every 50 ms while moving (the spec asks "
-     "for about every 100 ms)",
-     "FACTS DMC v2"},
+     "Position updates come much more often than every 100 ms (dmc-lite sends every 40-60 ms)",
+     "unsolicited MOTOR_GET_POSITION go out every 40-60 ms while moving, all with ID 0",
+     "docs/device-facts.md, DMC v2"},
     {"DMC-POS-004", L::kShould, N::kMotors,
      "After motion stops, a position update reports the final position",
      "to keep Dragonframe informed of the positions.",
@@ -267,7 +266,7 @@ const std::vector<Rule> kRules = {
      "MOTOR_CONFIGURE is acknowledged OK, unknown flag bits included",
      "dmc-lite's header also defines MOTOR_CONFIGURE flags beyond the spec's two ... Accept "
      "unknown flag bits without error.",
-     "MSG_MOTOR_CONFIGURE; FACTS DMC v2"},
+     "MSG_MOTOR_CONFIGURE; docs/device-facts.md, DMC v2"},
     {"DMC-CFG-003", L::kMust, N::kMotors,
      "MOTOR_JOG is acknowledged OK and the motor moves towards the destination",
      "Instruct the device to jog/inch a motor.", "MSG_MOTOR_JOG"},
@@ -289,12 +288,12 @@ const std::vector<Rule> kRules = {
      "uncoupling it are acknowledged OK",
      "0x0100 Couple motors; dmc-lite's header also defines MOTOR_CONFIGURE flags beyond the "
      "spec's two: ... 0x10 coupled, 0x20 coupled reversed (capability 0x0100 \"couple motors\")",
-     "Capabilities; FACTS DMC v2"},
+     "Capabilities; docs/device-facts.md, DMC v2"},
     {"DMC-CFG-008", L::kNote, N::kCoupleMotors,
      "A motor coupled with flag 0x10 makes the steps of the motor before it (mirrored with 0x20), "
      "and moves on its own again once uncoupled",
      "0x10 coupled, 0x20 coupled reversed (capability 0x0100 \"couple motors\")",
-     "Capabilities; FACTS DMC v2"},
+     "Capabilities; docs/device-facts.md, DMC v2"},
 
     // --- Errors ---
     {"DMC-ERR-001", L::kMust, N::kMotors, "Motor number 0 is refused with ERR_RANGE",
@@ -324,7 +323,7 @@ const std::vector<Rule> kRules = {
      "A Length above that is a framing error, not an allocation. (The 1048 bytes are a minimum: "
      "a device with a larger buffer rightly waits for a Length it can hold; the reference parser "
      "drops a frame whose length exceeds its buffer.)",
-     "ERRATA 1.2; FACTS DMC v2"},
+     "ERRATA 1.2; docs/device-facts.md, DMC v2"},
     {"DMC-ERR-009", L::kMust, N::kNothing,
      "A request delivered one byte at a time is answered as a whole one",
      "The receiving buffer on the device must be at least 1048 bytes.", "Message Format"},
@@ -392,7 +391,7 @@ const std::vector<Rule> kRules = {
      "The device answers the host's ACK of its unsolicited messages (the reference firmware "
      "answers ERR_UNSUPPORTED; ignoring it is as good)",
      "The device must respond to every message it receives. / The host answers them with an ACK",
-     "MSG_FLAG_ACK; ERRATA 1.9; FACTS DMC v2"},
+     "MSG_FLAG_ACK; ERRATA 1.9; docs/device-facts.md, DMC v2"},
 
     // --- I/O and DMX ---
     {"DMC-GIO-001", L::kMust, N::kNothing, "GIO_IN is answered with a 4-byte GIO_IN response",
@@ -536,9 +535,8 @@ const std::vector<Rule> kRules = {
      "frame.",
      "MSG_RT_GO"},
     {"DMC-RT-016", L::kNote, N::kRealTime,
-     "A motor sent to an uploaded frame reads exactly the uploaded position (the reference "
-     "firmware can read one step short: 199 for 200)",
-     "a position read after an upload can be one step short (199 for 200)", "FACTS DMC v2"},
+     "A motor sent to an uploaded frame reads exactly the uploaded position",
+     "an uploaded frame reads back exactly (200)", "docs/device-facts.md, DMC v2"},
     {"DMC-RT-017", L::kShould, N::kRtTriggers,
      "RT_UPLOAD_MOVE_TRIGGERS with frame indices within the upload is acknowledged OK",
      "MSG_RT_UPLOAD_MOVE_TRIGGERS [0x0104] Introduced in Protocol: 2 Send a section of trigger "
@@ -638,16 +636,16 @@ const std::vector<Rule> kRules = {
      "VIRT_MOVE to a target the rig cannot reach is refused and moves nothing",
      "Inverse: P = target - R o; b = asin(P.z / L) ... |P.z| > L or |P.x| > h is unreachable "
      "(ERR_RANGE).",
-     "FACTS \"Boom rig virtual axes\""},
+     "docs/device-facts.md, Boom rig virtual axes"},
     {"DMC-VIRT-005", L::kShould, N::kVirtualBoomRig,
      "An unreachable VIRT_MOVE target is refused with ERR_RANGE",
      "ERR_RANGE 0x0014 A parameter was out of range; |P.z| > L or |P.x| > h is unreachable "
      "(ERR_RANGE).",
-     "MSG_FLAG_ACK; FACTS \"Boom rig virtual axes\""},
+     "MSG_FLAG_ACK; docs/device-facts.md, Boom rig virtual axes"},
     {"DMC-VIRT-006", L::kShould, N::kVirtual,
      "VIRT_MOVE and VIRT_STOP with virtual motor 0 or 7 are refused with ERR_RANGE",
      "Virtual axis numbers: TRACK=1, EW=2, NS=3, PAN=4, TILT=5, ROLL=6.",
-     "FACTS \"Boom rig virtual axes\"; ERRATA 1.11"},
+     "docs/device-facts.md, Boom rig virtual axes; ERRATA 1.11"},
     {"DMC-VIRT-007", L::kMust, N::kVirtualBoomRig,
      "VIRT_STOP during a virtual move is acknowledged OK and the rig comes to rest short of the "
      "target",
@@ -670,14 +668,14 @@ const std::vector<Rule> kRules = {
      "The four virtual mode capabilities (0x0004, 0x0008, 0x0010, 0x0020) are advertised together",
      "Dragonframe reportedly refused a device that advertised only the boom-swing-track "
      "capability bit; that firmware advertises all four virtual bits.",
-     "FACTS \"Boom rig virtual axes\""},
+     "docs/device-facts.md, Boom rig virtual axes"},
     {"DMC-VIRT-012", L::kNote, N::kVirtual,
      "VIRT_CONFIG TYPE numbers the rigs 0..4 as the spec does; a device accepting TYPE 8 as x-y-z "
      "takes a dmc-lite-derived firmware's bit-flag numbering",
      "TYPE BYTE 0=none 1=boom-swing-track 2=swing-pan, 3=y-swing-track 4=x-y-z; a "
      "dmc-lite-derived header instead uses bit flags (0x01 BST, 0x02 swing-pan, 0x04 "
      "y-swing-track, 0x08 x-y-z)",
-     "MSG_VIRT_CONFIG; FACTS \"Boom rig virtual axes\""},
+     "MSG_VIRT_CONFIG; docs/device-facts.md, Boom rig virtual axes"},
 };
 
 }  // namespace
@@ -946,7 +944,7 @@ std::string RulesMarkdown() {
   s += "How a level is chosen: MUST where the clause says must (or required), or where a\n";
   s += "host cannot work otherwise; SHOULD where it says should, and for a strong\n";
   s += "reading of the text; NOTE where the spec is silent and real devices differ\n";
-  s += "(FACTS.md). A rule is never stricter than the devices the spec allows: the\n";
+  s += "(docs/device-facts.md). A rule is never stricter than the devices the spec allows: the\n";
   s += "levels are checked against the reference firmware's behaviour (the DMC-16's\n";
   s += "`fixtures/profiles/dmc-lite.json`), which fails only where it departs from a\n";
   s += "must or a should.\n\n";

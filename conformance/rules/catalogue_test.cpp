@@ -107,6 +107,65 @@ TEST(Catalogue, DocsRulesMdIsTheGeneratedCatalogue) {
       << "docs/rules.md is stale: regenerate it with `mococheck rules --markdown > docs/rules.md`";
 }
 
+// A rule that cites docs/device-facts.md can be looked up there: the section
+// it names is on the page, and when the page is its only source, every
+// fragment of its clause (between "..." and " / ") is on the page (when it is
+// one of several, the clause quotes the vendor specification).
+TEST(Catalogue, RulesCitingTheDeviceFactsQuoteThem) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  const std::string path = std::string(root != nullptr ? root : ".") + "/docs/device-facts.md";
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << "cannot read " << path;
+  std::stringstream text;
+  text << in.rdbuf();
+  // Whitespace runs as one space: the page wraps its lines.
+  const auto squeeze = [](std::string_view t) {
+    std::string out;
+    for (const char c : t) {
+      const bool space = c == ' ' || c == '\n' || c == '\t';
+      if (space && (out.empty() || out.back() == ' ')) continue;
+      out += space ? ' ' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+    return out;
+  };
+  const std::string page = squeeze(text.str());
+  size_t citing = 0;
+  for (const Protocol p : kAllProtocols) {
+    for (const Rule& r : RulesFor(p)) {
+      if (r.source.find("docs/device-facts.md") == std::string_view::npos) continue;
+      ++citing;
+      EXPECT_EQ(r.source.find("FACTS"), std::string_view::npos) << r.id;
+      std::vector<std::string> fragments;
+      std::string clause(r.clause);
+      for (const std::string_view sep : {"...", " / "}) {
+        for (size_t at; (at = clause.find(sep)) != std::string::npos;) {
+          clause.replace(at, sep.size(), "\x01");
+        }
+      }
+      std::stringstream parts(clause);
+      for (std::string f; std::getline(parts, f, '\x01');) {
+        f = squeeze(f);
+        while (!f.empty() && f.front() == ' ') f.erase(f.begin());
+        while (!f.empty() && (f.back() == ' ' || f.back() == '.')) f.pop_back();
+        if (f.size() >= 3) fragments.push_back(f);
+      }
+      // "docs/device-facts.md, DMC v2 (...)": the page has a section "## DMC v2...".
+      std::string section(r.source.substr(r.source.find("docs/device-facts.md")));
+      section = section.substr(std::min(section.size(), section.find(", ") + 2));
+      section = section.substr(0, std::min(section.find(" ("), section.find(';')));
+      EXPECT_NE(page.find("## " + squeeze(section)), std::string::npos)
+          << r.id << ": no section \"" << section << "\" on " << path;
+      if (r.source.find(';') == std::string_view::npos) {
+        for (const std::string& f : fragments) {
+          EXPECT_NE(page.find(f), std::string::npos)
+              << r.id << ": \"" << f << "\" of its clause is not on " << path;
+        }
+      }
+    }
+  }
+  EXPECT_GT(citing, 40u);
+}
+
 TEST(Catalogue, MarkdownCountsLevels) {
   size_t must = 0;
   for (const Rule& r : DmcRules()) must += r.level == Level::kMust;

@@ -26,7 +26,8 @@ const std::vector<Rule> kRules = {
     {"DFM-LINE-004", L::kMust, N::kNothing,
      "Every device line is a reply of the protocol (hi, ms, mm, mp, sm, sa, jm, im, pr, zm, np, "
      "bf, go, or the sketch's two error lines): no stray output",
-     "Messages are given from perspective of DFMoco device.", "Messages; FACTS DFMoco"},
+     "Messages are given from perspective of DFMoco device.",
+     "Messages; docs/device-facts.md, DFMoco"},
     {"DFM-LINE-005", L::kMust, N::kNothing,
      "Apart from `mp` reports and the boot `hi`, every device line answers a command the host "
      "sent",
@@ -38,12 +39,14 @@ const std::vector<Rule> kRules = {
     {"DFM-LINE-007", L::kNote, N::kNothing,
      "A command ended by a bare \"\\n\" is not taken (the sketch's framing), where ERRATA reads "
      "that it should be",
-     "lines end with `\\r\\n`. Accept a bare `\\n` or `\\r` too.", "ERRATA 2.1; FACTS DFMoco"},
+     "lines end with `\\r\\n`. Accept a bare `\\n` or `\\r` too.",
+     "ERRATA 2.1; docs/device-facts.md, DFMoco"},
 
     // --- Hello ("Hello (hi) - initiate communication") ---
     {"DFM-HI-001", L::kShould, N::kNothing,
      "The device announces itself with `hi` unprompted when it starts",
-     "At boot the sketch sends `hi <major> <axes> <version>` unprompted", "FACTS DFMoco"},
+     "At boot the sketch sends `hi <major> <axes> <version>` unprompted",
+     "docs/device-facts.md, DFMoco"},
     {"DFM-HI-002", L::kMust, N::kNothing,
      "`hi` is answered with `hi <major version> <number of axes> <full version string>`",
      "OUT: hi <major version> <number of axes> <full version string>", "Hello (hi)"},
@@ -61,7 +64,7 @@ const std::vector<Rule> kRules = {
     {"DFM-HI-007", L::kNote, N::kNothing,
      "The device is none of the known sketches (1.2.7, 1.3.0, 1.3.1, 2.0.0 with 4 or 8 axes)",
      "Version 1.x answers `hi 1 4 1.3.0` / `hi 1 4 1.2.7`. ... Uno drives 4 motors ...; Mega 8.",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
     {"DFM-HI-008", L::kMust, N::kNothing,
      "The first `hi` a host sends is answered (not only a repeat after the host's timeout)",
      "Hello (hi) - initiate communication ... IN: hi OUT: hi <major version> <number of axes> "
@@ -76,10 +79,10 @@ const std::vector<Rule> kRules = {
      "IN: sa OUT: sa", "Messages"},
     {"DFM-REPLY-003", L::kShould, N::kNothing,
      "A command word the device does not know gets no reply at all",
-     "Unknown two-letter commands get no reply at all.", "FACTS DFMoco"},
+     "Unknown two-letter commands get no reply at all.", "docs/device-facts.md, DFMoco"},
     {"DFM-REPLY-004", L::kMust, N::kNothing,
      "Replies come in the order of the commands, also for commands sent back to back",
-     "Outgoing messages wait in a 16-slot queue", "FACTS DFMoco"},
+     "Outgoing messages wait in a 16-slot queue", "docs/device-facts.md, DFMoco"},
     {"DFM-REPLY-005", L::kMust, N::kNothing,
      "A reply to a motor command names the motor of the command",
      "OUT: sm <motor> ... OUT: jm <motor> ... OUT: pr <motor> <steps/second>", "Messages"},
@@ -116,11 +119,12 @@ const std::vector<Rule> kRules = {
      "Any time a motor is moving, the device should send occasional \"mp\" messages.", "Notes"},
     {"DFM-MP-003", L::kShould, N::kDfmMotors,
      "While a motor moves, its `mp` reports are at most 1 s apart (+ the reply deadline)",
-     "While moving, `mp m pos` goes out once per second per moving motor", "FACTS DFMoco"},
+     "While moving, `mp m pos` goes out once per second per moving motor",
+     "docs/device-facts.md, DFMoco"},
     {"DFM-MP-004", L::kShould, N::kDfmMotors,
      "An `mp` report follows a motor's stop within 1 s (+ the reply deadline)",
      "plus once after the motor stops (so the last one can lag the stop by up to 1 s)",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
     {"DFM-MP-005", L::kMust, N::kDfmMotors,
      "An `mp` the device sends after a motor stopped carries the position the motor rests at",
      "OUT: mp <motor> <step position>", "Motor Position Query (mp); Notes"},
@@ -131,25 +135,25 @@ const std::vector<Rule> kRules = {
      "Nothing is sent unprompted while every motor rests and no stop is still to be reported",
      "While moving, `mp m pos` goes out once per second per moving motor, plus once after the "
      "motor stops",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
 
     // --- New position / zero ("New Position (np)", "Zero Motor (zm)") ---
     {"DFM-NP-001", L::kMust, N::kDfmMotors,
-     "`np m p` is answered `mp m p` (FACTS) or `np m p` (protocol text)",
-     "OUT: np <motor> <position>", "New Position (np); FACTS DFMoco"},
+     "`np m p` is answered `mp m p` (the sketch) or `np m p` (protocol text)",
+     "OUT: np <motor> <position>", "New Position (np); docs/device-facts.md, DFMoco"},
     {"DFM-NP-002", L::kMust, N::kDfmMotors, "`np m p` moves nothing and the motor then reports p",
      "sets the motor's current position to a new value (no movement)", "New Position (np)"},
     {"DFM-NP-003", L::kNote, N::kDfmMotors,
      "`np` is answered `np m p` as the protocol text says, where the sketch answers `mp m p`",
-     "`np m p` -> `mp m p` (not `np` as the protocol text says).", "FACTS DFMoco"},
+     "`np m p` -> `mp m p` (not `np` as the protocol text says).", "docs/device-facts.md, DFMoco"},
     {"DFM-ZM-001", L::kMust, N::kDfmMotors,
-     "`zm m` is answered `mp m 0` (FACTS) or `zm m` (protocol text)", "OUT: zm <motor>",
-     "Zero Motor (zm); FACTS DFMoco"},
+     "`zm m` is answered `mp m 0` (the sketch) or `zm m` (protocol text)", "OUT: zm <motor>",
+     "Zero Motor (zm); docs/device-facts.md, DFMoco"},
     {"DFM-ZM-002", L::kMust, N::kDfmMotors, "`zm m` moves nothing and the motor then reports 0",
      "resets the motor's current position to zero (no movement)", "Zero Motor (zm)"},
     {"DFM-ZM-003", L::kNote, N::kDfmMotors,
      "`zm` is answered `zm m` as the protocol text says, where the sketch answers `mp m 0`",
-     "`zm m` -> `mp m 0`, sent twice.", "FACTS DFMoco"},
+     "`zm m` -> `mp m 0`, sent twice.", "docs/device-facts.md, DFMoco"},
 
     // --- Stopping ("Stop Motor (sm)", "Stop All (sa)") ---
     {"DFM-SM-001", L::kMust, N::kDfmMotors, "`sm m` is answered `sm m`", "OUT: sm <motor>",
@@ -170,7 +174,7 @@ const std::vector<Rule> kRules = {
      "OUT: pr <motor> <steps/second>", "Pulse Rate (pr)"},
     {"DFM-PR-002", L::kShould, N::kDfmMotors,
      "A pulse rate outside 100..20000 is clamped, and the answer shows the clamped rate",
-     "`pr m v` -> `pr m v`, v clamped to 100..20000 steps/s", "FACTS DFMoco"},
+     "`pr m v` -> `pr m v`, v clamped to 100..20000 steps/s", "docs/device-facts.md, DFMoco"},
     {"DFM-PR-003", L::kMust, N::kDfmMotors,
      "A motor never moves faster than its pulse rate (a move of d steps at rate v takes at least "
      "d/v)",
@@ -193,9 +197,11 @@ const std::vector<Rule> kRules = {
     {"DFM-IM-002", L::kMust, N::kDfmMotors,
      "An inch from rest moves the motor towards its destination by at least one step, at most "
      "one step past it",
-     "move the in very small increments towards destination", "Inch Motor (im); FACTS DFMoco"},
+     "move the in very small increments towards destination",
+     "Inch Motor (im); docs/device-facts.md, DFMoco"},
     {"DFM-IM-003", L::kShould, N::kDfmMotors, "One inch moves the motor 16 steps at most",
-     "move the in very small increments towards destination", "Inch Motor (im); FACTS DFMoco"},
+     "move the in very small increments towards destination",
+     "Inch Motor (im); docs/device-facts.md, DFMoco"},
 
     // --- Errors (the protocol text has none; FACTS) ---
     {"DFM-ERR-001", L::kShould, N::kNothing,
@@ -203,18 +209,18 @@ const std::vector<Rule> kRules = {
      "error`",
      "A wrong argument count, an invalid motor, or `bf`/`go` while a motor moves answer `parse "
      "error`.",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
     {"DFM-ERR-002", L::kShould, N::kDfmMotors,
      "A motor number of 0 or above the number of axes is answered `parse error`",
      "A wrong argument count, an invalid motor, or `bf`/`go` while a motor moves answer `parse "
      "error`.",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
     {"DFM-ERR-003", L::kShould, N::kNothing,
      "A command with 40 or more arguments is answered `error: too many args`",
-     "40 or more arguments answer `error: too many args`.", "FACTS DFMoco"},
+     "40 or more arguments answer `error: too many args`.", "docs/device-facts.md, DFMoco"},
     {"DFM-ERR-004", L::kMust, N::kDfmMotors,
      "A command the device refuses moves nothing and changes no position",
-     "Motor number starts at 1.", "Messages; FACTS DFMoco"},
+     "Motor number starts at 1.", "Messages; docs/device-facts.md, DFMoco"},
     {"DFM-ERR-005", L::kMust, N::kNothing,
      "After a refused or unknown command the next valid command is answered normally",
      "Messages are in ASCII text, with trailing \\r\\n", "Message Format"},
@@ -222,40 +228,40 @@ const std::vector<Rule> kRules = {
     // --- Go-motion ("Go-Motion (Blur)"; ERRATA 2.5) ---
     {"DFM-GO-001", L::kMust, N::kDfmGoMotion,
      "`bf ...` is answered with one `bf <n>` line: n = 1000, the exposure time, or -1 (refused)",
-     "OUT: bf 1000", "Go-Motion (Blur); ERRATA 2.5; FACTS DFMoco"},
+     "OUT: bf 1000", "Go-Motion (Blur); ERRATA 2.5; docs/device-facts.md, DFMoco"},
     {"DFM-GO-002", L::kNote, N::kDfmGoMotion,
      "`bf` answers 1000 for an exposure other than 1000 ms (the sketch), where ERRATA reads the "
      "number as an echo of the exposure time",
      "`bf ...` reply: the document's example `bf 1000` is ambiguous; take it as an echo of the "
      "exposure time.",
-     "ERRATA 2.5; FACTS DFMoco"},
+     "ERRATA 2.5; docs/device-facts.md, DFMoco"},
     {"DFM-GO-003", L::kMust, N::kDfmGoMotion,
      "After an accepted `bf` the motors move to the start of the 1 s ramp before the exposure "
      "(within 2 steps) and rest there",
      "After the device calculates the go-motion move, it starts sending all motors into the "
      "initial position.",
-     "Go-Motion (Blur); FACTS DFMoco"},
+     "Go-Motion (Blur); docs/device-facts.md, DFMoco"},
     {"DFM-GO-004", L::kMust, N::kDfmGoMotion, "`go` is answered `go`", "IN: go OUT: go",
      "Go-Motion (Blur)"},
     {"DFM-GO-005", L::kMust, N::kDfmGoMotion,
      "After `go` each motor runs through the exposure and rests at the end of the 1 s ramp after "
      "it (within 2 steps)",
      "At this point the rig should immediately start the go-motion move as described above.",
-     "Go-Motion (Blur); FACTS DFMoco"},
+     "Go-Motion (Blur); docs/device-facts.md, DFMoco"},
     {"DFM-GO-006", L::kShould, N::kDfmGoMotion,
      "The go-motion move runs the 1 s ramp, the exposure (half its time on each half) and the 1 s "
      "slow-down: it lasts their sum, and the motors are where that plan puts them, both within "
      "150 ms",
      "The ramp up to speed should take exactly 1 second, even if the device does not need to "
      "move.",
-     "Go-Motion (Blur); ERRATA 2.5; FACTS DFMoco"},
+     "Go-Motion (Blur); ERRATA 2.5; docs/device-facts.md, DFMoco"},
     {"DFM-GO-007", L::kShould, N::kDfmGoMotion,
      "`bf` while a motor moves is refused with `parse error`",
-     "`bf exp blur {ch p0 p1 p2}...` is refused while moving.", "FACTS DFMoco"},
+     "`bf exp blur {ch p0 p1 p2}...` is refused while moving.", "docs/device-facts.md, DFMoco"},
     {"DFM-GO-008", L::kMust, N::kDfmBlurRefusal,
      "A `bf` whose speed would exceed 20000 steps/s is answered `bf -1` and moves nothing",
      "reply `bf 1000`, or `bf -1` (1.3.1 and later) if a speed would exceed 20000.",
-     "FACTS DFMoco"},
+     "docs/device-facts.md, DFMoco"},
 
     // --- Reply deadlines (runner options; the protocol gives no number) ---
     {"DFM-DL-001", L::kShould, N::kNothing,
@@ -282,7 +288,8 @@ const std::vector<Rule> kRules = {
     // --- The outgoing queue ---
     {"DFM-QUEUE-001", L::kShould, N::kNothing,
      "Twelve commands sent in one write are all answered, in order",
-     "Outgoing messages wait in a 16-slot queue that drops silently on overflow", "FACTS DFMoco"},
+     "Outgoing messages wait in a 16-slot queue that drops silently on overflow",
+     "docs/device-facts.md, DFMoco"},
 
     // --- The StackShot 3X DfMoco dialect (stackshot-protocol.txt section 3;
     // ERRATA 3.9): judged only when the device is judged in that dialect

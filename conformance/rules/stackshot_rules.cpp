@@ -55,11 +55,11 @@ const std::vector<Rule> kStackshotRules = {
      "constant 0x69 or constant 0x00)",
      "No known host computes the trailing checksum: published tools send a constant (0x69 in one "
      "Python/C++ family, 0x00 in a Java tool).",
-     "ERRATA 2; FACTS StackShot"},
+     "ERRATA 2; docs/device-facts.md, StackShot"},
     {"SS-CSUM-003", L::kMust, N::kNothing,
      "A request is answered whatever its checksum byte (computed, 0x69, 0x00 or wrong)",
      "A device must therefore not reject packets for their checksum byte.",
-     "FACTS StackShot; ERRATA 2"},
+     "docs/device-facts.md, StackShot; ERRATA 2"},
 
     // --- One reply per request (section 2) ---
     {"SS-ANS-001", L::kMust, N::kNothing,
@@ -375,12 +375,12 @@ const std::vector<Rule> kStackshotRules = {
      "Writes (moves, stops, settings) are answered within the deadline (kind \"command\")",
      "Host tools read fixed reply lengths (6 bytes for write acks, 10 for status, 11 for position) "
      "with 1 s timeouts",
-     "FACTS StackShot"},
+     "docs/device-facts.md, StackShot"},
     {"SS-DL-003", L::kShould, N::kNothing,
      "CC_SOFTWARE_CHECKSUM is answered within 1 s (the delay it is allowed stays within host "
      "timeouts)",
      "The checksum is performed upon command issue so a delay in the response is to be expected.",
-     "2 CC_SOFTWARE_CHECKSUM; FACTS StackShot"},
+     "2 CC_SOFTWARE_CHECKSUM; docs/device-facts.md, StackShot"},
 };
 
 }  // namespace

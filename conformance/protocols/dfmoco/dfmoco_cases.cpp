@@ -221,7 +221,7 @@ void LineEnd(DfmCaseContext& c) {
   h.Idle(300 * kMs);
   const bool taken = h.commands()[static_cast<size_t>(k)].answers > 0;
   Expect(c, "DFM-LINE-007", taken, "a command ended by a bare \\n is taken (ERRATA 2.1)",
-         "no answer to \"ms\\n\" (the sketch's framing, FACTS)");
+         "no answer to \"ms\\n\" (the sketch's framing, docs/device-facts.md)");
   if (!taken) {
     h.SendRaw("\r\n");  // completes the "ms" the sketch kept
     h.Await(k);

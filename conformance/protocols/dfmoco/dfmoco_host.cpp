@@ -503,7 +503,7 @@ void DfmHost::CheckAnswer(DfmCommand& c, const DfmLine& line) {
     if (bf->exposure_ms != 1000 && n != kBlurRefused) {
       verdicts_.Check("DFM-GO-002", n != 1000, [&] {
         return Ev(line, "bf " + std::to_string(bf->exposure_ms) + " (ERRATA 2.5)",
-                  Quote(line.text) + " (FACTS)");
+                  Quote(line.text) + " (the sketch's, docs/device-facts.md)");
       });
     }
   } else if (std::holds_alternative<Go>(*parsed)) {

@@ -59,9 +59,10 @@ struct Excluded {
   std::string_view why;
 };
 constexpr Excluded kSketchOnly[] = {
-    {"DFM-HI-001", "documents no `hi` at power-on (FACTS DFMoco is the sketch's)"},
+    {"DFM-HI-001", "documents no `hi` at power-on (docs/device-facts.md, DFMoco, is the sketch's)"},
     {"DFM-HI-007", "is not one of the sketch's versions: it answers `hi 1 3 1.2.6`"},
-    {"DFM-LINE-007", "documents no bare \"\\n\" framing (FACTS DFMoco is the sketch's)"},
+    {"DFM-LINE-007",
+     "documents no bare \"\\n\" framing (docs/device-facts.md, DFMoco, is the sketch's)"},
     {"DFM-MM-001",
      "answers `mm <motor> <current position>`, not the target (DFM-SS-002 judges it)"},
     {"DFM-MP-002", "reports a moving motor with `mm` lines, not `mp` (DFM-SS-003 judges them)"},
@@ -74,7 +75,8 @@ constexpr Excluded kSketchOnly[] = {
      "answers a rate above the controller's maximum with the maximum, not the "
      "sketch's 100..20000 clamp (DFM-SS-008 judges it)"},
     {"DFM-IM-003", "documents an inch as \"a slow crawl\", not the sketch's few steps"},
-    {"DFM-ERR-003", "documents no `error: too many args` (FACTS DFMoco is the sketch's)"},
+    {"DFM-ERR-003",
+     "documents no `error: too many args` (docs/device-facts.md, DFMoco, is the sketch's)"},
     {"connect/boot-hi", "documents no `hi` at power-on"},
     {"connect/line-end", "documents no bare \"\\n\" framing"},
     {"errors/too-many-args", "documents no `error: too many args`"},

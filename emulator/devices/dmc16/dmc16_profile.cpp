@@ -135,7 +135,8 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
   p.protocol_version = version == 0 ? std::nullopt : std::optional<uint16_t>(version);
   const int64_t width = r.GetInt("ack_width_bits", 16, 16, 32);
   if (width != 16 && width != 32) {
-    r.Fail("ack_width_bits", "is " + std::to_string(width), "use 16 (the spec) or 32 (FACTS)");
+    r.Fail("ack_width_bits", "is " + std::to_string(width),
+           "use 16 (the spec) or 32 (as some firmware writes, docs/device-facts.md)");
   }
   p.ack_width = width == 32 ? dmc::AckWidth::k32 : dmc::AckWidth::k16;
   p.baud = static_cast<uint32_t>(r.GetInt("baud", p.baud, 300, 4'000'000));
