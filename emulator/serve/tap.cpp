@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -66,8 +67,38 @@ class Tap::Recorder final : public transport::TrafficObserver {
   void OnTraffic(sim::TimeNs, transport::Direction, wire::ByteView) override {}
   void OnDelivered(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override {
     if (dir != transport::Direction::kToHost) return;
+    // A dialect change takes effect after the device byte that made it.
+    while (!switches_.empty() && passed_to_host_ + bytes.size() >= switches_.front().first) {
+      const size_t part = static_cast<size_t>(switches_.front().first - passed_to_host_);
+      if (part > 0) Traffic(t_ns, /*host=*/false, bytes.first(part));
+      delivered_to_host_ += part;
+      passed_to_host_ += part;
+      bytes = bytes.subspan(part);
+      SetDialect(switches_.front().second);
+      switches_.pop_front();
+    }
     delivered_to_host_ += bytes.size();
-    Traffic(t_ns, /*host=*/false, bytes);
+    passed_to_host_ += bytes.size();
+    if (!bytes.empty()) Traffic(t_ns, /*host=*/false, bytes);
+  }
+  // Device bytes that will never be delivered, in order with the delivered
+  // ones: dialect changes after them take effect.
+  void SkipToHost(uint64_t n) {
+    passed_to_host_ += n;
+    while (!switches_.empty() && passed_to_host_ >= switches_.front().first) {
+      SetDialect(switches_.front().second);
+      switches_.pop_front();
+    }
+  }
+  // Chunks are decoded in `dialect` once the first `device_bytes` device
+  // bytes are delivered (or skipped): the device's own switch is recorded
+  // where the host got it.
+  void SetDialectAfter(uint64_t device_bytes, wire::Protocol dialect) {
+    if (passed_to_host_ >= device_bytes) {
+      SetDialect(dialect);
+      return;
+    }
+    switches_.emplace_back(device_bytes, dialect);
   }
   // A chunk delivered: host -> device when `host`, else device -> host.
   void Traffic(sim::TimeNs t_ns, bool host, wire::ByteView bytes) {
@@ -208,8 +239,10 @@ class Tap::Recorder final : public transport::TrafficObserver {
     writer_->Append(lines_);
   }
 
-  bool recording_ = false;          // io thread
-  uint64_t delivered_to_host_ = 0;  // io thread
+  bool recording_ = false;                                    // io thread
+  uint64_t delivered_to_host_ = 0;                            // io thread
+  uint64_t passed_to_host_ = 0;                               // io thread: delivered or skipped
+  std::deque<std::pair<uint64_t, wire::Protocol>> switches_;  // io thread
   std::mutex mu_;
   std::condition_variable cv_;
   Batch pending_;        // guarded by mu_
@@ -432,6 +465,7 @@ void Tap::NoteLinkLosses() {
   const uint64_t lost = ls.overflowed + ls.discarded + ls.cut_dropped;
   if (lost <= link_lost_seen_) return;
   stats_.lost_to_host_bytes += lost - link_lost_seen_;
+  recorder_->SkipToHost(lost - link_lost_seen_);
   lost_to_host_unrecorded_ += lost - link_lost_seen_;
   link_lost_seen_ = lost;
 }
@@ -474,7 +508,7 @@ void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
   stats_.peak_to_host_bytes = std::max(stats_.peak_to_host_bytes, link.queued_bytes());
   NoteLinkLosses();
   if (const auto change = follower_.OnDeviceBytes(bytes)) {
-    recorder_->SetDialect(change->dialect);
+    recorder_->SetDialectAfter(stats_.device_read_bytes, change->dialect);
     ChangeLine(change->baud, "the device acknowledged a switch to " +
                                  std::string(wire::ProtocolName(change->dialect)));
   }
@@ -679,18 +713,25 @@ int RunTap(TapConfig config, transport::LogFn log) {
   int code = 0;
   signals.async_wait([&](const ErrorCode& ec, int sig) {
     if (ec) return;
-    log(std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
-                                       : sig == SIGHUP ? "SIGHUP"
-                                                       : "SIGTERM"));
-    std::string error;
-    if (!tap->Stop(&error)) {
-      log("recording not completed: " + error);
-      code = 1;
-    } else if (tap->writer() != nullptr) {
-      log("recorded " + tap->writer()->path().string());
-    }
-    driver.Stop();
-    io.stop();
+    // Stopped behind the completions already queued (twice: those of the
+    // handler running as the signal came are queued when it ends), so that
+    // bytes the kernel took are recorded as delivered, not lost (tap.h).
+    asio::post(io, [&, sig] {
+      asio::post(io, [&, sig] {
+        log(std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                           : sig == SIGHUP ? "SIGHUP"
+                                                           : "SIGTERM"));
+        std::string error;
+        if (!tap->Stop(&error)) {
+          log("recording not completed: " + error);
+          code = 1;
+        } else if (tap->writer() != nullptr) {
+          log("recorded " + tap->writer()->path().string());
+        }
+        driver.Stop();
+        io.stop();
+      });
+    });
   });
   tap->Start();
   driver.Start();

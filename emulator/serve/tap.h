@@ -130,7 +130,10 @@ class Tap {
   void Start();
   // Stops passing bytes, closes both ends (the PTY symlink removed) and
   // completes the recording (atomically). Returns false with a message when
-  // the recording could not be completed. Idempotent.
+  // the recording could not be completed. Idempotent. A write whose
+  // completion has not run yet counts as not delivered ("lost"): a caller
+  // stopping from outside posts Stop() behind the completions already queued
+  // (RunTap posts it twice).
   bool Stop(std::string* error = nullptr);
 
   // "pty /tmp/dmc16 -> /dev/pts/4" or "tcp 127.0.0.1:5000".

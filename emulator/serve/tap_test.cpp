@@ -197,10 +197,13 @@ TEST(TapRecording, StopRightAfterTheLastChunkRecordsEveryChunkInOrder) {
   }
   EXPECT_EQ(back, sent);
   bool stopped = false;
+  // As RunTap stops: behind the write completions already queued.
   asio::post(tap_io, [&] {
-    stopped = tap.Stop();
-    tap_driver.Stop();
-    tap_io.stop();
+    asio::post(tap_io, [&] {
+      stopped = tap.Stop();
+      tap_driver.Stop();
+      tap_io.stop();
+    });
   });
   tap_thread.join();
   close(fd);
@@ -286,11 +289,14 @@ class TapBetweenPtys {
   }
   bool Stop() {
     if (!thread_.joinable()) return stopped_;
+    // As RunTap stops: behind the write completions already queued.
     transport::asio::post(io_, [this] {
-      stopped_ = tap_->Stop();
-      stats_ = tap_->stats();
-      driver_.Stop();
-      io_.stop();
+      transport::asio::post(io_, [this] {
+        stopped_ = tap_->Stop();
+        stats_ = tap_->stats();
+        driver_.Stop();
+        io_.stop();
+      });
     });
     thread_.join();
     return stopped_;
@@ -379,6 +385,10 @@ TEST(TapFlowControl, DeviceFloodToAHostNotReadingIsDeliveredWholeAndRecorded) {
   device.join();
   EXPECT_EQ(got.size(), kSent);
   EXPECT_TRUE(got == sent) << "the host got other bytes than the device sent";
+  // The tap learns that its last write completed a moment after the host
+  // has read it: a write still in flight at the stop counts as lost.
+  EXPECT_TRUE(
+      t.WaitFor([](Tap& tap) { return tap.stats().device_bytes == kSent; }, [] { return false; }));
   ASSERT_TRUE(t.Stop());
   const TapStats& s = t.final_stats();
   EXPECT_EQ(s.device_read_bytes, kSent);
@@ -416,6 +426,8 @@ TEST(TapFlowControl, HostFarAheadOfADeviceNotReadingKeepsMemoryBounded) {
   host.join();
   EXPECT_EQ(got.size(), kSent);
   EXPECT_TRUE(got == sent) << "the device got other bytes than the host sent";
+  EXPECT_TRUE(
+      t.WaitFor([](Tap& tap) { return tap.stats().host_bytes == kSent; }, [] { return false; }));
   ASSERT_TRUE(t.Stop());
   const TapStats& s = t.final_stats();
   EXPECT_EQ(s.host_bytes, kSent);
