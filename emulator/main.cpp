@@ -94,6 +94,31 @@ int Decode(const std::string& path, bool show_time, bool strict) {
   return strict && problems > 0 ? 1 : 0;
 }
 
+// Checks an output before any work (docs/files.md) and prints why it cannot
+// be written. `defaulted`: the path was made beside the session because no
+// -o was given, so the fix is -o. Returns true when it cannot be written.
+bool CheckDefaultOrOutput(const std::string& out, bool defaulted, const char* command,
+                          const char* what) {
+  if (!defaulted) {
+    if (auto error = moco::base::CheckOutputPath(out, "--output")) {
+      std::fprintf(stderr, "mocosim %s: %s\n", command, error->c_str());
+      return true;
+    }
+    return false;
+  }
+  if (auto error = moco::base::CheckOutputPath(out, "")) {
+    // The fix here is -o, not the one the check suggests.
+    if (const size_t fix = error->rfind("; give"); fix != std::string::npos) error->resize(fix);
+    const std::string name = std::filesystem::path(out).filename().string();
+    std::fprintf(stderr,
+                 "mocosim %s: without -o the %s goes beside the session: %s; give -o FILE "
+                 "in a writable folder (e.g. -o /tmp/%s)\n",
+                 command, what, error->c_str(), name.c_str());
+    return true;
+  }
+  return false;
+}
+
 // `mocosim export --pcapng SESSION -o FILE`: writes the session's traffic as
 // a pcapng capture (session/pcapng.h, docs/wireshark.md), atomically. Exit 0
 // when written, 1 when writing failed, 2 for bad arguments or files.
@@ -101,11 +126,8 @@ int ExportPcapng(const std::string& session_path, const std::string& out_path) {
   const std::string out =
       out_path.empty() ? std::filesystem::path(session_path).replace_extension(".pcapng").string()
                        : out_path;
-  if (auto error = moco::base::CheckOutputPath(out, "--output")) {
-    std::fprintf(stderr, "mocosim export: %s\n", error->c_str());
-    return 2;
-  }
-  if (moco::base::SameFile(out, session_path)) {
+  if (CheckDefaultOrOutput(out, out_path.empty(), "export", "capture")) return 2;
+  if (moco::base::SamePath(out, session_path)) {
     std::fprintf(stderr,
                  "mocosim export: --output %s is the session itself; writing it would destroy "
                  "it: give another -o\n",
@@ -129,8 +151,9 @@ int ExportPcapng(const std::string& session_path, const std::string& out_path) {
     std::fprintf(stderr, "mocosim export: %s\n", error->c_str());
     return 1;
   }
-  std::printf("wrote %s: %zu packet(s), %zu byte(s) of %s traffic", out.c_str(), stats.packets,
-              stats.bytes, std::string(ProtocolName(s.header.protocol)).c_str());
+  std::printf("wrote %s%s: %zu packet(s), %zu byte(s) of %s traffic", out.c_str(),
+              out_path.empty() ? " (beside the session; -o FILE writes elsewhere)" : "",
+              stats.packets, stats.bytes, std::string(ProtocolName(s.header.protocol)).c_str());
   if (stats.events_left_out > 0) {
     std::printf(" (%zu event line(s) left out: a capture holds traffic only)",
                 stats.events_left_out);
@@ -161,12 +184,9 @@ int Plot(const PlotArgs& a) {
       a.out_path.empty() ? std::filesystem::path(a.session_path).replace_extension(".svg").string()
                          : a.out_path;
   // The output is checked before the work, and never written over an input.
-  if (auto error = moco::base::CheckOutputPath(out, "--output")) {
-    std::fprintf(stderr, "mocosim plot: %s\n", error->c_str());
-    return 2;
-  }
+  if (CheckDefaultOrOutput(out, a.out_path.empty(), "plot", "plot")) return 2;
   for (const std::string& input : {a.session_path, a.profile_path}) {
-    if (moco::base::SameFile(out, input)) {
+    if (moco::base::SamePath(out, input)) {
       std::fprintf(stderr,
                    "mocosim plot: --output %s is also an input (%s); writing it would destroy "
                    "it: give another -o\n",

@@ -173,6 +173,79 @@ mocosim_cli_export_pcapng_refuses_bad_paths_and_keeps_what_is_there)
   expect_rc 2 "$sim" export "$session" -o y.pcapng
   ;;
 
+# An output path that is an input or a path mocosim serves (a PTY's link,
+# the control socket), by any spelling (./, a/../, a symlink), is refused at
+# start with exit 2, the message naming both options and the fix; nothing is
+# left behind. (A recording into the device's own PTY used to block mocosim
+# on its own port, deaf to signals.) `timeout` only keeps a regression from
+# hanging the suite.
+mocosim_cli_output_equal_to_an_input_or_a_served_path_is_refused)
+  # refused WANT1 WANT2 ARGS...: exit 2, both named, no PTY link left.
+  refused() {
+    w1=$1
+    w2=$2
+    shift 2
+    expect_rc 2 timeout -s KILL 60 "$sim" "$@"
+    grep -q -- "$w1" err.txt || fail "$*: $w1 not named"
+    grep -q -- "$w2" err.txt || fail "$*: $w2 not named"
+    grep -q "give" err.txt || fail "$*: no fix given"
+    test ! -e "$work/p" || fail "$*: a PTY link was left"
+  }
+  mkdir sub
+  ln -s "$work/p" alias
+  cp "$src/fixtures/profiles/dmc16-boom.json" prof.json
+  for model in dfmoco dmc16; do
+    refused --record --pty "$model" --pty "$work/p" --record "$work/p"
+  done
+  refused --record --pty dfmoco --pty "$work/p" --record "$work/sub/../p"
+  refused --record --pty dfmoco --pty "$work/p" --record ./p
+  refused --record --pty dfmoco --pty "$work/p" --record alias
+  refused --vcd --pty dmc16 --pty "$work/p" --vcd "$work/p"
+  refused --state --pty stackshot3x --pty "$work/p" --state "$work/p"
+  refused --record --control dmc16 --pty "$work/p" --control "$work/c.sock" --record c.sock
+  refused --record --profile dmc16 --pty "$work/p" --profile prof.json --record ./prof.json
+  cmp -s prof.json "$src/fixtures/profiles/dmc16-boom.json" || fail "the profile was written"
+  refused --pty --profile dmc16 --pty "$work/prof.json" --profile prof.json
+  printf '{"events": []}\n' >scen.json
+  refused --record --scenario dmc16 --pty "$work/p" --scenario scen.json --record scen.json
+  # A run file: the keys are named; the run file itself is an input.
+  printf '{"devices": [{"name": "a", "endpoint": "pty:p", "record": "p"}]}\n' >run.json
+  refused '"record"' '"endpoint"' run run.json
+  printf '{"devices": [{"name": "a", "endpoint": "pty:p", "record": "run2.json"}]}\n' >run2.json
+  refused '"record"' 'the run file' run run2.json
+  grep -q devices run2.json || fail "the run file was written"
+  # export and plot: the session by another spelling.
+  cp "$src/fixtures/sessions/dmc16-boom-move.jsonl" s.jsonl
+  expect_rc 2 "$sim" export --pcapng s.jsonl -o sub/../s.jsonl
+  grep -q -- "--output" err.txt || fail "export: --output not named"
+  expect_rc 2 "$sim" plot s.jsonl --profile prof.json -o ./sub/../prof.json
+  grep -q -- "--output" err.txt || fail "plot: --output not named"
+  cmp -s s.jsonl "$src/fixtures/sessions/dmc16-boom-move.jsonl" || fail "the session was written"
+  cmp -s prof.json "$src/fixtures/profiles/dmc16-boom.json" || fail "the profile was written"
+  ;;
+
+# `mocosim export --pcapng SESSION` without -o writes beside the session and
+# says where; when that folder cannot be written it fails with exit 2 naming
+# -o as the fix, and leaves nothing there. (As root every folder is
+# writable: mocosim then runs as nobody.)
+mocosim_cli_export_without_o_says_where_and_names_o_when_it_cannot)
+  mkdir ro
+  cp "$src/fixtures/sessions/dmc16-handshake.jsonl" ro/s.jsonl
+  expect_rc 0 "$sim" export --pcapng ro/s.jsonl
+  grep -q "wrote ro/s.pcapng" out.txt || fail "does not say where it wrote"
+  test -s ro/s.pcapng || fail "no capture beside the session"
+  rm ro/s.pcapng
+  chmod 555 ro
+  as_user=""
+  [ "$(id -u)" = 0 ] && as_user="setpriv --reuid=65534 --regid=65534 --clear-groups"
+  # shellcheck disable=SC2086
+  expect_rc 2 $as_user "$sim" export --pcapng ro/s.jsonl
+  grep -q -- "-o FILE" err.txt || fail "the fix -o is not named"
+  grep -q "ro/s.pcapng" err.txt || fail "the path it could not write is not named"
+  [ "$(ls ro)" = s.jsonl ] || fail "something was left beside the session: $(ls ro)"
+  chmod 755 ro
+  ;;
+
 *)
   echo "unknown test $test_name" >&2
   exit 1

@@ -401,6 +401,21 @@ bool SameFile(const std::string& a, const std::string& b) {
   return normal(a) == normal(b);
 }
 
+bool SamePath(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty()) return false;
+  if (SameFile(a, b)) return true;
+  // Not following the last name: a dangling or stale symlink (a PTY's link
+  // left by a crash) and the path that will replace it.
+  const auto unfollowed = [](const std::string& p) {
+    std::error_code ec;
+    const fs::path abs = fs::absolute(p, ec).lexically_normal();
+    if (ec) return fs::path(p).lexically_normal();
+    const fs::path dir = fs::weakly_canonical(abs.parent_path(), ec);
+    return ec ? abs : dir / abs.filename();
+  };
+  return unfollowed(a) == unfollowed(b);
+}
+
 std::optional<std::string> MoveAsideNumbered(const std::string& path, const std::string& suffix,
                                              std::string* moved_to) {
   for (int i = 0; i < 10000; ++i) {

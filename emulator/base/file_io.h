@@ -133,6 +133,14 @@ std::string FormatByteSize(size_t bytes);
 // else the same absolute path once symlinks are followed.
 bool SameFile(const std::string& a, const std::string& b);
 
+// True when `a` and `b` name one place, also before it exists: SameFile, or
+// the same absolute path once std::filesystem::weakly_canonical has followed
+// the symlinks of its directories (the last name followed or not). An output
+// checked against a path a program will create (a PTY's symlink) or against
+// an input reached by another spelling (./x, a/../x, a symlink to x, the
+// device node a symlink points to).
+bool SamePath(const std::string& a, const std::string& b);
+
 // Moves `path` to the first of "<path><suffix>", "<path><suffix>.1", ...
 // that does not exist, never replacing one (rename with RENAME_NOREPLACE, or
 // link + unlink). Returns the new path in `moved_to`, or a message.

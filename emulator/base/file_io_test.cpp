@@ -350,6 +350,26 @@ TEST(SameFile, TheSameInodeByAnyNameAndTheSameNewPath) {
   EXPECT_FALSE(SameFile(a.string(), (dir.path() / "b.json").string()));
 }
 
+// An output against a path made later (a PTY's link) or reached by another
+// spelling: the same place either way.
+TEST(SamePath, OtherSpellingsSymlinksAndPathsNotYetMade) {
+  TempDir dir;
+  fs::create_directory(dir.path() / "d");
+  fs::create_directory_symlink(dir.path() / "d", dir.path() / "dlink");
+  const std::string pty = (dir.path() / "d" / "pty").string();
+  EXPECT_TRUE(SamePath(pty, (dir.path() / "d" / ".." / "d" / "pty").string()));
+  EXPECT_TRUE(SamePath(pty, (dir.path() / "dlink" / "pty").string()));
+  // A stale link where the PTY's link will be, and where it points.
+  fs::create_symlink(dir.path() / "gone", pty);
+  EXPECT_TRUE(SamePath(pty, (dir.path() / "dlink" / "pty").string()));
+  // A symlink to an existing node and the node itself.
+  Put(dir.path() / "node", "");
+  fs::create_symlink(dir.path() / "node", dir.path() / "to-node");
+  EXPECT_TRUE(SamePath((dir.path() / "to-node").string(), (dir.path() / "node").string()));
+  EXPECT_FALSE(SamePath(pty, (dir.path() / "d" / "other").string()));
+  EXPECT_FALSE(SamePath(pty, ""));
+}
+
 TEST(MoveAsideNumbered, EveryCopyIsKeptNoneOverwritten) {
   TempDir dir;
   const fs::path p = dir.path() / "s.json";

@@ -86,38 +86,80 @@ class DebugTap final : public TrafficObserver {
 
 // Refuses, before anything is opened, every output that cannot be written (a
 // directory, a socket, a missing directory) and every output that is another
-// output or an input: one would overwrite the other.
+// output, an input or a path the emulator serves (a PTY's symlink, the
+// control socket), by any spelling (base::SamePath): one would overwrite the
+// other, and a recording written into the device's own PTY blocks the
+// emulator on its own port. Each role names its option (or run-file key).
 void CheckFiles(const EmulatorConfig& c) {
   struct File {
     std::string path;
     std::string role;
   };
+  const bool run_file = !c.run_file_path.empty();
+  // "dmc16's --record" or "device \"a\"'s \"record\"".
+  auto role = [&](const DeviceConfig& d, std::string_view option, std::string_view key) {
+    return run_file ? "device \"" + d.name + "\"'s \"" + std::string(key) + "\""
+                    : std::string(option);
+  };
   std::vector<File> outputs;
   std::vector<File> inputs;
+  std::vector<File> served;
   for (const DeviceConfig& d : c.devices) {
-    if (!d.record_path.empty()) outputs.push_back({d.record_path, d.name + "'s recording"});
-    if (!d.vcd_path.empty()) outputs.push_back({d.vcd_path, d.name + "'s VCD"});
-    if (!d.state_path.empty()) outputs.push_back({d.state_path, d.name + "'s state file"});
-    if (!d.profile_path.empty()) inputs.push_back({d.profile_path, d.name + "'s profile"});
+    if (!d.record_path.empty()) outputs.push_back({d.record_path, role(d, "--record", "record")});
+    if (!d.vcd_path.empty()) outputs.push_back({d.vcd_path, role(d, "--vcd", "vcd")});
+    if (!d.state_path.empty()) outputs.push_back({d.state_path, role(d, "--state", "state")});
+    if (!d.profile_path.empty())
+      inputs.push_back({d.profile_path, role(d, "--profile", "profile")});
+    if (d.endpoint.starts_with("pty:")) {
+      served.push_back({d.endpoint.substr(4), role(d, "--pty", "endpoint")});
+    }
   }
-  if (!c.scenario_path.empty()) inputs.push_back({c.scenario_path, "the scenario"});
+  if (!c.scenario_path.empty()) {
+    inputs.push_back({c.scenario_path, run_file ? "\"scenario\"" : "--scenario"});
+  }
+  if (run_file) inputs.push_back({c.run_file_path, "the run file"});
+  if (!c.control_path.empty()) {
+    served.push_back({c.control_path, run_file ? "\"control\"" : "--control"});
+  }
   for (const File& o : outputs) {
     if (auto error = base::CheckOutputPath(o.path, "")) throw ConfigError(o.role + " " + *error);
   }
+  auto clash = [](const File& a, const File& b, std::string_view why, std::string_view fix) {
+    throw ConfigError(a.role + " " + a.path + " is also " + b.role + " " + b.path + ": " +
+                      std::string(why) + "; " + std::string(fix));
+  };
   for (size_t i = 0; i < outputs.size(); ++i) {
     for (size_t j = i + 1; j < outputs.size(); ++j) {
-      if (base::SameFile(outputs[i].path, outputs[j].path)) {
-        throw ConfigError(outputs[j].path + " is both " + outputs[i].role + " and " +
-                          outputs[j].role +
-                          "; one would overwrite the other: give each its "
-                          "own file");
+      if (base::SamePath(outputs[i].path, outputs[j].path)) {
+        clash(outputs[j], outputs[i], "one would overwrite the other",
+              "give each its own file (e.g. " + outputs[j].role + " " + outputs[j].path + ".2)");
       }
     }
     for (const File& in : inputs) {
-      if (base::SameFile(outputs[i].path, in.path)) {
-        throw ConfigError(outputs[i].path + " is both " + in.role + " and " + outputs[i].role +
-                          "; writing the output would destroy the input: choose another path "
-                          "for the output");
+      if (base::SamePath(outputs[i].path, in.path)) {
+        clash(outputs[i], in, "writing the output would destroy the input",
+              "give " + outputs[i].role + " another path");
+      }
+    }
+    for (const File& port : served) {
+      if (base::SamePath(outputs[i].path, port.path)) {
+        clash(outputs[i], port,
+              "the emulator serves a port there (a PTY's link, the control socket), which the "
+              "output would be written into or replace",
+              "give " + outputs[i].role + " a path of its own");
+      }
+    }
+  }
+  for (size_t i = 0; i < served.size(); ++i) {
+    for (size_t j = i + 1; j < served.size(); ++j) {
+      if (base::SamePath(served[i].path, served[j].path)) {
+        clash(served[j], served[i], "two ports cannot share one path", "give each its own path");
+      }
+    }
+    for (const File& in : inputs) {
+      if (base::SamePath(served[i].path, in.path)) {
+        clash(served[i], in, "serving the port there would replace the input",
+              "give " + served[i].role + " another path");
       }
     }
   }
@@ -488,7 +530,9 @@ EmulatorConfig LoadRunConfig(const std::string& path) {
   if (auto error = base::ReadFileBounded(path, &text)) throw ConfigError(where + " " + *error);
   try {
     const nlohmann::json j = devices::ParseProfileText(text, where);
-    return ParseRunConfig(j, where, std::filesystem::path(path).parent_path().string());
+    EmulatorConfig c = ParseRunConfig(j, where, std::filesystem::path(path).parent_path().string());
+    c.run_file_path = path;
+    return c;
   } catch (const devices::ProfileError& e) {
     throw ConfigError(e.what());
   }

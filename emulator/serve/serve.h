@@ -52,6 +52,9 @@ struct EmulatorConfig {
   std::string scenario_path;  // timed events; empty: none
   std::string bind_address = "127.0.0.1";
   LogLevel log_level = LogLevel::kInfo;
+  // The run file the config came from (an input no output may replace; its
+  // keys name the files in messages); empty: the command line's options.
+  std::string run_file_path;
 };
 
 // A run file (`mocosim run devices.json`) that cannot be used; what() names

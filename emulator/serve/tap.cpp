@@ -1,10 +1,12 @@
 // `mocosim tap`: a recording proxy between a host and a real device (see tap.h).
 #include "serve/tap.h"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -34,8 +36,11 @@ class Tap::Forwarder final : public devices::Device {
   Tap& tap_;
 };
 
-// Records the host link's traffic and events off the forwarding path. The io
-// thread only appends each chunk (its time, its side, its bytes) to a batch
+// Records the tap's traffic and events off the forwarding path. Traffic is
+// what was delivered: device bytes as the host link wrote them to the host
+// (OnDelivered), host bytes as the tap wrote them to the device (Traffic);
+// the link's OnTraffic (what was taken in) is not recorded. The io thread
+// only appends each chunk (its time, its side, its bytes) to a batch
 // in memory and goes back to forwarding; a writer thread takes the batch,
 // decodes the messages each chunk completed in the dialect then on the line,
 // and writes the batch's lines with one write. A batch is written
@@ -59,14 +64,52 @@ class Tap::Recorder final : public transport::TrafficObserver {
     thread_ = std::thread([this] { Run(); });
   }
 
-  void OnTraffic(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override {
+  void OnTraffic(sim::TimeNs, transport::Direction, wire::ByteView) override {}
+  void OnDelivered(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override {
+    if (dir != transport::Direction::kToHost) return;
+    // A dialect change takes effect after the device byte that made it.
+    while (!switches_.empty() && passed_to_host_ + bytes.size() >= switches_.front().first) {
+      const size_t part = static_cast<size_t>(switches_.front().first - passed_to_host_);
+      if (part > 0) Traffic(t_ns, /*host=*/false, bytes.first(part));
+      delivered_to_host_ += part;
+      passed_to_host_ += part;
+      bytes = bytes.subspan(part);
+      SetDialect(switches_.front().second);
+      switches_.pop_front();
+    }
+    delivered_to_host_ += bytes.size();
+    passed_to_host_ += bytes.size();
+    if (!bytes.empty()) Traffic(t_ns, /*host=*/false, bytes);
+  }
+  // Device bytes that will never be delivered, in order with the delivered
+  // ones: dialect changes after them take effect.
+  void SkipToHost(uint64_t n) {
+    passed_to_host_ += n;
+    while (!switches_.empty() && passed_to_host_ >= switches_.front().first) {
+      SetDialect(switches_.front().second);
+      switches_.pop_front();
+    }
+  }
+  // Chunks are decoded in `dialect` once the first `device_bytes` device
+  // bytes are delivered (or skipped): the device's own switch is recorded
+  // where the host got it.
+  void SetDialectAfter(uint64_t device_bytes, wire::Protocol dialect) {
+    if (passed_to_host_ >= device_bytes) {
+      SetDialect(dialect);
+      return;
+    }
+    switches_.emplace_back(device_bytes, dialect);
+  }
+  // A chunk delivered: host -> device when `host`, else device -> host.
+  void Traffic(sim::TimeNs t_ns, bool host, wire::ByteView bytes) {
     if (!recording_) return;
     Item item;
     item.kind = Kind::kTraffic;
     item.t_ns = t_ns;
-    item.host = dir == transport::Direction::kToDevice;
+    item.host = host;
     Push(std::move(item), bytes);
   }
+  uint64_t delivered_to_host() const { return delivered_to_host_; }
   void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override {
     Event({{"t_ns", t_ns}, {"event", std::string(kind)}, {"detail", std::string(detail)}});
   }
@@ -196,7 +239,10 @@ class Tap::Recorder final : public transport::TrafficObserver {
     writer_->Append(lines_);
   }
 
-  bool recording_ = false;  // io thread
+  bool recording_ = false;                                    // io thread
+  uint64_t delivered_to_host_ = 0;                            // io thread
+  uint64_t passed_to_host_ = 0;                               // io thread: delivered or skipped
+  std::deque<std::pair<uint64_t, wire::Protocol>> switches_;  // io thread
   std::mutex mu_;
   std::condition_variable cv_;
   Batch pending_;        // guarded by mu_
@@ -279,14 +325,40 @@ Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn l
     throw std::runtime_error("--baud " + std::to_string(baud_) +
                              " is not a standard rate; use e.g. 38400, 57600 or 115200");
   }
+  // The paths the tap writes (the recording, the host's PTY link) against
+  // each other and what it reads, by any spelling (base::SamePath): a
+  // recording into its own PTY blocks the tap and is lost at the stop.
+  const std::string host_pty = config_.host.starts_with("pty:") ? config_.host.substr(4) : "";
+  const std::string device_path = spec_.tcp ? "" : spec_.path;
+  auto refuse = [](const std::string& what, const std::string& path, const std::string& other,
+                   const std::string& other_path, const std::string& why, const std::string& fix) {
+    throw std::runtime_error(what + " " + path + " is also " + other + " " + other_path + ": " +
+                             why + "; " + fix);
+  };
+  if (!host_pty.empty() && base::SamePath(host_pty, device_path)) {
+    refuse("--pty", host_pty, "--device", device_path,
+           "the host's PTY link would replace the device's port",
+           "give --pty a path of its own (e.g. /tmp/tap-host)");
+  }
   if (!config_.record_path.empty()) {
     if (auto error = base::CheckOutputPath(config_.record_path, "")) {
       throw std::runtime_error("the recording " + *error);
     }
-    if (!spec_.tcp && base::SameFile(config_.record_path, spec_.path)) {
-      throw std::runtime_error(config_.record_path +
-                               " is both the device's port and the recording: give the "
-                               "recording its own file");
+    const std::string& rec = config_.record_path;
+    if (base::SamePath(rec, device_path)) {
+      refuse("--record", rec, "--device", device_path,
+             "the recording would be written into the device's port",
+             "give --record a file of its own (e.g. session.jsonl)");
+    }
+    if (base::SamePath(rec, host_pty)) {
+      refuse("--record", rec, "--pty", host_pty,
+             "the recording would be written into the tap's own PTY (blocking it) and lost "
+             "when it stops",
+             "give --record a file of its own (e.g. session.jsonl)");
+    }
+    if (base::SamePath(rec, config_.profile)) {
+      refuse("--record", rec, "--profile", config_.profile,
+             "writing the recording would destroy the profile", "give --record another path");
     }
   }
   // The device first: a host never finds a port with nothing behind it.
@@ -296,6 +368,8 @@ Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn l
   transport::ServeOptions opts;
   opts.no_pacing = true;  // the real line paces; the tap adds nothing
   opts.observer = recorder_.get();
+  opts.max_queue_bytes = config_.max_queue_bytes;
+  opts.on_drain = [this] { OnDrain(); };
   opts.log = [this](std::string_view line) { log_("host side: " + std::string(line)); };
   server_ = std::make_unique<transport::DeviceServer>(driver_, config_.host, opts);
   if (server_->spec().kind == transport::EndpointSpec::Kind::kWifi) {
@@ -335,6 +409,8 @@ void Tap::OpenDevice() {
   }
   ++device_gen_;
   writing_ = false;
+  device_reading_ = false;
+  device_held_ = false;
 }
 
 void Tap::Start() {
@@ -353,13 +429,68 @@ void Tap::Start() {
 }
 
 void Tap::ReadDevice() {
-  if (device_stream_ == nullptr || stopped_) return;
+  if (device_stream_ == nullptr || stopped_ || device_reading_) return;
+  // Flow control: a read only when the host's queue has room for all of it,
+  // so the link never drops device output; until then the device's bytes
+  // wait in the kernel and the line (OnDrain reads on).
+  const transport::Link& link = server_->link();
+  if (link.queued_bytes() + read_buf_.size() > config_.max_queue_bytes) {
+    device_held_ = true;
+    return;
+  }
+  device_held_ = false;
+  device_reading_ = true;
   device_stream_->AsyncReadSome(
       asio::buffer(read_buf_),
       [this, weak = std::weak_ptr<bool>(alive_), gen = device_gen_](const ErrorCode& ec, size_t n) {
-        if (weak.expired() || gen != device_gen_ || stopped_) return;
+        if (weak.expired() || gen != device_gen_) return;
+        device_reading_ = false;
+        if (stopped_) return;
         OnDeviceRead(ec, n);
       });
+}
+
+void Tap::OnDrain() {
+  if (!started_ || stopped_) return;
+  NoteLinkLosses();
+  FlushLosses();
+  if (device_held_) ReadDevice();
+}
+
+void Tap::NoteLinkLosses() {
+  // The link drops device output only where no host can take it: a TCP host
+  // not connected, or leaving with bytes queued (a full queue is never
+  // reached: ReadDevice waits for room).
+  const transport::LinkStats& ls = server_->link().stats();
+  const uint64_t lost = ls.overflowed + ls.discarded + ls.cut_dropped;
+  if (lost <= link_lost_seen_) return;
+  stats_.lost_to_host_bytes += lost - link_lost_seen_;
+  recorder_->SkipToHost(lost - link_lost_seen_);
+  lost_to_host_unrecorded_ += lost - link_lost_seen_;
+  link_lost_seen_ = lost;
+}
+
+void Tap::FlushLosses() {
+  if (lost_to_host_unrecorded_ > 0) {
+    Event({{"event", "lost"},
+           {"to", "host"},
+           {"bytes", lost_to_host_unrecorded_},
+           {"detail", "device output no host was connected to take"}});
+    lost_to_host_unrecorded_ = 0;
+  }
+  if (lost_to_device_unrecorded_ > 0) {
+    Event({{"event", "lost"},
+           {"to", "device"},
+           {"bytes", lost_to_device_unrecorded_},
+           {"detail", "host bytes while the device was away"}});
+    lost_to_device_unrecorded_ = 0;
+  }
+}
+
+TapStats Tap::stats() const {
+  TapStats s = stats_;
+  s.device_bytes = recorder_ ? recorder_->delivered_to_host() : 0;
+  return s;
 }
 
 void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
@@ -370,11 +501,14 @@ void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
   }
   driver_.Sync();
   const wire::ByteView bytes(read_buf_.data(), n);
-  stats_.device_bytes += n;
-  // Recorded by the host link's observer as it takes them.
-  server_->link().Write(bytes);
+  stats_.device_read_bytes += n;
+  // Recorded by the host link's observer as it delivers them.
+  transport::Link& link = server_->link();
+  link.Write(bytes);
+  stats_.peak_to_host_bytes = std::max(stats_.peak_to_host_bytes, link.queued_bytes());
+  NoteLinkLosses();
   if (const auto change = follower_.OnDeviceBytes(bytes)) {
-    recorder_->SetDialect(change->dialect);
+    recorder_->SetDialectAfter(stats_.device_read_bytes, change->dialect);
     ChangeLine(change->baud, "the device acknowledged a switch to " +
                                  std::string(wire::ProtocolName(change->dialect)));
   }
@@ -386,33 +520,49 @@ void Tap::ToDevice(wire::ByteView bytes) {
   follower_.OnHostBytes(bytes);
   if (device_stream_ == nullptr) {
     stats_.dropped_bytes += bytes.size();
+    lost_to_device_unrecorded_ += bytes.size();
     if (!drop_logged_) {
       drop_logged_ = true;
       log_("the device is away: dropping what the host sends until it is back");
     }
     return;
   }
-  stats_.host_bytes += bytes.size();
   pending_.insert(pending_.end(), bytes.begin(), bytes.end());
+  stats_.peak_to_device_bytes = std::max(stats_.peak_to_device_bytes, to_device_queued());
+  // Flow control: the host's writes wait in the kernel until the device
+  // has taken some of what is held for it.
+  if (to_device_queued() >= config_.max_queue_bytes) server_->link().HoldReading(true);
   PumpDevice();
 }
 
 void Tap::PumpDevice() {
-  if (writing_ || pending_.empty() || device_stream_ == nullptr || stopped_) return;
-  in_write_.swap(pending_);
-  pending_.clear();
+  if (writing_ || device_stream_ == nullptr || stopped_) return;
+  if (in_write_off_ == in_write_.size()) {
+    if (pending_.empty()) return;
+    in_write_.swap(pending_);
+    pending_.clear();
+    in_write_off_ = 0;
+  }
   writing_ = true;
-  device_stream_->AsyncWriteAll(
-      asio::buffer(in_write_),
-      [this, weak = std::weak_ptr<bool>(alive_), gen = device_gen_](const ErrorCode& ec, size_t) {
+  // Written in steps, each recorded as it is delivered.
+  device_stream_->AsyncWriteSome(
+      asio::buffer(in_write_.data() + in_write_off_, in_write_.size() - in_write_off_),
+      [this, weak = std::weak_ptr<bool>(alive_), gen = device_gen_](const ErrorCode& ec, size_t n) {
         if (weak.expired() || gen != device_gen_ || stopped_) return;
         writing_ = false;
-        in_write_.clear();
+        if (n > 0) {
+          recorder_->Traffic(driver_.NowNs(), /*host=*/true,
+                             wire::ByteView(in_write_.data() + in_write_off_, n));
+          stats_.host_bytes += n;
+          in_write_off_ += n;
+        }
         if (ec) {
           DeviceLost("write failed: " + ec.message());
           return;
         }
+        if (to_device_queued() < config_.max_queue_bytes) server_->link().HoldReading(false);
         PumpDevice();
+        driver_.Kick();
       });
 }
 
@@ -420,10 +570,14 @@ void Tap::DeviceLost(const std::string& why) {
   if (device_stream_ == nullptr) return;
   driver_.Sync();
   ++stats_.device_losses;
-  stats_.dropped_bytes += pending_.size() + in_write_.size();
+  const size_t queued = to_device_queued();
+  stats_.dropped_bytes += queued;
   pending_.clear();
   in_write_.clear();
+  in_write_off_ = 0;
   writing_ = false;
+  device_reading_ = false;
+  device_held_ = false;
   device_stream_->Close();
   device_stream_.reset();
   serial_ = nullptr;
@@ -433,6 +587,14 @@ void Tap::DeviceLost(const std::string& why) {
        "); the tap keeps running and looks for it again every " +
        std::to_string(config_.reopen_ns / sim::kNsPerMs) + " ms");
   Event({{"event", "device_link"}, {"detail", "lost: " + why}});
+  if (queued > 0) {
+    Event({{"event", "lost"},
+           {"to", "device"},
+           {"bytes", queued},
+           {"detail", "host bytes queued for the device when it went away"}});
+  }
+  // Host bytes are dropped (and counted) until the device is back.
+  server_->link().HoldReading(false);
   ScheduleReopen();
   driver_.Kick();
 }
@@ -448,6 +610,7 @@ void Tap::ScheduleReopen() {
       return;
     }
     log_("the device " + config_.device + " is back");
+    FlushLosses();
     Event({{"event", "device_link"}, {"detail", "open"}});
     ReadDevice();
   });
@@ -483,7 +646,8 @@ void Tap::PollHostLine() {
 }
 
 void Tap::Event(nlohmann::json event) {
-  event["t_ns"] = driver_.Sync();
+  // The wall clock: never less than any time recorded before (NowNs).
+  event["t_ns"] = driver_.NowNs();
   recorder_->Event(std::move(event));
 }
 
@@ -492,6 +656,31 @@ bool Tap::Stop(std::string* error) {
   stopped_ = true;
   driver_.scheduler().Cancel(poll_timer_);
   driver_.scheduler().Cancel(reopen_timer_);
+  if (server_ && started_) {
+    // What was taken in and is still held is lost with the tap: counted and
+    // recorded, never as traffic.
+    NoteLinkLosses();
+    FlushLosses();
+    const size_t to_host = server_->link().undelivered_bytes();
+    stats_.lost_to_host_bytes += to_host;
+    lost_to_host_unrecorded_ += to_host;
+    stats_.dropped_bytes += to_device_queued();
+    lost_to_device_unrecorded_ += to_device_queued();
+    if (lost_to_host_unrecorded_ > 0) {
+      Event({{"event", "lost"},
+             {"to", "host"},
+             {"bytes", lost_to_host_unrecorded_},
+             {"detail", "device output the host had not taken when the tap stopped"}});
+      lost_to_host_unrecorded_ = 0;
+    }
+    if (lost_to_device_unrecorded_ > 0) {
+      Event({{"event", "lost"},
+             {"to", "device"},
+             {"bytes", lost_to_device_unrecorded_},
+             {"detail", "host bytes the device had not taken when the tap stopped"}});
+      lost_to_device_unrecorded_ = 0;
+    }
+  }
   if (server_) server_->Stop();
   if (device_stream_) device_stream_->Close();
   device_stream_.reset();
@@ -524,18 +713,25 @@ int RunTap(TapConfig config, transport::LogFn log) {
   int code = 0;
   signals.async_wait([&](const ErrorCode& ec, int sig) {
     if (ec) return;
-    log(std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
-                                       : sig == SIGHUP ? "SIGHUP"
-                                                       : "SIGTERM"));
-    std::string error;
-    if (!tap->Stop(&error)) {
-      log("recording not completed: " + error);
-      code = 1;
-    } else if (tap->writer() != nullptr) {
-      log("recorded " + tap->writer()->path().string());
-    }
-    driver.Stop();
-    io.stop();
+    // Stopped behind the completions already queued (twice: those of the
+    // handler running as the signal came are queued when it ends), so that
+    // bytes the kernel took are recorded as delivered, not lost (tap.h).
+    asio::post(io, [&, sig] {
+      asio::post(io, [&, sig] {
+        log(std::string("stopping on ") + (sig == SIGINT   ? "SIGINT"
+                                           : sig == SIGHUP ? "SIGHUP"
+                                                           : "SIGTERM"));
+        std::string error;
+        if (!tap->Stop(&error)) {
+          log("recording not completed: " + error);
+          code = 1;
+        } else if (tap->writer() != nullptr) {
+          log("recorded " + tap->writer()->path().string());
+        }
+        driver.Stop();
+        io.stop();
+      });
+    });
   });
   tap->Start();
   driver.Start();

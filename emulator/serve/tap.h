@@ -47,6 +47,10 @@ struct TapConfig {
   // device that went away is looked for again.
   sim::TimeNs poll_ns = 20 * sim::kNsPerMs;
   sim::TimeNs reopen_ns = 1000 * sim::kNsPerMs;
+  // Flow control (docs/tap.md "Flow control"): at most this many bytes are
+  // held for each side. Past it the tap stops reading the other side until
+  // the slow one takes some, so the kernel and the line hold the rest.
+  size_t max_queue_bytes = 256 * 1024;
 };
 
 // Parses a device-side spec: "serial:PATH", "tcp:HOST:PORT" or a bare path
@@ -62,23 +66,43 @@ std::variant<DeviceSpec, std::string> ParseDeviceSpec(std::string_view spec);
 // The usual device model of a protocol ("dmc16", "dfmoco-uno", "stackshot3x").
 std::string DefaultTapDevice(wire::Protocol protocol);
 
+// Bytes are counted where they are recorded: when delivered (written to the
+// other side's port or socket). What was taken in and never delivered is
+// counted as lost and recorded as a "lost" event with its count.
 struct TapStats {
-  uint64_t host_bytes = 0;     // host -> device, passed on
-  uint64_t device_bytes = 0;   // device -> host, passed on
-  uint64_t dropped_bytes = 0;  // host bytes while the device was away
+  uint64_t host_bytes = 0;          // host -> device, delivered and recorded
+  uint64_t device_bytes = 0;        // device -> host, delivered and recorded
+  uint64_t device_read_bytes = 0;   // read from the device
+  uint64_t dropped_bytes = 0;       // host bytes lost: the device was away or went with them
+  uint64_t lost_to_host_bytes = 0;  // device bytes lost: no TCP host, or the tap stopped first
   uint64_t device_losses = 0;
   uint64_t line_changes = 0;
+  // The most bytes held at once for the device (read from the host, not yet
+  // written) and for the host (the host link's outgoing queue): flow control
+  // keeps each within TapConfig::max_queue_bytes plus one read (4 KiB).
+  size_t peak_to_device_bytes = 0;
+  size_t peak_to_host_bytes = 0;
 };
 
 // One tap. Construction opens both ends (the device side first, so a host
 // never sees a port with nothing behind it) and the recording; Start() begins
 // passing bytes. Host bytes reach the device in the order read, device bytes
 // the host in the order read; each chunk is stamped with the driver's clock
-// as it is read (header "clock": "real", t_ns from the tap's start) and
+// as it is delivered (header "clock": "real", t_ns from the tap's start) and
 // recorded off the forwarding path: the io thread copies it into a batch and
 // a writer thread decodes and writes the batch (one write per batch, at most
 // about 50 ms after its first chunk). Stop() writes what is left, so a
 // stopped tap's recording is complete.
+//
+// Flow control: neither side is read while the other's buffer in the tap is
+// full (max_queue_bytes), as a serial bridge stops its UART: bytes wait in
+// the kernel (and the sender's writes block) instead of being dropped, so
+// memory stays bounded both ways and no byte is lost to a slow reader. Each
+// chunk is recorded when it is delivered (written to the other side), so the
+// recording never holds a byte that did not arrive; the few that cannot
+// arrive (the device gone with bytes queued for it, a TCP host leaving, the
+// tap stopped before a host read its bytes) are counted and recorded as a
+// "lost" event with "to" and "bytes".
 //
 // Ends: the host closing and reopening its PTY (or a TCP host disconnecting
 // and another connecting) never ends the tap; it is recorded as a
@@ -106,7 +130,10 @@ class Tap {
   void Start();
   // Stops passing bytes, closes both ends (the PTY symlink removed) and
   // completes the recording (atomically). Returns false with a message when
-  // the recording could not be completed. Idempotent.
+  // the recording could not be completed. Idempotent. A write whose
+  // completion has not run yet counts as not delivered ("lost"): a caller
+  // stopping from outside posts Stop() behind the completions already queued
+  // (RunTap posts it twice).
   bool Stop(std::string* error = nullptr);
 
   // "pty /tmp/dmc16 -> /dev/pts/4" or "tcp 127.0.0.1:5000".
@@ -114,7 +141,13 @@ class Tap {
   uint16_t host_tcp_port() const { return server_->tcp_port(); }
   bool device_open() const { return device_stream_ != nullptr; }
   uint32_t baud() const { return baud_; }
-  const TapStats& stats() const { return stats_; }
+  TapStats stats() const;
+  // Host bytes held for the device now (read, not yet written).
+  size_t to_device_queued() const { return pending_.size() + in_write_.size() - in_write_off_; }
+  // Flow control in force: the device is not read (the host's queue is
+  // full) / the host is not read (the bytes held for the device are).
+  bool device_held() const { return device_held_; }
+  bool host_held() const { return server_->link().reading_held(); }
   const session::SessionWriter* writer() const { return writer_.get(); }
 
  private:
@@ -123,6 +156,9 @@ class Tap {
   void OpenDevice();
   void DeviceLost(const std::string& why);
   void ReadDevice();
+  void OnDrain();
+  void NoteLinkLosses();
+  void FlushLosses();
   void OnDeviceRead(const transport::ErrorCode& ec, size_t n);
   void ToDevice(wire::ByteView bytes);
   void PumpDevice();
@@ -146,9 +182,15 @@ class Tap {
   transport::SerialStream* serial_ = nullptr;  // device_stream_ when it is a serial port
   uint64_t device_gen_ = 0;
   std::array<uint8_t, 4096> read_buf_{};
-  wire::Bytes pending_;   // host bytes waiting for the device's write
-  wire::Bytes in_write_;  // the write in flight
+  wire::Bytes pending_;      // host bytes waiting for the device's write
+  wire::Bytes in_write_;     // being written; in_write_off_ of it are written
+  size_t in_write_off_ = 0;  // delivered (and recorded) bytes of in_write_
   bool writing_ = false;
+  bool device_reading_ = false;  // a read of the device is pending
+  bool device_held_ = false;     // not read: the host's queue has no room
+  uint64_t link_lost_seen_ = 0;  // the host link's drops already counted
+  uint64_t lost_to_host_unrecorded_ = 0;
+  uint64_t lost_to_device_unrecorded_ = 0;
   bool drop_logged_ = false;
 
   uint32_t host_line_seen_ = 0;

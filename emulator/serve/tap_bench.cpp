@@ -12,6 +12,13 @@
 // "MSG_HI [0x0001]"; 12 bytes out, 63 back), each unpaced (the tap's own cost against the
 // fastest link there is) and paced at 115200 baud (a DMC-16's line).
 //   tap_bench [iterations]
+// and flow control with a slow side (docs/tap.md "Flow control"): a device
+// sending BYTES to a host that reads nothing until the tap holds the device
+// back, then everything; and a host writing BYTES ahead of a device that
+// reads nothing until the tap holds the host back. Each prints the bytes
+// sent, delivered and recorded (counted in the session file) and the most the
+// tap held at once:
+//   tap_bench slow-reader [bytes]
 #include <poll.h>
 #include <pthread.h>
 #include <pty.h>
@@ -21,10 +28,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <string>
 #include <thread>
@@ -32,6 +41,7 @@
 
 #include "serve/serve.h"
 #include "serve/tap.h"
+#include "session/session.h"
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
 #include "transport/test_support.h"
@@ -321,7 +331,116 @@ void Measure(Kind kind, bool paced, int n, int warmup) {
 
 }  // namespace
 
+// One side floods, the other reads nothing until the tap holds the flood
+// back, then reads all of it.
+struct SlowReaderResult {
+  size_t sent = 0;
+  size_t delivered = 0;  // what the slow side read, equal to what was sent
+  size_t recorded = 0;   // that direction's bytes in the session file
+  size_t lost_events = 0;
+  bool held = false;     // the tap held the fast side back
+  size_t peak_held = 0;  // the most the tap held for the slow side
+  moco::serve::TapStats stats;
+};
+
+SlowReaderResult SlowReader(bool device_floods, size_t bytes) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("tap_bench.slow." + std::to_string(getpid()));
+  fs::create_directories(dir);
+  int device_fd = -1;
+  int slave = -1;
+  char slave_name[256] = {};
+  if (openpty(&device_fd, &slave, slave_name, nullptr, nullptr) != 0) std::abort();
+  close(slave);
+  asio::io_context io;
+  moco::sim::Scheduler scheduler;
+  moco::transport::RealtimeDriver driver(io, scheduler);
+  moco::serve::TapConfig config;
+  config.protocol = moco::wire::Protocol::kDmc;
+  config.device = std::string("serial:") + slave_name;
+  config.host = "pty:" + (dir / "host").string();
+  config.record_path = (dir / "s.jsonl").string();
+  auto tap = std::make_unique<moco::serve::Tap>(driver, config, [](std::string_view) {});
+  tap->Start();
+  driver.Start();
+  std::thread tap_thread([&] { io.run(); });
+  const int host_fd = moco::transport::testing::OpenPtyHost((dir / "host").string());
+  auto on_tap = [&](auto f) {
+    std::promise<decltype(f())> result;
+    auto future = result.get_future();
+    asio::post(io, [&] { result.set_value(f()); });
+    return future.get();
+  };
+  SlowReaderResult r;
+  r.sent = bytes;
+  std::vector<uint8_t> sent(bytes);
+  for (size_t i = 0; i < bytes; ++i) sent[i] = static_cast<uint8_t>(i * 7 + i / 251);
+  const int from = device_floods ? device_fd : host_fd;
+  const int to = device_floods ? host_fd : device_fd;
+  std::atomic<bool> written{false};
+  std::thread writer([&] {
+    moco::transport::testing::WriteAll(from, sent.data(), sent.size());
+    written = true;
+  });
+  for (int i = 0; i < 20000 && !r.held && !written; ++i) {
+    r.held = on_tap([&] { return device_floods ? tap->device_held() : tap->host_held(); });
+    if (!r.held) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  std::vector<uint8_t> got;
+  std::vector<uint8_t> buf(65536);
+  while (got.size() < bytes) {
+    pollfd p{to, POLLIN, 0};
+    if (poll(&p, 1, 10000) <= 0) break;
+    const ssize_t n = read(to, buf.data(), std::min(buf.size(), bytes - got.size()));
+    if (n <= 0) break;
+    got.insert(got.end(), buf.begin(), buf.begin() + n);
+  }
+  writer.join();
+  r.delivered = got == sent ? got.size() : 0;
+  asio::post(io, [&] {
+    tap->Stop();
+    r.stats = tap->stats();
+    driver.Stop();
+    io.stop();
+  });
+  tap_thread.join();
+  r.peak_held = device_floods ? r.stats.peak_to_host_bytes : r.stats.peak_to_device_bytes;
+  auto loaded = moco::session::LoadSession(config.record_path);
+  if (const auto* s = std::get_if<moco::session::Session>(&loaded)) {
+    for (const auto& e : s->entries) {
+      if (e.is_event) {
+        if (e.event.value("event", "") == "lost") ++r.lost_events;
+      } else if ((e.from == moco::session::Origin::kDevice) == device_floods) {
+        r.recorded += e.bytes.size();
+      }
+    }
+  }
+  close(host_fd);
+  close(device_fd);
+  fs::remove_all(dir);
+  return r;
+}
+
+int SlowReaderMain(size_t bytes) {
+  std::printf("load average %.2f\n\n", Load1());
+  std::printf(
+      "| slow side | sent | delivered | recorded | lost events | held back | most held in the tap "
+      "|\n| --- | --- | --- | --- | --- | --- | --- |\n");
+  int rc = 0;
+  for (bool device_floods : {true, false}) {
+    const SlowReaderResult r = SlowReader(device_floods, bytes);
+    std::printf("| %s | %zu | %zu | %zu | %zu | %s | %zu |\n",
+                device_floods ? "host (device sends)" : "device (host sends)", r.sent, r.delivered,
+                r.recorded, r.lost_events, r.held ? "yes" : "no", r.peak_held);
+    if (r.sent != r.delivered || r.sent != r.recorded || r.lost_events != 0) rc = 1;
+  }
+  return rc;
+}
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "slow-reader") {
+    return SlowReaderMain(argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 1'000'000);
+  }
   const int n = argc > 1 ? std::max(1, std::atoi(argv[1])) : 3000;
   const int paced_n = std::max(1, n / 10);
   std::printf(

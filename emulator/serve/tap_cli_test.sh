@@ -254,7 +254,30 @@ mocosim_tap_cli_bad_input_exits_2_and_names_the_fix)
   serve dmc16 dev
   expect_rc 2 "$sim" tap --protocol dmc --device "$work/dev" --baud 12345 --pty "$work/host"
   grep -q "not a standard rate" err.txt || fail "odd baud not refused"
-  mkdir adir
+  # The recording or the host's PTY on a path the tap reads or serves, by
+  # any spelling (a recording into its own PTY blocked the tap and was lost
+  # at the stop): both options named, with the fix. `timeout` only keeps a
+  # regression from hanging the suite.
+  ln -s "$(readlink "$work/dev")" devnode
+  for args in "--record $work/host:--pty" "--record ./host:--pty" \
+              "--record $work/adir/../host:--pty" "--record $work/dev:--device" \
+              "--record devnode:--device"; do
+    mkdir -p adir
+    rec=${args%%:*}
+    other=${args##*:}
+    # shellcheck disable=SC2086
+    expect_rc 2 timeout -s KILL 60 "$sim" tap --protocol dmc --device "$work/dev" \
+      --pty "$work/host" $rec
+    grep -q -- "--record" err.txt || fail "$rec: --record not named"
+    grep -q -- "$other" err.txt || fail "$rec: $other not named"
+    grep -q "give --record" err.txt || fail "$rec: no fix given"
+    test ! -e "$work/host" || fail "$rec: a PTY link was left"
+  done
+  expect_rc 2 timeout -s KILL 60 "$sim" tap --protocol dmc --device "$work/dev" --pty "$work/dev"
+  grep -q -- "--pty" err.txt || fail "--pty = --device: --pty not named"
+  grep -q -- "--device" err.txt || fail "--pty = --device: --device not named"
+  test -L "$work/dev" || fail "the device's PTY link was replaced"
+  mkdir -p adir
   expect_rc 2 "$sim" tap --protocol dmc --device "$work/dev" --pty "$work/host" --record adir
   grep -q "recording" err.txt || fail "directory recording not refused"
   expect_rc 2 "$sim" tap --protocol dmc --device "$work/dev" --pty "$work/nodir/host"

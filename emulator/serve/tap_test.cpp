@@ -5,7 +5,11 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <pty.h>
+
+#include <atomic>
 #include <filesystem>
+#include <future>
 #include <string>
 #include <thread>
 #include <variant>
@@ -193,10 +197,13 @@ TEST(TapRecording, StopRightAfterTheLastChunkRecordsEveryChunkInOrder) {
   }
   EXPECT_EQ(back, sent);
   bool stopped = false;
+  // As RunTap stops: behind the write completions already queued.
   asio::post(tap_io, [&] {
-    stopped = tap.Stop();
-    tap_driver.Stop();
-    tap_io.stop();
+    asio::post(tap_io, [&] {
+      stopped = tap.Stop();
+      tap_driver.Stop();
+      tap_io.stop();
+    });
   });
   tap_thread.join();
   close(fd);
@@ -227,6 +234,268 @@ TEST(TapRecording, StopRightAfterTheLastChunkRecordsEveryChunkInOrder) {
   EXPECT_EQ(host_bytes, sent);
   EXPECT_EQ(device_bytes, sent);
   std::filesystem::remove_all(dir);
+}
+
+// A tap between a host PTY the test opens and a "serial port" that is a PTY
+// the test holds the other end of (the device), on its own io thread; the
+// flow-control tests (docs/tap.md "Flow control") read either end or not.
+class TapBetweenPtys {
+ public:
+  explicit TapBetweenPtys(const std::string& name, size_t max_queue_bytes) {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("tap_test." + name + "." + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    int slave = -1;
+    char slave_name[256] = {};
+    EXPECT_EQ(openpty(&device_fd, &slave, slave_name, nullptr, nullptr), 0);
+    close(slave);
+    TapConfig config;
+    config.protocol = wire::Protocol::kDmc;
+    config.device = std::string("serial:") + slave_name;
+    config.host = "pty:" + (dir_ / "host").string();
+    config.record_path = record_path();
+    config.max_queue_bytes = max_queue_bytes;
+    tap_ = std::make_unique<Tap>(driver_, config, [](std::string_view) {});
+    tap_->Start();
+    driver_.Start();
+    thread_ = std::thread([this] { io_.run(); });
+    host_fd = transport::testing::OpenPtyHost((dir_ / "host").string());
+    EXPECT_GE(host_fd, 0);
+  }
+  ~TapBetweenPtys() {
+    Stop();
+    if (host_fd >= 0) close(host_fd);
+    if (device_fd >= 0) close(device_fd);
+    std::filesystem::remove_all(dir_);
+  }
+
+  // Runs f on the tap's io thread and returns its result.
+  template <typename F>
+  auto OnTap(F f) {
+    std::promise<decltype(f(std::declval<Tap&>()))> result;
+    auto future = result.get_future();
+    transport::asio::post(io_, [&] { result.set_value(f(*tap_)); });
+    return future.get();
+  }
+  // Polls the tap until cond(tap) or done() (a guard against a hang, not a
+  // measure of time). Returns cond's last value.
+  bool WaitFor(const std::function<bool(Tap&)>& cond, const std::function<bool()>& done) {
+    for (int i = 0; i < 20000; ++i) {
+      if (OnTap(cond)) return true;
+      if (done()) return OnTap(cond);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return OnTap(cond);
+  }
+  bool Stop() {
+    if (!thread_.joinable()) return stopped_;
+    // As RunTap stops: behind the write completions already queued.
+    transport::asio::post(io_, [this] {
+      transport::asio::post(io_, [this] {
+        stopped_ = tap_->Stop();
+        stats_ = tap_->stats();
+        driver_.Stop();
+        io_.stop();
+      });
+    });
+    thread_.join();
+    return stopped_;
+  }
+  const TapStats& final_stats() const { return stats_; }
+  std::string record_path() const { return (dir_ / "tapped.jsonl").string(); }
+
+  int host_fd = -1;
+  int device_fd = -1;
+
+ private:
+  std::filesystem::path dir_;
+  transport::asio::io_context io_;
+  sim::Scheduler scheduler_;
+  transport::RealtimeDriver driver_{io_, scheduler_};
+  std::unique_ptr<Tap> tap_;
+  std::thread thread_;
+  bool stopped_ = false;
+  TapStats stats_;
+};
+
+wire::Bytes Pattern(size_t n) {
+  wire::Bytes b(n);
+  for (size_t i = 0; i < n; ++i) b[i] = static_cast<uint8_t>((i * 7 + i / 251) & 0xff);
+  return b;
+}
+
+// Reads from fd until `want` bytes came; a read that stalls fails (a guard
+// against a hang, generous for a loaded machine).
+wire::Bytes ReadExactly(int fd, size_t want) {
+  wire::Bytes got;
+  got.reserve(want);
+  uint8_t buf[65536];
+  while (got.size() < want) {
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 10000) <= 0) break;
+    const ssize_t n = read(fd, buf, std::min(sizeof buf, want - got.size()));
+    if (n <= 0) break;
+    got.insert(got.end(), buf, buf + n);
+  }
+  return got;
+}
+
+struct Recorded {
+  wire::Bytes host;
+  wire::Bytes device;
+  std::vector<nlohmann::json> lost;  // "lost" events
+};
+Recorded LoadRecorded(const std::string& path) {
+  Recorded r;
+  auto loaded = session::LoadSession(path);
+  EXPECT_TRUE(std::holds_alternative<session::Session>(loaded));
+  if (!std::holds_alternative<session::Session>(loaded)) return r;
+  for (const session::SessionEntry& e : std::get<session::Session>(loaded).entries) {
+    if (e.is_event) {
+      if (e.event.value("event", "") == "lost") r.lost.push_back(e.event);
+      continue;
+    }
+    wire::Bytes& to = e.from == session::Origin::kHost ? r.host : r.device;
+    to.insert(to.end(), e.bytes.begin(), e.bytes.end());
+  }
+  return r;
+}
+
+// A device sending 1,000,000 bytes to a host that has opened the port but
+// not read yet: the tap stops reading the device once the host's queue is
+// full (the device's writes wait), and when the host reads, every byte
+// arrives, in order, and is recorded once. Nothing is lost or dropped.
+TEST(TapFlowControl, DeviceFloodToAHostNotReadingIsDeliveredWholeAndRecorded) {
+  constexpr size_t kSent = 1'000'000;
+  constexpr size_t kMaxQueue = 256 * 1024;
+  TapBetweenPtys t("device_flood", kMaxQueue);
+  ASSERT_GE(t.host_fd, 0);
+  const wire::Bytes sent = Pattern(kSent);
+  std::atomic<bool> written{false};
+  std::thread device([&] {
+    EXPECT_TRUE(transport::testing::WriteAll(t.device_fd, sent.data(), sent.size()));
+    written = true;
+  });
+  // The host reads nothing until the tap holds the device back (or, as it
+  // did before flow control, the device got rid of everything).
+  EXPECT_TRUE(t.WaitFor([](Tap& tap) { return tap.device_held(); }, [&] { return written.load(); }))
+      << "the tap never held the device back";
+  EXPECT_LE(t.OnTap([](Tap& tap) { return tap.stats().peak_to_host_bytes; }), kMaxQueue);
+  const wire::Bytes got = ReadExactly(t.host_fd, kSent);
+  device.join();
+  EXPECT_EQ(got.size(), kSent);
+  EXPECT_TRUE(got == sent) << "the host got other bytes than the device sent";
+  // The tap learns that its last write completed a moment after the host
+  // has read it: a write still in flight at the stop counts as lost.
+  EXPECT_TRUE(
+      t.WaitFor([](Tap& tap) { return tap.stats().device_bytes == kSent; }, [] { return false; }));
+  ASSERT_TRUE(t.Stop());
+  const TapStats& s = t.final_stats();
+  EXPECT_EQ(s.device_read_bytes, kSent);
+  EXPECT_EQ(s.device_bytes, kSent);
+  EXPECT_EQ(s.lost_to_host_bytes, 0u);
+  EXPECT_LE(s.peak_to_host_bytes, kMaxQueue);
+  const Recorded r = LoadRecorded(t.record_path());
+  EXPECT_EQ(r.device.size(), kSent);
+  EXPECT_TRUE(r.device == sent) << "the recording differs from what was delivered";
+  EXPECT_TRUE(r.lost.empty());
+}
+
+// A host writing 4 MiB far ahead of a device that does not read: the tap
+// holds at most max_queue_bytes (plus one read) for the device and stops
+// reading the host; when the device reads, every byte arrives and is
+// recorded once.
+TEST(TapFlowControl, HostFarAheadOfADeviceNotReadingKeepsMemoryBounded) {
+  constexpr size_t kSent = 4 << 20;
+  constexpr size_t kMaxQueue = 64 * 1024;
+  constexpr size_t kOneRead = 4096;
+  TapBetweenPtys t("host_ahead", kMaxQueue);
+  ASSERT_GE(t.host_fd, 0);
+  const wire::Bytes sent = Pattern(kSent);
+  std::atomic<bool> written{false};
+  std::thread host([&] {
+    EXPECT_TRUE(transport::testing::WriteAll(t.host_fd, sent.data(), sent.size()));
+    written = true;
+  });
+  EXPECT_TRUE(t.WaitFor([](Tap& tap) { return tap.host_held(); }, [&] { return written.load(); }))
+      << "the tap never held the host back";
+  EXPECT_LE(t.OnTap([](Tap& tap) { return tap.to_device_queued(); }), kMaxQueue + kOneRead);
+  EXPECT_LE(t.OnTap([](Tap& tap) { return tap.stats().peak_to_device_bytes; }),
+            kMaxQueue + kOneRead);
+  const wire::Bytes got = ReadExactly(t.device_fd, kSent);
+  host.join();
+  EXPECT_EQ(got.size(), kSent);
+  EXPECT_TRUE(got == sent) << "the device got other bytes than the host sent";
+  EXPECT_TRUE(
+      t.WaitFor([](Tap& tap) { return tap.stats().host_bytes == kSent; }, [] { return false; }));
+  ASSERT_TRUE(t.Stop());
+  const TapStats& s = t.final_stats();
+  EXPECT_EQ(s.host_bytes, kSent);
+  EXPECT_EQ(s.dropped_bytes, 0u);
+  EXPECT_LE(s.peak_to_device_bytes, kMaxQueue + kOneRead);
+  const Recorded r = LoadRecorded(t.record_path());
+  EXPECT_EQ(r.host.size(), kSent);
+  EXPECT_TRUE(r.host == sent) << "the recording differs from what was delivered";
+  EXPECT_TRUE(r.lost.empty());
+}
+
+// Bytes the tap took in but could not deliver are never recorded as
+// traffic but as "lost" events with their count: device output still queued
+// for a host that has not read it when the tap stops.
+TEST(TapFlowControl, OutputQueuedForAHostAtStopIsALostEventNotTraffic) {
+  constexpr size_t kMaxQueue = 256 * 1024;
+  TapBetweenPtys t("lost_to_host", kMaxQueue);
+  ASSERT_GE(t.host_fd, 0);
+  // More than the host's PTY holds, less than the tap's queue.
+  const wire::Bytes said = Pattern(200 * 1000);
+  std::thread device(
+      [&] { EXPECT_TRUE(transport::testing::WriteAll(t.device_fd, said.data(), said.size())); });
+  EXPECT_TRUE(t.WaitFor(
+      [&](Tap& tap) { return tap.device_held() || tap.stats().device_read_bytes == said.size(); },
+      [] { return false; }));
+  device.join();
+  ASSERT_TRUE(t.Stop());
+  const TapStats& s = t.final_stats();
+  EXPECT_EQ(s.device_read_bytes, said.size());
+  EXPECT_EQ(s.device_bytes + s.lost_to_host_bytes, said.size());
+  EXPECT_GT(s.lost_to_host_bytes, 0u);
+  const Recorded r = LoadRecorded(t.record_path());
+  EXPECT_EQ(r.device.size(), s.device_bytes);
+  ASSERT_EQ(r.lost.size(), 1u);
+  EXPECT_EQ(r.lost[0].value("to", ""), "host");
+  EXPECT_EQ(r.lost[0].value("bytes", uint64_t{0}), s.lost_to_host_bytes);
+}
+
+// A device that goes away with host bytes queued for it: those bytes, and
+// the host's bytes while it is away, are lost events, never traffic.
+TEST(TapFlowControl, HostBytesQueuedForADeviceThatWentAwayAreLostEvents) {
+  constexpr size_t kMaxQueue = 64 * 1024;
+  TapBetweenPtys t("lost_to_device", kMaxQueue);
+  ASSERT_GE(t.host_fd, 0);
+  const wire::Bytes sent = Pattern(400 * 1000);
+  std::thread host(
+      [&] { EXPECT_TRUE(transport::testing::WriteAll(t.host_fd, sent.data(), sent.size())); });
+  EXPECT_TRUE(t.WaitFor([](Tap& tap) { return tap.host_held(); }, [] { return false; }));
+  close(t.device_fd);  // the device goes away
+  t.device_fd = -1;
+  host.join();  // the host is read again: its bytes are dropped until the device is back
+  EXPECT_TRUE(t.WaitFor(
+      [&](Tap& tap) { return tap.stats().host_bytes + tap.stats().dropped_bytes == sent.size(); },
+      [] { return false; }));
+  ASSERT_TRUE(t.Stop());
+  const TapStats& s = t.final_stats();
+  EXPECT_EQ(s.device_losses, 1u);
+  EXPECT_EQ(s.host_bytes + s.dropped_bytes, sent.size());
+  EXPECT_GT(s.dropped_bytes, 0u);
+  const Recorded r = LoadRecorded(t.record_path());
+  EXPECT_EQ(r.host.size(), s.host_bytes);
+  EXPECT_TRUE(std::equal(r.host.begin(), r.host.end(), sent.begin()));
+  uint64_t lost = 0;
+  for (const nlohmann::json& e : r.lost) {
+    EXPECT_EQ(e.value("to", ""), "device");
+    lost += e.value("bytes", uint64_t{0});
+  }
+  EXPECT_EQ(lost, s.dropped_bytes);
 }
 
 }  // namespace

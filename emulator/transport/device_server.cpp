@@ -108,6 +108,7 @@ DeviceServer::DeviceServer(RealtimeDriver& driver, std::string_view spec, ServeO
   lo.max_queue_bytes = options.max_queue_bytes;
   lo.faults = options.faults;
   lo.observer = options.observer;
+  lo.on_drain = options.on_drain;
   lo.log = options.log ? options.log : LogFn(LogToStderr);
   if (spec_.kind == EndpointSpec::Kind::kPty) {
     lo.hold_while_closed = true;

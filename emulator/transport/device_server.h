@@ -5,6 +5,7 @@
 #define MOCO_TRANSPORT_DEVICE_SERVER_H_
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -51,6 +52,7 @@ struct ServeOptions {
   size_t max_queue_bytes = 256 * 1024;
   FaultConfig faults;                   // off by default
   TrafficObserver* observer = nullptr;  // not owned; must outlive the server
+  std::function<void()> on_drain;       // LinkOptions::on_drain
   LogFn log = LogToStderr;
 };
 

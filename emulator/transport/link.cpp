@@ -166,17 +166,38 @@ void Link::OnWritten(const ErrorCode& ec, size_t n) {
     return;
   }
   stats_.bytes_to_host += n;
+  // Bytes written again after a reclaim were reported the first time.
+  const size_t again = std::min(n, redelivered_);
+  redelivered_ -= again;
+  if (options_.observer != nullptr && n > again) {
+    options_.observer->OnDelivered(driver_.NowNs(), Direction::kToHost,
+                                   wire::ByteView(write_buf_.data() + again, n - again));
+  }
   write_buf_.clear();
   if (!host_present_) Reclaim();
   PumpWriter();
   StartRead();  // resumes reading held back by a full outgoing queue
+  NotifyDrain();
   driver_.Kick();
+}
+
+void Link::NotifyDrain() {
+  if (!stopped_ && options_.on_drain) options_.on_drain();
+}
+
+void Link::DroppedFromHead(size_t n) { redelivered_ -= std::min(n, redelivered_); }
+
+void Link::HoldReading(bool hold) {
+  if (hold == hold_reading_) return;
+  hold_reading_ = hold;
+  if (!hold) StartRead();
 }
 
 // ---- Host -> device ---------------------------------------------------------
 
 void Link::StartRead() {
-  if (stopped_ || reading_ || !stream_ || device_ == nullptr || in_.size() >= kMaxInboundBytes) {
+  if (stopped_ || reading_ || hold_reading_ || !stream_ || device_ == nullptr ||
+      in_.size() >= kMaxInboundBytes) {
     return;
   }
   // Back-pressure: while the host leaves half the outgoing queue unread, its
@@ -303,6 +324,11 @@ void Link::DetachInternal() {
   stream_.reset();
   ++stream_gen_;
   reading_ = false;
+  if (writing_) {
+    // The write in flight goes with the stream: the host never got it whole.
+    stats_.discarded += write_buf_.size();
+    DroppedFromHead(write_buf_.size());
+  }
   writing_ = false;
   write_buf_.clear();
   on_end_ = nullptr;
@@ -341,6 +367,7 @@ void Link::UpdateHostOpen() {
     if (!options_.hold_while_closed) {
       stats_.discarded += out_.size();
       out_.clear();
+      redelivered_ = std::min(redelivered_, writing_ ? write_buf_.size() : 0);
     } else if (stream_ != nullptr) {
       if (!writing_) Reclaim();
       ScheduleReclaimRetry();
@@ -348,6 +375,7 @@ void Link::UpdateHostOpen() {
   }
   if (device_ != nullptr && options_.report_host_link) device_->OnHostLink(open);
   if (open) PumpWriter();
+  NotifyDrain();
 }
 
 void Link::ScheduleReclaimRetry() {
@@ -373,6 +401,7 @@ void Link::Reclaim() {
     ++pos;
   }
   reclaim_pos_ += back.size();
+  redelivered_ += back.size();
   stats_.reclaimed += back.size();
 }
 
@@ -386,6 +415,7 @@ void Link::Cut(sim::TimeNs duration_ns, bool close_stream) {
   in_.clear();
   out_.clear();
   reclaim_pos_ = 0;
+  redelivered_ = std::min(redelivered_, writing_ ? write_buf_.size() : 0);
   CancelTimer(in_wake_);
   CancelTimer(out_wake_);
   Event("link_fault", "cut " + std::to_string(duration_ns));
@@ -423,6 +453,7 @@ void Link::Stop() {
   // already be gone (they are usually built after the link, so die first).
   device_ = nullptr;
   options_.observer = nullptr;
+  options_.on_drain = nullptr;
   CancelTimer(in_wake_);
   CancelTimer(out_wake_);
   CancelTimer(reclaim_timer_);

@@ -35,6 +35,12 @@ class ByteStream {
   // REQUIRES: at most one read and one write pending; buffers outlive them.
   virtual void AsyncReadSome(asio::mutable_buffer buffer, Handler handler) = 0;
   virtual void AsyncWriteAll(asio::const_buffer buffer, Handler handler) = 0;
+  // Writes some of `buffer` (at least one byte unless an error ends it) and
+  // reports how many: a caller that must know which bytes left (the tap
+  // records bytes as they are delivered) writes in such steps. Default: all.
+  virtual void AsyncWriteSome(asio::const_buffer buffer, Handler handler) {
+    AsyncWriteAll(buffer, std::move(handler));
+  }
   virtual void Close() = 0;
   // Takes back bytes already written but not yet read by the far end, when the
   // stream can (a PTY whose host closed the port); oldest first.
@@ -54,6 +60,9 @@ class AsioByteStream : public ByteStream {
   }
   void AsyncWriteAll(asio::const_buffer buffer, Handler handler) override {
     asio::async_write(stream_, buffer, std::move(handler));
+  }
+  void AsyncWriteSome(asio::const_buffer buffer, Handler handler) override {
+    stream_.async_write_some(buffer, std::move(handler));
   }
   void Close() override {
     ErrorCode ignored;
@@ -89,6 +98,11 @@ struct LinkOptions {
   size_t max_write_bytes = 0;
   FaultConfig faults;
   TrafficObserver* observer = nullptr;  // not owned; must outlive the link
+  // Called on the io thread when the outgoing queue may have room again or
+  // the host came or went (a write to the host completed, a host attached or
+  // detached): a writer that holds its source back while queued_bytes() is
+  // near max_queue_bytes (the tap, docs/tap.md "Flow control") reads on.
+  std::function<void()> on_drain;
   LogFn log = LogToStderr;
   std::string name = "link";  // prefix of log lines, e.g. "pty /tmp/dmc16"
 };
@@ -99,7 +113,8 @@ struct LinkStats {
   uint64_t bytes_from_device = 0;  // written by the device
   uint64_t bytes_to_host = 0;      // written to streams
   uint64_t overflowed = 0;         // dropped: queue full
-  uint64_t discarded = 0;          // dropped: no host and !hold_while_closed, or queue cleared
+  uint64_t discarded = 0;          // dropped: no host and !hold_while_closed, queue cleared, or a
+                                   // write in flight when the host's stream ended
   uint64_t cut_dropped = 0;        // dropped during a link cut
   uint64_t reclaimed = 0;          // taken back from a closed PTY and re-queued
   uint64_t connections = 0;        // streams attached
@@ -163,6 +178,12 @@ class Link final : public devices::ByteSink {
   // already delayed keep their release times. REQUIRES: !config.Validate().
   void SetFaults(const FaultConfig& config);
 
+  // Holds back (true) or resumes (false) reading from the host: the far side
+  // of a proxy cannot take more yet, so the host's writes wait in the kernel
+  // (its writes block), as a UART's would. Starts false.
+  void HoldReading(bool hold);
+  bool reading_held() const { return hold_reading_; }
+
   // Closes the stream, cancels the link's timers and stops serving, without
   // calling the device or the observer. Idempotent.
   void Stop();
@@ -170,6 +191,9 @@ class Link final : public devices::ByteSink {
   const LinkStats& stats() const { return stats_; }
   const FaultInjector& faults() const { return faults_; }
   size_t queued_bytes() const { return out_.size() + write_buf_.size(); }
+  // Queued bytes never reported delivered (queued_bytes() less those taken
+  // back from a PTY the host closed unread).
+  size_t undelivered_bytes() const { return queued_bytes() - redelivered_; }
   const LinePacer& out_pacer() const { return out_pacer_; }
   RealtimeDriver& driver() { return driver_; }
   void Log(std::string_view line) const;
@@ -208,6 +232,9 @@ class Link final : public devices::ByteSink {
   void DetachInternal();
   void UpdateHostOpen();
   void Reclaim();
+  // Forgets `n` bytes dropped from the head of the queue (write_buf_ first).
+  void DroppedFromHead(size_t n);
+  void NotifyDrain();
   // Reclaims again after kReclaimRetryNs, and on while a write is held up.
   void ScheduleReclaimRetry();
   void CancelTimer(sim::Scheduler::TimerId& id);
@@ -235,6 +262,7 @@ class Link final : public devices::ByteSink {
   // Host -> device.
   std::array<uint8_t, kReadChunk> read_buf_{};
   bool reading_ = false;
+  bool hold_reading_ = false;
   std::deque<InByte> in_;
   uint32_t line_rate_ = 0;  // bytes/s the pacers run at (0: unpaced)
   LinePacer in_pacer_;
@@ -247,6 +275,10 @@ class Link final : public devices::ByteSink {
   LinePacer out_pacer_;
   sim::TimeNs send_floor_ns_ = 0;  // bytes are not sent before the host (re)opened
   size_t reclaim_pos_ = 0;         // where the next reclaimed bytes go in out_
+  // Bytes at the head of write_buf_ + out_ already reported delivered
+  // (TrafficObserver::OnDelivered) once: taken back from a PTY the host
+  // closed without reading them. They come first in the order written.
+  size_t redelivered_ = 0;
   sim::Scheduler::TimerId out_wake_ = sim::Scheduler::kNoTimer;
   sim::Scheduler::TimerId reclaim_timer_ = sim::Scheduler::kNoTimer;
   sim::Scheduler::TimerId power_on_timer_ = sim::Scheduler::kNoTimer;

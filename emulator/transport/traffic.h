@@ -32,6 +32,12 @@ class TrafficObserver {
   // "cut <ns>"), "power_cycle" (detail "off <ns>"). Default: ignored.
   virtual void OnLinkEvent(sim::TimeNs /*t_ns*/, std::string_view /*kind*/,
                            std::string_view /*detail*/) {}
+  // kToHost bytes handed to the host's stream (a PTY's or a socket's kernel
+  // buffer), in order, each byte once, stamped with the time the write
+  // completed: what reached the host, where OnTraffic is what the device
+  // said. A byte taken back from a PTY the host closed unread and written
+  // again is not reported again. Default: ignored.
+  virtual void OnDelivered(sim::TimeNs /*t_ns*/, Direction /*dir*/, wire::ByteView /*bytes*/) {}
 };
 
 }  // namespace moco::transport
