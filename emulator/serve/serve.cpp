@@ -96,10 +96,10 @@ void CheckFiles(const EmulatorConfig& c) {
     std::string role;
   };
   const bool run_file = !c.run_file_path.empty();
-  // "dmc16's --record" or "device \"a\"'s \"record\"".
+  // "--record", "a's --record" (more than one device) or "device \"a\"'s \"record\"".
   auto role = [&](const DeviceConfig& d, std::string_view option, std::string_view key) {
-    return run_file ? "device \"" + d.name + "\"'s \"" + std::string(key) + "\""
-                    : std::string(option);
+    if (run_file) return "device \"" + d.name + "\"'s \"" + std::string(key) + "\"";
+    return c.devices.size() > 1 ? d.name + "'s " + std::string(option) : std::string(option);
   };
   std::vector<File> outputs;
   std::vector<File> inputs;
