@@ -2,9 +2,41 @@
 // protocol table names each protocol's decoder (wire/protocol.h).
 #include "wire/transcript.h"
 
+#include <algorithm>
+
 #include "wire/transcript_sides.h"
 
 namespace moco::wire {
+namespace {
+
+// A line of a transcript is text a terminal shows: bytes a device sent that
+// are control characters (an ESC sequence that would clear the screen, a NUL
+// that would cut the line) or not ASCII are written as \xNN.
+std::vector<TranscriptLine> Printable(std::vector<TranscriptLine> lines) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  for (TranscriptLine& l : lines) {
+    const bool clean = std::all_of(l.text.begin(), l.text.end(), [](char c) {
+      const auto u = static_cast<unsigned char>(c);
+      return u >= 0x20 && u < 0x7f;
+    });
+    if (clean) continue;
+    std::string text;
+    for (const char c : l.text) {
+      const auto u = static_cast<unsigned char>(c);
+      if (u >= 0x20 && u < 0x7f) {
+        text.push_back(c);
+      } else {
+        text += "\\x";
+        text.push_back(kHex[u >> 4]);
+        text.push_back(kHex[u & 0xF]);
+      }
+    }
+    l.text = std::move(text);
+  }
+  return lines;
+}
+
+}  // namespace
 
 TranscriptDecoder::TranscriptDecoder(Protocol protocol) : sides_(Info(protocol).transcript()) {}
 
@@ -13,13 +45,13 @@ TranscriptDecoder::~TranscriptDecoder() = default;
 std::vector<TranscriptLine> TranscriptDecoder::Feed(Side from, ByteView bytes) {
   std::vector<TranscriptLine> out;
   sides_->Feed(from, bytes, out);
-  return out;
+  return Printable(std::move(out));
 }
 
 std::vector<TranscriptLine> TranscriptDecoder::Finish() {
   std::vector<TranscriptLine> out;
   sides_->Finish(out);
-  return out;
+  return Printable(std::move(out));
 }
 
 }  // namespace moco::wire

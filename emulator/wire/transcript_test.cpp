@@ -85,6 +85,43 @@ TEST(TranscriptTest, DfmocoLearnsDialectFromHiAndFlagsUnterminatedLine) {
   EXPECT_EQ(lines[0].from, Side::kHost);
 }
 
+// What a device sends reaches the terminal as text: an ESC sequence, a NUL
+// or a byte above ASCII in a reply is written as \xNN, and the rest of the
+// line after it is kept.
+TEST(TranscriptTest, DeviceBytesThatAreNotPrintableAreEscaped) {
+  TranscriptDecoder d(Protocol::kDfmoco);
+  d.Feed(Side::kDevice, View("hi 2 4 2.0.0\r\n"));
+  const std::string reply("ms \x1b[2J\0tail\xff\r\n", 17);
+  std::vector<TranscriptLine> lines = d.Feed(Side::kDevice, View(reply));
+  ASSERT_FALSE(lines.empty());
+  std::string all;
+  for (const TranscriptLine& l : lines) {
+    all += l.text + "\n";
+    for (const char c : l.text) {
+      const auto u = static_cast<unsigned char>(c);
+      EXPECT_TRUE(u >= 0x20 && u < 0x7f) << "byte " << int{u} << " in " << l.text;
+    }
+  }
+  EXPECT_NE(all.find("\\x1b[2J"), std::string::npos) << all;
+  EXPECT_NE(all.find("\\x00tail\\xff"), std::string::npos) << all;
+}
+
+// Any bytes either way give printable lines, whatever the protocol.
+RC_GTEST_PROP(TranscriptTest, EveryLineIsPrintableAscii,
+              (const std::vector<uint8_t>& bytes, bool host)) {
+  for (const Protocol p : {Protocol::kDmc, Protocol::kDfmoco, Protocol::kStackshot}) {
+    TranscriptDecoder d(p);
+    std::vector<TranscriptLine> lines = d.Feed(host ? Side::kHost : Side::kDevice, bytes);
+    for (TranscriptLine& l : d.Finish()) lines.push_back(std::move(l));
+    for (const TranscriptLine& l : lines) {
+      for (const char c : l.text) {
+        const auto u = static_cast<unsigned char>(c);
+        RC_ASSERT(u >= 0x20 && u < 0x7f);
+      }
+    }
+  }
+}
+
 TEST(TranscriptTest, StackshotReplyReadAsAnswerToLastHostAction) {
   TranscriptDecoder d(Protocol::kStackshot);
   // Spec section 2 example: read current position, X axis (checksum byte as hosts send it).
