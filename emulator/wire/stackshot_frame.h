@@ -108,6 +108,9 @@ class PacketDecoder {
   size_t Flush();
 
   size_t pending_bytes() const { return len_; }
+  // Bytes skipped (no sync byte, or a dropped partial packet) that no packet
+  // has reported yet as its `skipped_before`.
+  size_t skipped_pending() const { return skipped_pending_; }
   uint64_t skipped_total() const { return skipped_total_; }
   uint64_t packets_total() const { return packets_total_; }
   bool from_device() const { return sync_ == kSyncDevice; }

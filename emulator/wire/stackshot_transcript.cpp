@@ -51,11 +51,19 @@ class StackshotSides final : public TranscriptSides {
   }
 
   void Finish(std::vector<TranscriptLine>& out) override {
-    if (size_t n = host_.Flush()) {
-      out.push_back({Side::kHost, true, std::to_string(n) + " byte(s) of an incomplete packet"});
-    }
-    if (size_t n = device_.Flush()) {
-      out.push_back({Side::kDevice, true, std::to_string(n) + " byte(s) of an incomplete packet"});
+    for (const Side side : {Side::kHost, Side::kDevice}) {
+      stackshot::PacketDecoder& d = side == Side::kHost ? host_ : device_;
+      const size_t partial = d.Flush();
+      // Bytes after the last packet with no sync byte among them are skipped
+      // too, though no packet follows to report them.
+      if (const size_t junk = d.skipped_pending() - partial; junk > 0) {
+        out.push_back(
+            {side, true,
+             "skipped " + std::to_string(junk) + " byte(s) at the end, with no sync byte"});
+      }
+      if (partial > 0) {
+        out.push_back({side, true, std::to_string(partial) + " byte(s) of an incomplete packet"});
+      }
     }
   }
 

@@ -131,6 +131,29 @@ TEST(TranscriptTest, StackshotReplyReadAsAnswerToLastHostAction) {
   EXPECT_NE(lines[0].text.find("CC_RAIL_POSITION_CURRENT"), std::string::npos) << lines[0].text;
 }
 
+// Junk after the last packet with no sync byte in it is a problem, as DMC's
+// stray bytes are: 36 bytes of it are reported at the end, either way.
+TEST(TranscriptTest, StackshotJunkAfterTheLastPacketIsReported) {
+  for (const Side side : {Side::kHost, Side::kDevice}) {
+    TranscriptDecoder d(Protocol::kStackshot);
+    auto lines = d.Feed(Side::kHost, *FromHex("55 10 02 00 00 69"));
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_TRUE(d.Feed(side, Bytes(36, 0x11)).empty());
+    lines = d.Finish();
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_TRUE(lines[0].problem);
+    EXPECT_EQ(lines[0].from, side);
+    EXPECT_NE(lines[0].text.find("skipped 36 byte(s) at the end"), std::string::npos)
+        << lines[0].text;
+  }
+  // A partial packet at the end is reported as such, not as junk too.
+  TranscriptDecoder d(Protocol::kStackshot);
+  d.Feed(Side::kHost, *FromHex("55 10 02"));
+  const auto lines = d.Finish();
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].text.find("3 byte(s) of an incomplete packet"), std::string::npos);
+}
+
 RC_GTEST_PROP(TranscriptProp, DmcChunkingDoesNotChangeTranscript,
               (const std::vector<uint32_t>& ids, size_t chunk)) {
   Bytes stream;
