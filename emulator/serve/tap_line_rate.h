@@ -12,6 +12,7 @@
 #include "wire/bytes.h"
 #include "wire/protocol.h"
 #include "wire/stackshot_frame.h"
+#include "wire/stackshot_mode_switch.h"
 
 namespace moco::serve {
 
@@ -44,7 +45,7 @@ class LineRateFollower {
   wire::Protocol dialect_;
   stackshot::PacketDecoder host_{false};
   stackshot::PacketDecoder device_{true};
-  bool switch_requested_ = false;  // a DfMoco mode write awaits its answer
+  stackshot::DfmocoModeSwitch switch_;
 };
 
 }  // namespace moco::serve

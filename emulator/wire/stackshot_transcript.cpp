@@ -1,8 +1,10 @@
-// StackShot 3X transcripts (see transcript_sides.h).
+// StackShot 3X transcripts (see transcript_sides.h); a line switched to
+// DfMoco mode (wire/stackshot_mode_switch.h) is followed as DFMoco text.
 #include <map>
 #include <string>
 
 #include "wire/stackshot.h"
+#include "wire/stackshot_mode_switch.h"
 #include "wire/transcript_sides.h"
 
 namespace moco::wire {
@@ -15,39 +17,27 @@ class StackshotSides final : public TranscriptSides {
   StackshotSides() : host_(false), device_(true) {}
 
   void Feed(Side side, ByteView bytes, std::vector<TranscriptLine>& out) override {
+    if (dfmoco_) {
+      dfmoco_->Feed(side, bytes, out);
+      return;
+    }
+    if (side == Side::kDevice && switch_.pending()) {
+      // The acknowledgement of a switch to DfMoco mode may end anywhere in
+      // this chunk, and DFMoco text follow it: packet by packet.
+      for (size_t i = 0; i < bytes.size(); ++i) {
+        std::vector<stackshot::DecodedPacket> packets;
+        device_.Feed(bytes.subspan(i, 1), packets);
+        Describe(side, packets, out);
+        if (dfmoco_) {
+          dfmoco_->Feed(side, bytes.subspan(i + 1), out);
+          return;
+        }
+      }
+      return;
+    }
     std::vector<stackshot::DecodedPacket> packets;
     (side == Side::kHost ? host_ : device_).Feed(bytes, packets);
-    for (const auto& d : packets) {
-      if (d.skipped_before > 0) {
-        out.push_back(
-            {side, true,
-             "skipped " + std::to_string(d.skipped_before) + " byte(s) before a sync byte"});
-      }
-      std::string note;
-      if (!d.checksum_ok) note = " [checksum byte differs from the default algorithm]";
-      if (side == Side::kHost) {
-        last_action_[d.packet.command] = static_cast<stackshot::Action>(d.packet.action);
-        auto c = stackshot::DecodeHostPacket(d.packet);
-        if (!c.ok()) {
-          out.push_back(
-              {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(c.error())});
-          continue;
-        }
-        out.push_back({side, false, stackshot::Describe(*c) + note});
-      } else {
-        stackshot::ReplyContext ctx;
-        if (auto it = last_action_.find(d.packet.command); it != last_action_.end()) {
-          ctx.request_action = it->second;
-        }
-        auto r = stackshot::DecodeDevicePacket(d.packet, ctx);
-        if (!r.ok()) {
-          out.push_back(
-              {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(r.error())});
-          continue;
-        }
-        out.push_back({side, false, stackshot::Describe(*r) + note});
-      }
-    }
+    Describe(side, packets, out);
   }
 
   void Finish(std::vector<TranscriptLine>& out) override {
@@ -65,12 +55,58 @@ class StackshotSides final : public TranscriptSides {
         out.push_back({side, true, std::to_string(partial) + " byte(s) of an incomplete packet"});
       }
     }
+    if (dfmoco_) dfmoco_->Finish(out);
   }
 
  private:
+  void Describe(Side side, const std::vector<stackshot::DecodedPacket>& packets,
+                std::vector<TranscriptLine>& out) {
+    for (const auto& d : packets) {
+      if (d.skipped_before > 0) {
+        out.push_back(
+            {side, true,
+             "skipped " + std::to_string(d.skipped_before) + " byte(s) before a sync byte"});
+      }
+      out.push_back(Line(side, d));
+      if (side == Side::kDevice && switch_.OnDevicePacket(d.packet)) {
+        // Section 3: from the next byte on, DFMoco text both ways.
+        out.push_back(
+            {side, false, "(the line switches to DfMoco mode: DFMoco text at 57600 baud)"});
+        dfmoco_ = MakeStackshotDfmocoTranscript();
+        return;
+      }
+    }
+  }
+
+  TranscriptLine Line(Side side, const stackshot::DecodedPacket& d) {
+    const std::string note =
+        d.checksum_ok ? "" : " [checksum byte differs from the default algorithm]";
+    if (side == Side::kHost) {
+      switch_.OnHostPacket(d.packet);
+      last_action_[d.packet.command] = static_cast<stackshot::Action>(d.packet.action);
+      auto c = stackshot::DecodeHostPacket(d.packet);
+      if (!c.ok()) {
+        return {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(c.error())};
+      }
+      return {side, false, stackshot::Describe(*c) + note};
+    }
+    stackshot::ReplyContext ctx;
+    if (auto it = last_action_.find(d.packet.command); it != last_action_.end()) {
+      ctx.request_action = it->second;
+    }
+    auto r = stackshot::DecodeDevicePacket(d.packet, ctx);
+    if (!r.ok()) {
+      return {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(r.error())};
+    }
+    return {side, false, stackshot::Describe(*r) + note};
+  }
+
   stackshot::PacketDecoder host_;
   stackshot::PacketDecoder device_;
   std::map<uint16_t, stackshot::Action> last_action_;
+  stackshot::DfmocoModeSwitch switch_;
+  // Once the line switched to DfMoco mode: its DFMoco decoders.
+  std::unique_ptr<TranscriptSides> dfmoco_;
 };
 
 }  // namespace

@@ -154,6 +154,64 @@ TEST(TranscriptTest, StackshotJunkAfterTheLastPacketIsReported) {
   EXPECT_NE(lines[0].text.find("3 byte(s) of an incomplete packet"), std::string::npos);
 }
 
+// A StackShot acknowledging CC_RAIL_CONFIG_GLOBAL_MODE = DfMoco speaks
+// DFMoco from the byte after the acknowledgement (section 3): the transcript
+// follows the line, whether the first DFMoco bytes share a chunk with the
+// acknowledgement or not; a refused switch changes nothing.
+TEST(TranscriptTest, StackshotFollowsTheLineIntoDfmocoMode) {
+  stackshot::HostCommand c;
+  c.command = static_cast<uint16_t>(stackshot::Command::kRailConfigGlobalMode);
+  c.action = stackshot::Action::kWrite;
+  c.payload = stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco};
+  Bytes write;
+  ASSERT_TRUE(stackshot::EncodeHostCommand(c, write));
+  auto answer = [](stackshot::Action status) {
+    stackshot::DeviceReply r;
+    r.command = static_cast<uint16_t>(stackshot::Command::kRailConfigGlobalMode);
+    r.status = status;
+    r.kind = status == stackshot::Action::kRspOk ? stackshot::ReplyKind::kWriteAck
+                                                 : stackshot::ReplyKind::kError;
+    r.payload = stackshot::Empty{};
+    Bytes out;
+    EXPECT_TRUE(stackshot::EncodeDeviceReply(r, out));
+    return out;
+  };
+  for (const bool same_chunk : {false, true}) {
+    TranscriptDecoder d(Protocol::kStackshot);
+    std::vector<TranscriptLine> all = d.Feed(Side::kHost, write);
+    Bytes ack = answer(stackshot::Action::kRspOk);
+    const std::string hello = "hi 2 1 1.2.6\r\n";
+    if (same_chunk) ack.insert(ack.end(), hello.begin(), hello.end());
+    for (auto& l : d.Feed(Side::kDevice, ack)) all.push_back(l);
+    for (const char* text : {"hi\r\n", "ms\r\n", "mm 1 100\r\n"}) {
+      for (auto& l : d.Feed(Side::kHost, View(text))) all.push_back(l);
+    }
+    if (!same_chunk) {
+      for (auto& l : d.Feed(Side::kDevice, View(hello))) all.push_back(l);
+    }
+    for (auto& l : d.Feed(Side::kDevice, View("ms 0\r\nmm 1 100\r\n"))) all.push_back(l);
+    for (auto& l : d.Finish()) all.push_back(l);
+    std::string text;
+    size_t problems = 0;
+    for (const TranscriptLine& l : all) {
+      text += l.text + "\n";
+      problems += l.problem;
+    }
+    EXPECT_EQ(problems, 0u) << text;
+    EXPECT_NE(text.find("switches to DfMoco mode"), std::string::npos) << text;
+    // 3 host commands and 3 device lines, each its own transcript line.
+    EXPECT_EQ(all.size(), 2u + 1u + 6u) << text;
+  }
+  // Refused: the text after it is no StackShot packet, and says so.
+  TranscriptDecoder d(Protocol::kStackshot);
+  d.Feed(Side::kHost, write);
+  d.Feed(Side::kDevice, answer(stackshot::Action::kBadParam));
+  d.Feed(Side::kHost, View("hi\r\n"));
+  size_t problems = 0;
+  for (const TranscriptLine& l : d.Finish()) problems += l.problem;
+  EXPECT_EQ(problems, 1u);
+}
+
 RC_GTEST_PROP(TranscriptProp, DmcChunkingDoesNotChangeTranscript,
               (const std::vector<uint32_t>& ids, size_t chunk)) {
   Bytes stream;

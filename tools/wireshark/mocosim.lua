@@ -447,7 +447,11 @@ local SS_AXES = { [0] = "X", "Y", "Z", "3" }
 -- action/status, length, data, checksum. The checksum is never a reason to
 -- drop a packet (ERRATA 3.2); a byte other than the negated 8-bit sum is
 -- flagged as `mocosim decode` flags it.
-local function stackshot_stream(from_host)
+-- `line` is shared by both directions: a host's write of
+-- CC_RAIL_CONFIG_GLOBAL_MODE = 8 (Motion->DfMoco) acknowledged "ok" switches
+-- the line to DFMoco text from the byte after the acknowledgement (section 3;
+-- wire/stackshot_mode_switch.h); the bytes after it are left in line.rest.
+local function stackshot_stream(from_host, line)
   local sync = from_host and 0x55 or 0xAA
   local st = { buf = "", base = 0, skipped = 0 }
   function st.feed(bytes, emit)
@@ -488,6 +492,19 @@ local function stackshot_stream(from_host)
                           { "checksum", packet:byte(6 + len) },
                           { "checksum.status", ok and "good" or "differs" } } })
         st.buf, st.base = b:sub(#packet + 1), st.base + #packet
+        if command == 0x109E and from_host and action == 1 then
+          -- The latest mode write decides.
+          line.requested = len >= 1 and packet:byte(6) == 8
+        elseif command == 0x109E and not from_host and line.requested then
+          line.requested = false
+          if action == 2 then
+            emit({ problem = false,
+                   text = "(the line switches to DfMoco mode: DFMoco text at 57600 baud)" })
+            line.switched, line.rest = true, st.buf
+            st.buf = ""
+            return
+          end
+        end
       end
     end
   end
@@ -682,8 +699,9 @@ end
 local function stream_for(protocol, from_host)
   local key = protocol .. (from_host and ":host" or ":device")
   if not streams[key] then
+    streams.line = streams.line or {}
     if protocol == "dmc" then streams[key] = dmc_stream(from_host)
-    elseif protocol == "stackshot" then streams[key] = stackshot_stream(from_host)
+    elseif protocol == "stackshot" then streams[key] = stackshot_stream(from_host, streams.line)
     else
       streams.dialect = streams.dialect or
                         { major = protocol == "stackshot-dfmoco" and 1 or 2,
@@ -711,18 +729,35 @@ local function add_fields(tree, range, protocol, fields)
 end
 
 function mocosim.dissector(tvb, pinfo, tree)
-  local protocol = protocol_of()
   local iface = f_if_id()
   local from_host = not iface or iface.value == 0
-  pinfo.cols.protocol = protocol == "stackshot-dfmoco" and "DFMOCO" or protocol:upper()
 
   local r = results[pinfo.number]
-  if not r then
+  local protocol
+  if r then
+    protocol = r.protocol
+  else
+    protocol = protocol_of()
+    -- A StackShot line that switched to DfMoco mode carries DFMoco text.
+    if protocol == "stackshot" and streams.line and streams.line.switched then
+      protocol = "stackshot-dfmoco"
+    end
     local st = stream_for(protocol, from_host)
     -- r.base: the stream offset of this packet's first byte.
-    r = { base = st.fed or 0, items = {} }
+    r = { base = st.fed or 0, items = {}, protocol = protocol }
     st.feed(tvb:raw(), function(item) r.items[#r.items + 1] = item end)
     st.fed = r.base + tvb:len()
+    if streams.line and streams.line.rest then
+      -- The bytes after the acknowledgement of the switch, in the same packet.
+      local rest = streams.line.rest
+      streams.line.rest = nil
+      local dst = stream_for("stackshot-dfmoco", from_host)
+      dst.feed(rest, function(item)
+        item.protocol, item.start = "stackshot-dfmoco", nil
+        r.items[#r.items + 1] = item
+      end)
+      dst.fed = (dst.fed or 0) + #rest
+    end
     results[pinfo.number] = r
     -- Where each message's bytes began, for the packets it spans.
     streams.first = streams.first or {}
@@ -742,6 +777,7 @@ function mocosim.dissector(tvb, pinfo, tree)
     end
   end
 
+  pinfo.cols.protocol = protocol == "stackshot-dfmoco" and "DFMOCO" or protocol:upper()
   local root = tree:add(mocosim, tvb())
   root:add(pf.direction, from_host and "host->device" or "device->host")
   root:add(pf.protocol, protocol)
@@ -758,13 +794,14 @@ function mocosim.dissector(tvb, pinfo, tree)
         range = ByteArray.new(item.raw, true):tvb("Reassembled message")()
       end
     end
-    local sp = sub_protos[protocol][1]
+    local item_protocol = item.protocol or protocol
+    local sp = sub_protos[item_protocol][1]
     local sub = range and tree:add(sp, range) or tree:add(sp)
     sub:set_text(sp.description .. ": " .. text)
     sub:add(pf.message, text)
     if item.problem then sub:add(pf.problem, true) end
     if item.from_packet then sub:add(pf.reassembled, item.from_packet) end
-    add_fields(sub, nil, protocol, item.fields)
+    add_fields(sub, nil, item_protocol, item.fields)
   end
   local arrow = from_host and "host -> dev " or "dev  -> host"
   if #texts == 0 then
