@@ -21,18 +21,21 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs
         FILES_MATCHING PATTERN "*.md" PATTERN "*.svg")
 
+# Installed compressed (gzip -9n: no name or time stamp, so the same bytes
+# every build), as Debian's policy has man pages.
 set(moco_man_pages)
 foreach(program mocosim mococheck dmc-host)
   set(page ${CMAKE_BINARY_DIR}/man/${program}.1)
   add_custom_command(
-    OUTPUT ${page}
+    OUTPUT ${page}.gz
     COMMAND ${CMAKE_COMMAND} -DPROGRAM=$<TARGET_FILE:${program}> -DNAME=${program}
             -DVERSION=${PROJECT_VERSION} -DOUTPUT=${page}
             -P ${PROJECT_SOURCE_DIR}/cmake/help_to_man.cmake
+    COMMAND gzip -9nf ${page}
     DEPENDS ${program} ${PROJECT_SOURCE_DIR}/cmake/help_to_man.cmake
-    COMMENT "Man page ${program}.1 from ${program} --help"
+    COMMENT "Man page ${program}.1.gz from ${program} --help"
     VERBATIM)
-  list(APPEND moco_man_pages ${page})
+  list(APPEND moco_man_pages ${page}.gz)
 endforeach()
 add_custom_target(man_pages ALL DEPENDS ${moco_man_pages})
 install(FILES ${moco_man_pages} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
@@ -45,10 +48,11 @@ set(CPACK_PACKAGE_VENDOR "mocosim")
 set(CPACK_PACKAGE_CONTACT "mocosim maintainers <mocosim@invalid>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
     "emulated motion-control devices (DMC-16, DFMoco, StackShot 3X) and a conformance runner")
-set(CPACK_PACKAGE_DESCRIPTION
-    "mocosim emulates a DMC-16 (DMC v2 binary protocol), a DFMoco Arduino and a Cognisys "
-    "StackShot 3X on a PTY or a TCP port; mococheck checks a device's traffic against the "
-    "rules of its protocol. With man pages, device profiles and a Wireshark dissector.")
+# One string: set() with several would join them with ";".
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+       "mocosim emulates a DMC-16 (DMC v2 binary protocol), a DFMoco Arduino and a Cognisys "
+       "StackShot 3X on a PTY or a TCP port; mococheck checks a device's traffic against the "
+       "rules of its protocol. With man pages, device profiles and a Wireshark dissector.")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION utils)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)

@@ -52,8 +52,8 @@ bool Watch(DmcHostClient& c, Done done) {
 
 int main(int argc, char** argv) {
   static constexpr const char* kUsage =
+      "dmc-host: plays a short DMC v2 session against a device and prints it\n"
       "usage: dmc-host PATH | tcp:PORT | tcp:127.0.0.1:PORT\n"
-      "Plays a short DMC v2 session against the device and prints it.\n"
       "Example: mocosim dmc16 --pty /tmp/dmc16 & dmc-host /tmp/dmc16\n";
   if (argc == 2 && std::string(argv[1]) == "--help") {
     std::fputs(kUsage, stdout);  // asked for: stdout, exit 0 (the man page is made from it)
