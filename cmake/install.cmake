@@ -13,6 +13,11 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/profiles/
         DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/profiles FILES_MATCHING PATTERN "*.json")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/rigs/
         DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/rigs FILES_MATCHING PATTERN "*.json")
+# The board and step-driver profiles mococheck's --board and --driver take.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/boards/
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/boards FILES_MATCHING PATTERN "*.json")
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/drivers/
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/drivers FILES_MATCHING PATTERN "*.json")
 install(FILES ${PROJECT_SOURCE_DIR}/tools/wireshark/mocosim.lua
         DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/wireshark)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
