@@ -164,6 +164,19 @@ class HostBase {
   void Answered(std::string_view kind);
   // Records a request of `kind` whose answer was not waited for.
   void NotWaitedFor(std::string_view kind) { ++not_waited_for_[std::string(kind)]; }
+  // When waiting for the answer to a request of `kind` is pointless
+  // (Hopeless), judges it unanswered at once: `fail(observed)` judges the
+  // request's rule, and the request counts as unanswered. True when so: the
+  // caller returns without waiting.
+  template <typename Fail>
+  bool JudgedWithoutWaiting(std::string_view kind, Fail&& fail) {
+    const std::string why = Hopeless(kind);
+    if (why.empty()) return false;
+    fail("not waited for: " + why);
+    NotWaitedFor(kind);
+    Unanswered(kind);
+    return true;
+  }
 
   HostLink link_;
   Verdicts& verdicts_;

@@ -555,14 +555,7 @@ const DfmLine* DfmHost::Await(int index) {
     verdicts_.Fail(rule,
                    Evidence{"an answer to " + Quote(c.line), std::move(observed), "", c.sent_ns});
   };
-  if (commands_[i].answer < 0) {
-    if (const std::string why = Hopeless(kind); !why.empty()) {
-      fail("not waited for: " + why);
-      NotWaitedFor(kind);
-      Unanswered(kind);
-      return nullptr;
-    }
-  }
+  if (commands_[i].answer < 0 && JudgedWithoutWaiting(kind, fail)) return nullptr;
   const TimeNs give_up = commands_[i].sent_ns + options_.answer_timeout_ns;
   if (!link_.ReadUntil(give_up, [&] { return commands_[i].answer >= 0; })) {
     fail(link_.lost() ? "the link closed" : "nothing after " + Ms(options_.answer_timeout_ns));

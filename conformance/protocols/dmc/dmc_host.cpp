@@ -581,14 +581,7 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
                    Evidence{"an answer to " + dmc::TypeName(req.type) + " id=" + std::to_string(id),
                             std::move(observed), wire::ToHex(req.raw), req.sent_ns});
   };
-  if (requests_[at].answer < 0) {
-    if (const std::string why = Hopeless(kind); !why.empty()) {
-      fail("not waited for: " + why);
-      NotWaitedFor(kind);
-      Unanswered(kind);
-      return nullptr;
-    }
-  }
+  if (requests_[at].answer < 0 && JudgedWithoutWaiting(kind, fail)) return nullptr;
   // An answer that came with a bad checksum is as good as none: when the host
   // gives up on unanswered requests, it does not wait out the timeout for it.
   const bool stop_at_garbled = gives_up();

@@ -331,14 +331,7 @@ const SsRecord* SsHost::Await(int index) {
                                           std::move(observed), wire::ToHex(req.raw), req.sent_ns});
     return true;
   };
-  if (requests_[i].answer < 0) {
-    if (const std::string why = Hopeless(kind); !why.empty()) {
-      fail("not waited for: " + why);
-      NotWaitedFor(kind);
-      Unanswered(kind);
-      return nullptr;
-    }
-  }
+  if (requests_[i].answer < 0 && JudgedWithoutWaiting(kind, fail)) return nullptr;
   const TimeNs give_up = requests_[i].sent_ns + options_.answer_timeout_ns;
   if (!link_.ReadUntil(give_up, [&] { return requests_[i].answer >= 0; })) {
     if (fail(link_.lost() ? "the link closed"
