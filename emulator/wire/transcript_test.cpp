@@ -91,7 +91,8 @@ TEST(TranscriptTest, DfmocoLearnsDialectFromHiAndFlagsUnterminatedLine) {
 TEST(TranscriptTest, DeviceBytesThatAreNotPrintableAreEscaped) {
   TranscriptDecoder d(Protocol::kDfmoco);
   d.Feed(Side::kDevice, View("hi 2 4 2.0.0\r\n"));
-  const std::string reply("ms \x1b[2J\0tail\xff\r\n", 17);
+  static constexpr char kReply[] = "ms \x1b[2J\0tail\xff\r\n";
+  const std::string reply(kReply, sizeof kReply - 1);  // the NUL inside kept
   std::vector<TranscriptLine> lines = d.Feed(Side::kDevice, View(reply));
   ASSERT_FALSE(lines.empty());
   std::string all;
