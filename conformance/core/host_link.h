@@ -154,16 +154,10 @@ class HostBase {
   // Whether the host stops waiting for answers the device does not give
   // (options().give_up_after_unanswered > 0).
   bool gives_up() const { return options_.give_up_after_unanswered > 0; }
-  // Why waiting for the answer to a request of `kind` is pointless ("" when it
-  // is not). When it is, the host judges the request unanswered at once and
-  // calls NotWaitedFor(kind) and Unanswered(kind).
-  std::string Hopeless(std::string_view kind) const;
   // Records that a request of `kind` went unanswered (its rule judged).
   void Unanswered(std::string_view kind);
   // Records that a request of `kind` was answered (late answers too).
   void Answered(std::string_view kind);
-  // Records a request of `kind` whose answer was not waited for.
-  void NotWaitedFor(std::string_view kind) { ++not_waited_for_[std::string(kind)]; }
   // When waiting for the answer to a request of `kind` is pointless
   // (Hopeless), judges it unanswered at once: `fail(observed)` judges the
   // request's rule, and the request counts as unanswered. True when so: the
@@ -183,6 +177,12 @@ class HostBase {
   HostOptions options_;
 
  private:
+  // Why waiting for the answer to a request of `kind` is pointless ("" when it
+  // is not): the device left the last give_up_after_unanswered requests of
+  // that kind, or (outside a greeting) of any kind, unanswered.
+  std::string Hopeless(std::string_view kind) const;
+  void NotWaitedFor(std::string_view kind) { ++not_waited_for_[std::string(kind)]; }
+
   std::map<std::string, int, std::less<>> not_waited_for_;  // by kind
   bool greeting_ = false;
 };
