@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "devices/usb_bridge.h"
 #include "wire/bytes.h"
 
 namespace moco::sim {
@@ -32,12 +33,14 @@ class ByteSink {
   virtual void Write(wire::ByteView bytes) = 0;
 };
 
-// Serial line settings the transport honours when pacing (baud / 10 bytes/s for 8N1).
+// Serial line settings the transport honours when pacing (baud / 10 bytes/s
+// for 8N1), and the USB serial bridge between the device's UART and the host.
 struct LineSettings {
   uint32_t baud = 115200;
   uint8_t data_bits = 8;
   uint8_t stop_bits = 1;
   char parity = 'N';
+  UsbBridge bridge;  // none: the host reads bytes as the UART completes them
   // Bytes per second on the wire for this setting (start + data + parity + stop bits).
   uint32_t BytesPerSecond() const {
     const uint32_t bits = 1u + data_bits + (parity == 'N' ? 0u : 1u) + stop_bits;

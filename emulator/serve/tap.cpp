@@ -26,7 +26,7 @@ class Tap::Forwarder final : public devices::Device {
  public:
   explicit Forwarder(Tap& tap) : tap_(tap) {}
   std::string_view Model() const override { return tap_.config_.device_model; }
-  devices::LineSettings Line() const override { return {tap_.baud_, 8, 1, 'N'}; }
+  devices::LineSettings Line() const override { return {tap_.baud_, 8, 1, 'N', {}}; }
   void PowerOn() override {}
   void PowerOff() override {}
   bool Powered() const override { return true; }

@@ -56,24 +56,35 @@ void Link::SetDevice(devices::Device* device) {
     CancelTimer(in_wake_);
     return;
   }
-  line_rate_ = options_.pacing ? device_->Line().BytesPerSecond() : 0;
-  in_pacer_ = LinePacer(line_rate_);
-  out_pacer_ = LinePacer(line_rate_);
+  ApplyLine(/*always=*/true);
   if (host_open_ && options_.report_host_link) device_->OnHostLink(true);
   StartRead();
 }
 
 // ---- Device -> host ---------------------------------------------------------
 
+void Link::ApplyLine(bool always) {
+  const devices::LineSettings line = device_->Line();
+  const devices::UsbBridge bridge = options_.pacing ? line.bridge : devices::UsbBridge::None();
+  // A CDC port has no UART: the baud rate paces nothing.
+  const uint32_t rate =
+      options_.pacing && (!bridge.active() || bridge.uart_paced) ? line.BytesPerSecond() : 0;
+  if (always || rate != line_rate_) {
+    line_rate_ = rate;
+    in_pacer_ = LinePacer(rate);
+    out_pacer_ = LinePacer(rate);
+  }
+  if (always || bridge != bridge_pacer_.bridge()) {
+    UnbridgeAll();  // bytes held by the old bridge pass through the new one
+    bridge_pacer_ = UsbBridgePacer(bridge);
+  }
+}
+
 void Link::FollowLineRate() {
   // A device may change its line (a StackShot switching to its DfMoco dialect
   // at 57600): the pacers follow from the next byte on.
   if (!options_.pacing || device_ == nullptr) return;
-  const uint32_t rate = device_->Line().BytesPerSecond();
-  if (rate == line_rate_) return;
-  line_rate_ = rate;
-  in_pacer_ = LinePacer(rate);
-  out_pacer_ = LinePacer(rate);
+  ApplyLine(/*always=*/false);
 }
 
 void Link::Write(wire::ByteView bytes) {
@@ -130,11 +141,63 @@ void Link::StartWrite() {
   stream_->AsyncWriteAll(asio::buffer(write_buf_), Guard(&Link::OnWritten));
 }
 
+sim::TimeNs Link::TakeBridged(sim::TimeNs now) {
+  sim::TimeNs next = sim::kTimeNever;
+  // The UART hands the bridge each byte as its stop bit ends.
+  while (!out_.empty()) {
+    const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
+    const sim::TimeNs due = out_pacer_.DueTime(ready);
+    if (due > now) {
+      next = due;
+      break;
+    }
+    out_pacer_.Take(ready);
+    bridged_.push_back({due, out_.front().byte});
+    out_.pop_front();
+  }
+  // The bridge sends whole packets: a host never sees one trickle in.
+  const size_t chunk = WriteChunk();
+  const auto arrival = [this](size_t i) { return bridged_[i].ready_ns; };
+  while (!bridged_.empty() && write_buf_.size() < chunk) {
+    const UsbBridgePacer::Packet packet =
+        bridge_pacer_.Next(bridged_.size(), arrival, send_floor_ns_);
+    if (packet.at_ns > now) {
+      next = std::min(next, packet.at_ns);
+      break;
+    }
+    bridge_pacer_.Sent(packet);
+    for (size_t i = 0; i < packet.bytes; ++i) {
+      write_buf_.push_back(bridged_.front().byte);
+      bridged_.pop_front();
+    }
+  }
+  return next;
+}
+
+void Link::UnbridgeAll() {
+  while (!bridged_.empty()) {
+    out_.push_front(bridged_.back());
+    bridged_.pop_back();
+  }
+}
+
 void Link::PumpWriter() {
-  if (stopped_ || writing_ || !host_open_ || out_.empty()) return;
+  if (stopped_ || writing_ || !host_open_ || (out_.empty() && bridged_.empty())) return;
   CancelTimer(out_wake_);
   const sim::TimeNs now = driver_.NowNs();
   write_buf_.clear();
+  if (bridge_pacer_.active()) {
+    const sim::TimeNs next = TakeBridged(now);
+    if (!write_buf_.empty()) {
+      StartWrite();
+    } else if (next != sim::kTimeNever) {
+      out_wake_ = scheduler_.At(next, [this] {
+        out_wake_ = sim::Scheduler::kNoTimer;
+        PumpWriter();
+      });
+    }
+    return;
+  }
   sim::TimeNs next_due = now;
   const size_t chunk = WriteChunk();
   while (!out_.empty() && write_buf_.size() < chunk) {
@@ -364,6 +427,7 @@ void Link::UpdateHostOpen() {
     CancelTimer(reclaim_timer_);
   } else {
     CancelTimer(out_wake_);
+    UnbridgeAll();
     if (!options_.hold_while_closed) {
       stats_.discarded += out_.size();
       out_.clear();
@@ -411,9 +475,10 @@ void Link::Cut(sim::TimeNs duration_ns, bool close_stream) {
   if (stopped_) return;
   const sim::TimeNs now = driver_.Sync();
   cut_until_ns_ = std::max(cut_until_ns_, now + std::max<sim::TimeNs>(duration_ns, 0));
-  stats_.cut_dropped += in_.size() + out_.size();
+  stats_.cut_dropped += in_.size() + out_.size() + bridged_.size();
   in_.clear();
   out_.clear();
+  bridged_.clear();
   reclaim_pos_ = 0;
   redelivered_ = std::min(redelivered_, writing_ ? write_buf_.size() : 0);
   CancelTimer(in_wake_);
@@ -461,6 +526,7 @@ void Link::Stop() {
   DetachInternal();
   in_.clear();
   out_.clear();
+  bridged_.clear();
 }
 
 }  // namespace moco::transport

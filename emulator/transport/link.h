@@ -21,6 +21,7 @@
 #include "transport/link_faults.h"
 #include "transport/realtime_driver.h"
 #include "transport/traffic.h"
+#include "transport/usb_bridge_pacer.h"
 #include "wire/bytes.h"
 
 namespace moco::transport {
@@ -128,7 +129,10 @@ struct LinkStats {
 // after which the driver is kicked. Device bytes: stamped with the scheduler
 // time of the write, passed through faults, queued, and written to the stream
 // when the line rate allows (a byte no earlier than the end of its own
-// character time) and the host is present.
+// character time) and the host is present. Behind a USB serial bridge
+// (LineSettings::bridge) the bytes the UART completed wait in the bridge and
+// are written a packet at a time, when the bridge would send it; a CDC port
+// has no UART, so neither direction is paced at the line rate.
 //
 // The driver must outlive the link. The device and the observer must outlive
 // the link's service: until Stop() (or the destructor, which stops), neither
@@ -190,11 +194,12 @@ class Link final : public devices::ByteSink {
 
   const LinkStats& stats() const { return stats_; }
   const FaultInjector& faults() const { return faults_; }
-  size_t queued_bytes() const { return out_.size() + write_buf_.size(); }
+  size_t queued_bytes() const { return out_.size() + bridged_.size() + write_buf_.size(); }
   // Queued bytes never reported delivered (queued_bytes() less those taken
   // back from a PTY the host closed unread).
   size_t undelivered_bytes() const { return queued_bytes() - redelivered_; }
   const LinePacer& out_pacer() const { return out_pacer_; }
+  const UsbBridgePacer& bridge_pacer() const { return bridge_pacer_; }
   RealtimeDriver& driver() { return driver_; }
   void Log(std::string_view line) const;
 
@@ -217,9 +222,22 @@ class Link final : public devices::ByteSink {
   static constexpr sim::TimeNs kReclaimRetryNs = 20 * sim::kNsPerMs;
 
   void FollowLineRate();
+  // Sets the pacers from the device's line: `always` resets them even when
+  // the line is unchanged.
+  void ApplyLine(bool always);
   // Whether bytes in `dir` pass unpaced and with no fault: they then skip
   // the per-byte queues (same result, without the per-byte work).
-  bool Straight(Direction dir) const { return line_rate_ == 0 && faults_.PassesUnchanged(dir); }
+  bool Straight(Direction dir) const {
+    return line_rate_ == 0 && (dir == Direction::kToDevice || !bridge_pacer_.active()) &&
+           faults_.PassesUnchanged(dir);
+  }
+  // Moves the bytes whose character time has ended into the bridge and the
+  // bridge's packets that are due into write_buf_; returns when to look
+  // again (kTimeNever: nothing waits).
+  sim::TimeNs TakeBridged(sim::TimeNs now);
+  // The bytes the bridge holds go back to the head of out_ (the host left:
+  // they are sent again, in order, when it returns).
+  void UnbridgeAll();
   size_t WriteChunk() const;
   void Enqueue(sim::TimeNs ready_ns, uint8_t byte);
   void StartWrite();
@@ -270,6 +288,10 @@ class Link final : public devices::ByteSink {
 
   // Device -> host.
   std::deque<OutByte> out_;
+  // Behind a USB bridge: bytes the UART completed (ready_ns: when), waiting
+  // for their packet. They come after write_buf_ and before out_.
+  std::deque<OutByte> bridged_;
+  UsbBridgePacer bridge_pacer_;
   wire::Bytes write_buf_;
   bool writing_ = false;
   LinePacer out_pacer_;

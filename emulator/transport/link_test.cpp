@@ -19,6 +19,8 @@ struct FakeEnd {
   asio::io_context* io = nullptr;
   std::string written;
   std::vector<size_t> write_sizes;  // one entry per AsyncWriteAll
+  std::vector<sim::TimeNs> write_times;  // the scheduler's time of each
+  const sim::Scheduler* clock = nullptr;
   ByteStream::Handler pending_read;
   asio::mutable_buffer read_buf;
   bool closed = false;
@@ -48,6 +50,7 @@ class FakeStream final : public ByteStream {
   void AsyncWriteAll(asio::const_buffer buffer, Handler handler) override {
     end_->written.append(static_cast<const char*>(buffer.data()), buffer.size());
     end_->write_sizes.push_back(buffer.size());
+    if (end_->clock != nullptr) end_->write_times.push_back(end_->clock->Now());
     asio::post(*end_->io, [h = std::move(handler), n = buffer.size()] { h(ErrorCode(), n); });
   }
   void Close() override {
@@ -85,11 +88,12 @@ class Recorder final : public TrafficObserver {
 
 class LinkTest : public ::testing::Test {
  protected:
-  void Build(LinkOptions o) {
+  void Build(LinkOptions o, const devices::LineSettings& line = {}) {
     o.observer = &recorder_;
     o.log = [this](std::string_view l) { log_ += std::string(l) + "\n"; };
     link_ = std::make_unique<Link>(driver_, o);
     device_ = std::make_unique<EchoDevice>(*link_);
+    device_->SetLine(line);
     device_->PowerOn();
     link_->SetDevice(device_.get());
     driver_.Start();
@@ -97,6 +101,7 @@ class LinkTest : public ::testing::Test {
   std::shared_ptr<FakeEnd> AttachFake() {
     auto end = std::make_shared<FakeEnd>();
     end->io = &io_;
+    end->clock = &scheduler_;
     link_->Attach(std::make_unique<FakeStream>(end));
     return end;
   }
@@ -332,6 +337,92 @@ TEST_F(LinkTest, UnpacedFaultFreeBytesPassStraightWithTheQueuesResults) {
   for (const auto& r : recorder_.log) seen.push_back(r.what);
   EXPECT_EQ(seen, (std::vector<std::string>{"E:host_link open", "D:0123456789ABCDEF", "D:ab",
                                             "D:cd", "D:ef", "H:hello", "H:!"}));
+}
+
+// ---- USB serial bridges (devices/usb_bridge.h) ------------------------------
+
+devices::LineSettings Bridged(uint32_t baud, const devices::UsbBridge& bridge) {
+  devices::LineSettings line;
+  line.baud = baud;
+  line.bridge = bridge;
+  return line;
+}
+
+// A StackShot's FTDI chip: a 10-byte reply is clocked out at 38400 baud but
+// reaches the host in one piece at the latency timer's tick (every 16 ms of
+// the device's clock), never byte by byte.
+TEST_F(LinkTest, FtdiBridgeDeliversAShortReplyInOnePieceAtTheLatencyTick) {
+  Build(LinkOptions{}, Bridged(38400, devices::UsbBridge::Ftdi()));
+  auto end = AttachFake();
+  device_->echo = false;
+  const sim::TimeNs sent = driver_.Sync();
+  device_->Send("0123456789");
+  driver_.Kick();  // the device wrote outside a scheduler callback
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 10; }));
+  EXPECT_EQ(end->written, "0123456789");
+  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{10}));
+  // The last stop bit ends 10 character times (260.4 us each) after the write.
+  const sim::TimeNs uart_done = sent + 2'604'167;
+  const sim::TimeNs tick = (uart_done + 16 * kNsPerMs - 1) / (16 * kNsPerMs) * (16 * kNsPerMs);
+  ASSERT_EQ(end->write_times.size(), 1u);
+  EXPECT_GE(end->write_times[0], tick);
+  EXPECT_EQ(link_->queued_bytes(), 0u);
+}
+
+// A CDC port has no UART: host bytes reach the device at once, and the echo
+// leaves in the next 1 ms USB frame, 64-byte packets together.
+TEST_F(LinkTest, CdcBridgeIsUnpacedAndDeliversInTheNextUsbFrame) {
+  Build(LinkOptions{}, Bridged(115200, devices::UsbBridge::Cdc()));
+  auto end = AttachFake();
+  const sim::TimeNs before = driver_.Sync();
+  end->HostSends("abcdef");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "abcdef"; }));
+  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{6}));
+  // Unpaced: the device got all six in one hand-over.
+  size_t host_chunks = 0;
+  for (const auto& r : recorder_.log) host_chunks += r.what.starts_with("H:") ? 1 : 0;
+  EXPECT_EQ(host_chunks, 1u);
+  ASSERT_EQ(end->write_times.size(), 1u);
+  EXPECT_EQ(end->write_times[0] % kNsPerMs, 0);  // on a frame boundary
+  EXPECT_GT(end->write_times[0], before);
+  // 200 bytes at once: three full packets go together, the last 8 a frame on.
+  device_->echo = false;
+  device_->Send(std::string(200, 'z'));
+  driver_.Kick();
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == 206; }));
+  ASSERT_EQ(end->write_sizes.size(), 3u);
+  EXPECT_EQ(end->write_sizes[1], 192u);
+  EXPECT_EQ(end->write_sizes[2], 8u);
+}
+
+// Bytes the bridge holds when the host closes the port are not lost or
+// reordered: they go out first when it opens it again.
+TEST_F(LinkTest, BytesTheBridgeHoldsWhenTheHostLeavesComeFirstWhenItReturns) {
+  Build(LinkOptions{}, Bridged(38400, devices::UsbBridge::Ftdi(255)));
+  auto end = AttachFake();
+  device_->echo = false;
+  const sim::TimeNs sent = driver_.Sync();
+  device_->Send("abc");
+  driver_.Kick();
+  // The UART is done after 0.79 ms; the bridge holds them until its tick,
+  // 255 ms after the clock's start: the host leaves and comes back between.
+  ASSERT_TRUE(RunUntil(io_, [&] { return driver_.Sync() >= sent + kNsPerMs; }));
+  link_->SetHostPresent(false);
+  device_->Send("def");
+  link_->SetHostPresent(true);
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 6; }));
+  EXPECT_EQ(end->written, "abcdef");
+  EXPECT_EQ(link_->queued_bytes(), 0u);
+}
+
+// --no-pacing turns the bridge off with the UART: bytes pass at once.
+TEST_F(LinkTest, WithoutPacingTheBridgeDoesNotHoldBytes) {
+  Build(Unpaced(), Bridged(38400, devices::UsbBridge::Ftdi()));
+  EXPECT_FALSE(link_->bridge_pacer().active());
+  auto end = AttachFake();
+  device_->echo = false;
+  device_->Send("xyz");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "xyz"; }));
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ class EchoDevice final : public devices::Device {
     if (echo) sink_.Write(bytes);
   }
   void OnHostLink(bool open) override { link_events.push_back(open); }
+  // Before the link reads it (Link::SetDevice).
+  void SetLine(const devices::LineSettings& line) { line_ = line; }
   // Writes as the device (from the io thread).
   void Send(std::string_view text) {
     sink_.Write(wire::ByteView(reinterpret_cast<const uint8_t*>(text.data()), text.size()));

@@ -79,7 +79,9 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
 
   // --- Device ---
   std::string_view Model() const override { return "dfmoco"; }
-  LineSettings Line() const override { return LineSettings{dfmoco::kBaudRate, 8, 1, 'N'}; }
+  LineSettings Line() const override {
+    return LineSettings{dfmoco::kBaudRate, 8, 1, 'N', profile_.usb_bridge};
+  }
   // Boots: after profile.boot_delay_ms the sketch starts and queues `hi`.
   void PowerOn() override;
   // Halts every motor, forgets positions, pulse rates, the go-motion set-up,

@@ -70,6 +70,7 @@ DfmocoProfile DfmocoProfile::FromJson(const nlohmann::json& object, const std::s
                                     dfmoco::kMinPulseRate, dfmoco::kMaxPulseRate));
   p.boot_delay_ms = r.GetInt("boot_delay_ms", 0, 0, 60'000);
   p.reset_on_open = r.GetBool("reset_on_open", false);
+  p.usb_bridge = ReadUsbBridge(r, p.usb_bridge);
   p.name = r.GetString("name", "", 200);
   (void)r.GetString("note", "");  // free text for the reader of the file
   r.Finish();
@@ -82,7 +83,8 @@ nlohmann::json DfmocoProfile::ToJson() const {
                       {"firmware", FirmwareVersion(firmware)},
                       {"pulse_rate_steps_per_s", pulse_rate_steps_per_s},
                       {"boot_delay_ms", boot_delay_ms},
-                      {"reset_on_open", reset_on_open}};
+                      {"reset_on_open", reset_on_open},
+                      {"usb_bridge", usb_bridge.ToJson()}};
   if (!name.empty()) j["name"] = name;
   return j;
 }

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "devices/usb_bridge.h"
 #include "wire/dfmoco.h"
 
 namespace moco::devices {
@@ -37,6 +38,9 @@ struct DfmocoProfile {
   int64_t boot_delay_ms = 0;
   // The board resets when the host opens the port (an Uno's DTR auto-reset).
   bool reset_on_open = false;
+  // The USB serial bridge to the host: the Uno's and Mega's ATmega16U2
+  // (FACTS "USB serial bridges").
+  UsbBridge usb_bridge = UsbBridge::Arduino16u2();
   std::string name;  // free text for logs; "" = none
 
   int32_t MotorCount() const { return board == DfmocoBoard::kMega ? 8 : 4; }

@@ -58,6 +58,7 @@ Dmc16::~Dmc16() {
 LineSettings Dmc16::Line() const {
   LineSettings l;
   l.baud = profile_.baud;
+  l.bridge = profile_.usb_bridge;
   return l;
 }
 

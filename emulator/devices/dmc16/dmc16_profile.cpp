@@ -140,6 +140,7 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
   }
   p.ack_width = width == 32 ? dmc::AckWidth::k32 : dmc::AckWidth::k16;
   p.baud = static_cast<uint32_t>(r.GetInt("baud", p.baud, 300, 4'000'000));
+  p.usb_bridge = ReadUsbBridge(r, p.usb_bridge);
   p.position_report_interval_ms = static_cast<uint32_t>(
       r.GetInt("position_report_interval_ms", p.position_report_interval_ms, 10, 10'000));
   p.hard_stop_window_ms =
@@ -238,6 +239,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
       {"protocol_version", p.protocol_version.value_or(0)},
       {"ack_width_bits", p.ack_width == dmc::AckWidth::k32 ? 32 : 16},
       {"baud", p.baud},
+      {"usb_bridge", p.usb_bridge.ToJson()},
       {"position_report_interval_ms", p.position_report_interval_ms},
       {"hard_stop_window_ms", p.hard_stop_window_ms},
       {"gio_debounce_ms", p.gio_debounce_ms},

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "devices/usb_bridge.h"
 #include "physics/bullet/rig_dynamics.h"
 #include "wire/dmc.h"
 
@@ -144,6 +145,9 @@ struct Dmc16Profile {
   std::optional<uint16_t> protocol_version = 2;
   dmc::AckWidth ack_width = dmc::AckWidth::k16;
   uint32_t baud = 115200;
+  // The USB serial bridge to the host: the DMC boards' own USB port in CDC
+  // mode (FACTS "USB serial bridges"; the baud setting does not pace it).
+  UsbBridge usb_bridge = UsbBridge::Cdc();
 
   // Unsolicited MOTOR_GET_POSITION cadence while anything moves (spec: "about
   // every 0.10 seconds"; dmc-lite uses 50 ms).

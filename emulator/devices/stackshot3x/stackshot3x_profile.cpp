@@ -50,6 +50,7 @@ Stackshot3xProfile Stackshot3xProfile::FromJson(const nlohmann::json& object,
   }
   p.dfmoco_report_ms = r.GetInt("dfmoco_report_ms", p.dfmoco_report_ms, 10, 60'000);
   p.boot_delay_ms = r.GetInt("boot_delay_ms", p.boot_delay_ms, 0, 60'000);
+  p.usb_bridge = ReadUsbBridge(r, p.usb_bridge);
   const nlohmann::json& axes = r.GetRaw("axes");
   if (!axes.is_null()) {
     if (!axes.is_array() || axes.size() != kAxisCount) {
@@ -96,6 +97,7 @@ nlohmann::json Stackshot3xProfile::ToJson() const {
                       {"dfmoco_version", dfmoco_version},
                       {"dfmoco_report_ms", dfmoco_report_ms},
                       {"boot_delay_ms", boot_delay_ms},
+                      {"usb_bridge", usb_bridge.ToJson()},
                       {"axes", axes_j}};
   if (!name.empty()) j["name"] = name;
   return j;

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "devices/usb_bridge.h"
 #include "wire/stackshot.h"
 
 namespace moco::devices {
@@ -54,6 +55,9 @@ struct Stackshot3xProfile {
   int64_t dfmoco_report_ms = 500;
   // Time from power-on (or CC_RESET) until the controller answers.
   int64_t boot_delay_ms = 0;
+  // The USB serial bridge of the serial port: an FTDI chip (FACTS "USB
+  // serial bridges"). The Wi-Fi link has none.
+  UsbBridge usb_bridge = UsbBridge::Ftdi();
   std::array<Stackshot3xAxisProfile, kAxisCount> axes{};
   std::string name;  // free text for logs
 
