@@ -99,9 +99,8 @@ UsbBridge ReadUsbBridge(ProfileReader& reader, const UsbBridge& def) {
   std::optional<UsbBridge> b = UsbBridgePreset(name);
   if (!b) c.Fail("kind", "is \"" + name + "\", not a known USB serial bridge", fix);
   if (b->kind == UsbBridge::Kind::kFtdi) {
-    const int64_t latency =
-        c.GetInt("latency_ms", UsbBridge::kFtdiDefaultLatencyMs, UsbBridge::kFtdiMinLatencyMs,
-                 UsbBridge::kFtdiMaxLatencyMs);
+    const int64_t latency = c.GetInt("latency_ms", UsbBridge::kFtdiDefaultLatencyMs,
+                                     UsbBridge::kFtdiMinLatencyMs, UsbBridge::kFtdiMaxLatencyMs);
     *b = UsbBridge::Ftdi(static_cast<int>(latency));
   } else if (c.Has("latency_ms")) {
     c.Fail("latency_ms", "is set, but only an FTDI chip has a latency timer to set",

@@ -18,7 +18,7 @@ using testing::RunUntil;
 struct FakeEnd {
   asio::io_context* io = nullptr;
   std::string written;
-  std::vector<size_t> write_sizes;  // one entry per AsyncWriteAll
+  std::vector<size_t> write_sizes;       // one entry per AsyncWriteAll
   std::vector<sim::TimeNs> write_times;  // the scheduler's time of each
   const sim::Scheduler* clock = nullptr;
   ByteStream::Handler pending_read;

@@ -18,7 +18,8 @@ UsbBridgePacer::Packet UsbBridgePacer::Next(size_t count,
   Packet p;
   if (count == 0) return p;
   const sim::TimeNs tick = NextTick(std::max(arrival(0), floor_ns));
-  const size_t limit = bridge_.flush_at_bytes == 0 ? count : std::min<size_t>(count, bridge_.flush_at_bytes);
+  const size_t limit =
+      bridge_.flush_at_bytes == 0 ? count : std::min<size_t>(count, bridge_.flush_at_bytes);
   size_t n = 0;
   while (n < limit && arrival(n) <= tick) ++n;
   if (bridge_.flush_at_bytes != 0 && n == bridge_.flush_at_bytes) {

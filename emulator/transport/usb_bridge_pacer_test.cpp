@@ -135,8 +135,8 @@ TEST(UsbBridgePacer, NothingLeavesBeforeTheFloorOrBeforeItsLastByteArrived) {
   EXPECT_EQ(packets[0].at_ns, 48 * kNsPerMs);
   // Law: for every preset and arrival pattern, a packet never leaves before
   // its own last byte arrived, and packets leave in order.
-  for (const UsbBridge& b : {UsbBridge::Ftdi(), UsbBridge::Ftdi(1), UsbBridge::Cdc(),
-                             UsbBridge::Arduino16u2()}) {
+  for (const UsbBridge& b :
+       {UsbBridge::Ftdi(), UsbBridge::Ftdi(1), UsbBridge::Cdc(), UsbBridge::Arduino16u2()}) {
     for (uint32_t rate : {960u, 3840u, 5760u, 11520u, 1'000'000u}) {
       UsbBridgePacer pacer(b);
       std::vector<TimeNs> arrivals = Uart(300, 777, rate);
