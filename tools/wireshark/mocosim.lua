@@ -220,6 +220,14 @@ local function quoted(s)
     return string.format("\\x%02x", c:byte())
   end) .. '"'
 end
+-- DFMoco text as wire/dfmoco.cpp quotes it: '"' and '\' after a backslash,
+-- other bytes outside printable ASCII as \xNN.
+local function dfm_quoted(s)
+  return '"' .. s:gsub('[%z\1-\31\127-\255"\\]', function(c)
+    if c == '"' or c == "\\" then return "\\" .. c end
+    return string.format("\\x%02x", c:byte())
+  end) .. '"'
+end
 
 -- Decodes a data section by its layout: returns the text after the type
 -- name and a list of {name, value} pairs, or nil and a reason.
@@ -485,7 +493,9 @@ local function stackshot_stream(from_host, line)
         if math.floor(ab / 64) % 2 == 1 then text = text .. " bit6=1" end
         if len > 0 then text = text .. " data=" .. tohex(packet:sub(6, 5 + len)) end
         if not ok then text = text .. " [checksum byte differs from the default algorithm]" end
-        emit({ problem = false, start = st.base, raw = packet, text = text,
+        -- A host packet of a known command is a read or a write (comm_action_t).
+        local problem = from_host and SS_NAMES[command] ~= nil and action > 1
+        emit({ problem = problem, start = st.base, raw = packet, text = text,
                fields = { { "command", command }, { "command_name", name },
                           { "action", SS_ACTIONS[action] or ("action#" .. action) },
                           { "axis", SS_AXES[axis] }, { "length", len },
@@ -517,18 +527,24 @@ end
 ------------------------------------------------------------------------------
 local DFM_MAX_LINE = 512
 
+-- As wire/dfmoco.cpp splits a line: the word is everything before the first
+-- space (a leading space gives an empty word), the arguments the runs of
+-- non-space bytes after it.
 local function words(line)
-  local w = {}
-  for t in line:gmatch("[^ ]+") do w[#w + 1] = t end
+  local w = { line:match("^[^ ]*") }
+  for t in line:sub(#w[1] + 1):gmatch("[^ ]+") do w[#w + 1] = t end
   return w
 end
+-- Strict decimals: an optional '-' and digits, within int32 ("-0" is 0).
 local function ints(args, first)
   local v = {}
   for i = first, #args do
-    local n = args[i]:match("^[-+]?%d+$")
+    local n = args[i]:match("^%-?%d+$")
     if not n then return nil end
-    v[#v + 1] = tonumber(n)
-    if v[#v] > 2147483647 or v[#v] < -2147483648 then return nil end
+    local x = tonumber(n)
+    if x > 2147483647 or x < -2147483648 then return nil end
+    if x == 0 then x = 0 end
+    v[#v + 1] = x
   end
   return v
 end
@@ -539,7 +555,7 @@ local function dfm_host(line, dialect)
   local n = #a - 1
   local known = { hi = 1, ms = 1, mm = 1, mp = 1, sm = 1, sa = 1, jm = 1, im = 1, pr = 1,
                   zm = 1, np = 1, bf = 1, go = 1 }
-  if not known[w] then return "unknown command " .. quoted(line) .. " (no reply)" end
+  if not known[w] then return "unknown command " .. dfm_quoted(line) .. " (no reply)" end
   if n >= 40 then return nil end
   if w == "mp" and dialect.stackshot and n == 1 and a[2] == "*" then
     return "position query, all motors"
@@ -652,7 +668,7 @@ local function dfmoco_stream(from_host, dialect)
             local text = from_host and dfm_host(line, dialect) or dfm_device(line, dialect)
             local a = words(line)
             local item = { problem = text == nil, start = st.start, rawlen = st.pos + 1 - st.start,
-                           text = text or (quoted(line) .. ": does not parse"),
+                           text = text or (dfm_quoted(line) .. ": does not parse"),
                            fields = { { "line", line }, { "command", a[1] or "" },
                                       { "args", table.concat(a, " ", 2) } } }
             if from_host and text and text:sub(1, 16) == "unknown command " then
