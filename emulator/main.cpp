@@ -81,7 +81,8 @@ int Decode(const std::string& path, bool show_time, bool strict) {
                   e.event.dump().c_str());
       continue;
     }
-    PrintLines(e.t_ns, decoder.Feed(e.from == Origin::kHost ? Side::kHost : Side::kDevice, e.bytes),
+    PrintLines(e.t_ns,
+               decoder.Feed(e.from == Origin::kHost ? Side::kHost : Side::kDevice, e.bytes, e.t_ns),
                show_time, problems);
   }
   PrintLines(last_t, decoder.Finish(), show_time, problems);

@@ -29,6 +29,11 @@ inline constexpr size_t kMaxFrameSize = kHeaderSize + kMaxDataLength + kCheckSiz
 // 2048) and then waits for a Length that a 1048-byte receiver drops. The
 // largest receive buffer a FrameDecoder (and a DMC-16 profile) models.
 inline constexpr size_t kLargestReceiveBuffer = 4096;
+// The spec has no inter-byte timeout; mocosim's reading (docs/protocol-notes.md
+// "Idle line"): a line idle this long ends any partial frame, which is given
+// up and its bytes rescanned. The DMC-16 does so, and the transcripts
+// (`mocosim decode`) and the Wireshark dissector follow it.
+inline constexpr int64_t kLineIdleGapNs = 50'000'000;  // 50 ms
 // Fletcher-16 is summed in blocks of this many bytes before reducing mod 255
 // ("Computing and Validating the Checksum").
 inline constexpr size_t kFletcherBlock = 20;

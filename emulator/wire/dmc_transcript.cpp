@@ -1,5 +1,7 @@
 // DMC v2 transcripts (see transcript_sides.h): one frame decoder per
 // direction, each frame described as a host or device message.
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include "wire/dmc.h"
@@ -21,6 +23,22 @@ class DmcSide {
   }
   void Finish(std::vector<TranscriptLine>& out) {
     decoder_.Finish([&](const dmc::FrameEvent& e) { Handle(e, out); });
+  }
+  // Idle line (docs/protocol-notes.md "Idle line", the DMC-16's
+  // kLineIdleGapNs): a chunk from this side that comes dmc::kLineIdleGapNs or
+  // more after the side's previous one first ends the partial frame the side
+  // holds: it is given up and its bytes rescanned, as the device does, so a
+  // damaged Length hides nothing past the gap. Skipped bytes are reported
+  // there too. The side's own chunks only, as a dissector that shows each
+  // line under a packet of its side can follow it (docs/wireshark.md).
+  void Elapse(int64_t t_ns, std::vector<TranscriptLine>& out) {
+    if (last_ns_ && t_ns - *last_ns_ >= dmc::kLineIdleGapNs &&
+        (decoder_.pending_bytes() > 0 || decoder_.unreported_skipped_bytes() > 0)) {
+      idle_ = true;
+      decoder_.Finish([&](const dmc::FrameEvent& e) { Handle(e, out); });
+      idle_ = false;
+    }
+    last_ns_ = t_ns;
   }
 
  private:
@@ -63,7 +81,8 @@ class DmcSide {
         case dmc::FramingError::Kind::kTruncated:
           out.push_back(
               {side_, true,
-               "stream ended inside a frame (" + std::to_string(fe->bytes) + " byte(s) of it)"});
+               (idle_ ? "frame given up after 50 ms idle (" : "stream ended inside a frame (") +
+                   std::to_string(fe->bytes) + " byte(s) of it)"});
           break;
       }
     }
@@ -71,12 +90,17 @@ class DmcSide {
 
   Side side_;
   dmc::FrameDecoder decoder_;
+  std::optional<int64_t> last_ns_;  // when this side's last chunk crossed
+  bool idle_ = false;               // Finish() runs for an idle gap
 };
 
 class DmcSides final : public TranscriptSides {
  public:
   void Feed(Side side, ByteView bytes, std::vector<TranscriptLine>& out) override {
     (side == Side::kHost ? host_ : device_).Feed(bytes, out);
+  }
+  void Elapse(Side side, int64_t t_ns, std::vector<TranscriptLine>& out) override {
+    (side == Side::kHost ? host_ : device_).Elapse(t_ns, out);
   }
   void Finish(std::vector<TranscriptLine>& out) override {
     host_.Finish(out);

@@ -78,6 +78,9 @@ class StackshotSides final : public TranscriptSides {
     }
   }
 
+  // A packet's line, refused or not, ends with the checksum note when its
+  // checksum byte is not the default algorithm's (ERRATA 3.2: never a reason
+  // to refuse it, but a damaged packet often explains a refused layout).
   TranscriptLine Line(Side side, const stackshot::DecodedPacket& d) {
     const std::string note =
         d.checksum_ok ? "" : " [checksum byte differs from the default algorithm]";
@@ -86,7 +89,8 @@ class StackshotSides final : public TranscriptSides {
       last_action_[d.packet.command] = static_cast<stackshot::Action>(d.packet.action);
       auto c = stackshot::DecodeHostPacket(d.packet);
       if (!c.ok()) {
-        return {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(c.error())};
+        return {side, true,
+                stackshot::Describe(d.packet) + ": " + wire::Describe(c.error()) + note};
       }
       return {side, false, stackshot::Describe(*c) + note};
     }
@@ -96,7 +100,7 @@ class StackshotSides final : public TranscriptSides {
     }
     auto r = stackshot::DecodeDevicePacket(d.packet, ctx);
     if (!r.ok()) {
-      return {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(r.error())};
+      return {side, true, stackshot::Describe(d.packet) + ": " + wire::Describe(r.error()) + note};
     }
     return {side, false, stackshot::Describe(*r) + note};
   }

@@ -48,6 +48,13 @@ std::vector<TranscriptLine> TranscriptDecoder::Feed(Side from, ByteView bytes) {
   return Printable(std::move(out));
 }
 
+std::vector<TranscriptLine> TranscriptDecoder::Feed(Side from, ByteView bytes, int64_t t_ns) {
+  std::vector<TranscriptLine> out;
+  sides_->Elapse(from, t_ns, out);
+  sides_->Feed(from, bytes, out);
+  return Printable(std::move(out));
+}
+
 std::vector<TranscriptLine> TranscriptDecoder::Finish() {
   std::vector<TranscriptLine> out;
   sides_->Finish(out);

@@ -4,6 +4,7 @@
 #ifndef MOCO_WIRE_TRANSCRIPT_H_
 #define MOCO_WIRE_TRANSCRIPT_H_
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,6 +36,11 @@ class TranscriptDecoder {
 
   // Feeds a chunk that crossed the link from `from`; returns what it completed.
   std::vector<TranscriptLine> Feed(Side from, ByteView bytes);
+  // The same for a chunk that crossed at t_ns (a session's clock): when the
+  // chunk comes its protocol's idle gap or more after the previous chunk from
+  // the same side, that side first gives up what it holds, as the device
+  // does (DMC v2: a partial frame and skipped bytes, dmc::kLineIdleGapNs).
+  std::vector<TranscriptLine> Feed(Side from, ByteView bytes, int64_t t_ns);
   // End of the traffic: reports what is left pending in either direction.
   std::vector<TranscriptLine> Finish();
 

@@ -19,6 +19,14 @@ class TranscriptSides {
   virtual ~TranscriptSides() = default;
   // Frames and describes a chunk that crossed the link from `side`.
   virtual void Feed(Side side, ByteView bytes, std::vector<TranscriptLine>& out) = 0;
+  // A chunk from `side` is about to be fed at t_ns: when its line has been
+  // idle long enough, the side gives up what it holds. The default keeps
+  // everything until Finish().
+  virtual void Elapse(Side side, int64_t t_ns, std::vector<TranscriptLine>& out) {
+    (void)side;
+    (void)t_ns;
+    (void)out;
+  }
   // End of the traffic: what is left pending in either direction.
   virtual void Finish(std::vector<TranscriptLine>& out) = 0;
 };

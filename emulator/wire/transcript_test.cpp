@@ -213,6 +213,40 @@ TEST(TranscriptTest, StackshotFollowsTheLineIntoDfmocoMode) {
   EXPECT_EQ(problems, 1u);
 }
 
+// Idle line (docs/protocol-notes.md): a request whose Length was damaged
+// hides the frames behind it only until its side's line is idle for 50 ms;
+// the next chunk from that side gives it up and rescans its bytes, as the
+// DMC-16 does. The other side's chunks change nothing.
+TEST(TranscriptTest, DmcPartialFrameIsGivenUpAtTheNextChunkAfterAnIdleGap) {
+  TranscriptDecoder d(Protocol::kDmc);
+  Bytes damaged;
+  dmc::Encode(1, dmc::HostMessage{dmc::HiRequest{}}, damaged);
+  damaged[dmc::kLengthOffset] = 100;  // waits for 100 data bytes
+  Bytes behind;
+  dmc::Encode(2, dmc::HostMessage{dmc::HiRequest{}}, behind);
+  EXPECT_TRUE(d.Feed(Side::kHost, damaged, 0).empty());
+  EXPECT_TRUE(d.Feed(Side::kHost, behind, 10'000'000).empty());
+  EXPECT_TRUE(d.Feed(Side::kDevice, {}, 70'000'000).empty());
+  Bytes next;
+  dmc::Encode(3, dmc::HostMessage{dmc::HiRequest{}}, next);
+  const auto lines = d.Feed(Side::kHost, next, 10'000'000 + dmc::kLineIdleGapNs);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0].text, "frame given up after 50 ms idle (24 byte(s) of it)");
+  EXPECT_TRUE(lines[0].problem);
+  EXPECT_EQ(lines[1].text, "skipped 12 byte(s) outside any frame");
+  EXPECT_EQ(lines[2].text, "#2 HI");
+  EXPECT_EQ(lines[3].text, "#3 HI");
+}
+
+TEST(TranscriptTest, DmcJunkIsReportedAtTheNextChunkAfterAnIdleGap) {
+  TranscriptDecoder d(Protocol::kDmc);
+  EXPECT_TRUE(d.Feed(Side::kDevice, View("junk junk"), 0).empty());
+  EXPECT_TRUE(d.Feed(Side::kDevice, View("more"), dmc::kLineIdleGapNs - 1).empty());
+  const auto lines = d.Feed(Side::kDevice, View("x"), 2 * dmc::kLineIdleGapNs);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].text, "skipped 13 byte(s) outside any frame");
+}
+
 RC_GTEST_PROP(TranscriptProp, DmcChunkingDoesNotChangeTranscript,
               (const std::vector<uint32_t>& ids, size_t chunk)) {
   Bytes stream;

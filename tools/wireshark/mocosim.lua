@@ -32,8 +32,11 @@ local pf = {
   message = ProtoField.string("mocosim.message", "Message"),
   problem = ProtoField.bool("mocosim.problem", "Problem"),
   reassembled = ProtoField.uint32("mocosim.reassembled_from", "Begins in packet"),
+  skipped_so_far = ProtoField.uint32("mocosim.skipped_so_far",
+                                     "Bytes skipped so far, not yet reported"),
 }
-mocosim.fields = { pf.direction, pf.protocol, pf.message, pf.problem, pf.reassembled }
+mocosim.fields = { pf.direction, pf.protocol, pf.message, pf.problem, pf.reassembled,
+                   pf.skipped_so_far }
 
 -- DMC fields: header, checksum, and every field name the decode text uses.
 local dmc_f = {
@@ -98,6 +101,7 @@ dfmoco.fields = { dfm_f.line, dfm_f.command, dfm_f.args }
 
 local f_if_desc = Field.new("frame.interface_description")
 local f_if_id = Field.new("frame.interface_id")
+local f_time = Field.new("frame.time_relative")
 
 -- Little helpers over Lua strings (byte 1 is the first).
 local function u8(s, i) return s:byte(i) end
@@ -217,6 +221,14 @@ local SIZES = { u8 = 1, u16 = 2, u32 = 4, i16 = 2, i32 = 4, h2 = 1, h4 = 2, h8 =
 
 local function quoted(s)
   return '"' .. s:gsub('[%z\1-\31\127-\255"\\]', function(c)
+    return string.format("\\x%02x", c:byte())
+  end) .. '"'
+end
+-- DFMoco text as wire/dfmoco.cpp quotes it: '"' and '\' after a backslash,
+-- other bytes outside printable ASCII as \xNN.
+local function dfm_quoted(s)
+  return '"' .. s:gsub('[%z\1-\31\127-\255"\\]', function(c)
+    if c == '"' or c == "\\" then return "\\" .. c end
     return string.format("\\x%02x", c:byte())
   end) .. '"'
 end
@@ -340,10 +352,17 @@ end
 -- checksum is not zero is reported with its header; after either the scan
 -- resumes at the byte after the candidate's 'D'. Skipped bytes are reported
 -- once, just before the next other event.
+-- Idle line (docs/protocol-notes.md "Idle line"; wire/dmc_transcript.cpp):
+-- a packet that comes 50 ms or more after the previous packet of its
+-- direction first ends the partial frame the direction holds (st.give_up):
+-- it is given up, its bytes rescanned, and skipped bytes reported, as the
+-- DMC-16 and `mocosim decode` do.
+local DMC_IDLE_GAP_NS = 50000000
 local function dmc_stream(from_host)
   local st = { buf = "", base = 0, skipped = 0 }
-  function st.feed(bytes, emit)
-    st.buf = st.buf .. bytes
+  -- Scans st.buf; with at_end, a candidate that needs more bytes is given
+  -- up (and its bytes after the 'D' rescanned) instead of kept.
+  local function scan(emit, at_end)
     local function flush()
       if st.skipped > 0 then
         emit({ problem = true, text = "skipped " .. st.skipped .. " byte(s) outside any frame",
@@ -358,12 +377,13 @@ local function dmc_stream(from_host)
     end
     while #st.buf > 0 do
       local b = st.buf
+      local need_more = false
       if b:byte(1) ~= 0x44 then
         local j = b:find("D", 1, true)
         drop(j and j - 1 or #b, true)
-      elseif #b < 2 then break
+      elseif #b < 2 then need_more = true
       elseif b:byte(2) ~= 0x46 then drop(1, true)
-      elseif #b < 10 then break
+      elseif #b < 10 then need_more = true
       else
         local id, t, length = u32le(b, 3), u16le(b, 7), u16le(b, 9)
         if length > DMC_MAX_DATA then
@@ -371,7 +391,7 @@ local function dmc_stream(from_host)
           emit({ problem = true, text = "frame length " .. length .. " exceeds 1036: dropped",
                  start = st.base, raw = b:sub(1, 10) })
           drop(1, true)
-        elseif #b < 12 + length then break
+        elseif #b < 12 + length then need_more = true
         else
           local frame = b:sub(1, 12 + length)
           flush()
@@ -400,7 +420,22 @@ local function dmc_stream(from_host)
           end
         end
       end
+      if need_more then
+        if not at_end then break end
+        flush()
+        emit({ problem = true, start = st.base, raw = b,
+               text = "frame given up after 50 ms idle (" .. #b .. " byte(s) of it)" })
+        drop(1, true)
+      end
     end
+    if at_end then flush() end
+  end
+  function st.feed(bytes, emit)
+    st.buf = st.buf .. bytes
+    scan(emit, false)
+  end
+  function st.give_up(emit)
+    scan(emit, true)
   end
   return st
 end
@@ -438,6 +473,107 @@ local SS_NAMES = {
   [0x110C] = "CC_LOG", [0x110D] = "CC_WIFI", [0x110E] = "CC_CLOSE", [0x1200] = "CC_WAD",
   [0x1600] = "CC_MOTION_CONFIG", [0x1601] = "CC_MOTION_START",
 }
+-- The data layouts of each command (wire/stackshot_table.cpp, which cites
+-- the section 2 tables and ERRATA 3.4, 3.5): { read request, read response,
+-- write request }, each a byte count, or "uq" (0 or 1: a units byte or
+-- none), "text" (a string: nothing after its NUL), "stack" (44 or 48),
+-- "log" (1 or 4), "start" (3, or padded to 132), "raw" (anything), false
+-- (the action is not allowed).
+local SS_SHAPES = {
+  [0x1000] = { false, false, 7 }, [0x1001] = { "uq", 5, false }, [0x1002] = { "uq", 5, false },
+  [0x1003] = { false, false, 0 }, [0x1004] = { false, false, 10 }, [0x1005] = { 0, 4, false },
+  [0x1006] = { false, false, 0 }, [0x1007] = { false, false, 10 },
+  [0x1008] = { false, false, "stack" }, [0x1009] = { 0, 4, false }, [0x100A] = { 0, 4, false },
+  [0x100B] = { false, false, 0 }, [0x1080] = { 0, "text", "text" }, [0x1081] = { 0, 1, 1 },
+  [0x1082] = { 0, 1, 1 }, [0x1083] = { 0, 1, 1 }, [0x1084] = { 0, 1, 1 }, [0x1085] = { 0, 2, 2 },
+  [0x1086] = { 0, 2, 2 }, [0x1087] = { "uq", 5, 5 }, [0x1088] = { "uq", 5, 5 },
+  [0x1089] = { 0, 4, 4 }, [0x108A] = { 0, 4, 4 }, [0x108B] = { "uq", 5, 5 }, [0x108C] = { 0, 4, 4 },
+  [0x108D] = { "uq", 5, 5 }, [0x108E] = { 0, 1, 1 }, [0x108F] = { 0, 1, 1 },
+  [0x1090] = { false, false, 1 }, [0x1091] = { false, false, 1 }, [0x1092] = { 0, 1, 1 },
+  [0x1093] = { 0, 4, 4 }, [0x1094] = { 0, 4, 4 }, [0x1095] = { "uq", 5, 5 }, [0x1096] = { 0, 1, 1 },
+  [0x1097] = { "uq", 5, 5 }, [0x1098] = { 0, 1, 1 }, [0x1099] = { 0, 1, 1 }, [0x109A] = { 0, 1, 1 },
+  [0x109B] = { 0, 4, 4 }, [0x109C] = { 0, 4, 4 }, [0x109D] = { 0, 4, 4 }, [0x109E] = { 0, 1, 1 },
+  [0x109F] = { 0, 1, 1 }, [0x10A0] = { 0, 1, 1 }, [0x1100] = { false, false, 0 },
+  [0x1101] = { false, false, 0 }, [0x1102] = { 0, "text", false }, [0x1103] = { 0, 4, false },
+  [0x1104] = { 0, 4, false }, [0x1105] = { 0, 4, false }, [0x1106] = { 0, 4, false },
+  [0x1107] = { 0, 4, 4 }, [0x1108] = { 1, 4, 5 }, [0x1109] = { "raw", "raw", "raw" },
+  [0x110A] = { "raw", "raw", "raw" }, [0x110B] = { 1, 2, false }, [0x110C] = { "log", "text", false },
+  [0x110D] = { "raw", "raw", "raw" }, [0x110E] = { false, false, 0 },
+  [0x1200] = { "raw", "raw", "raw" }, [0x1600] = { false, false, 132 },
+  [0x1601] = { false, false, "start" },
+}
+local SS_PING_TABLE_ID = 0x110A     -- CC_PING's table id (NOR_ACCESS by the enum)
+local SS_AUTO_RETURN = 0x108F       -- its garbled read table lists a bool
+
+-- Why `data` does not fit `shape`, as wire/stackshot.cpp ParseShape says
+-- it; nil when it fits.
+local function ss_shape_error(shape, data, name, what)
+  local n = #data
+  local function expects(lo, hi)
+    return "bad length at byte 4: " .. name .. " " .. what .. " expects " .. lo ..
+           (hi and (" or " .. hi) or "") .. " data byte(s), got " .. n
+  end
+  if type(shape) == "number" then
+    if n ~= shape then return expects(shape) end
+  elseif shape == "uq" then
+    if n > 1 then return expects(0, 1) end
+  elseif shape == "text" then
+    local nul = data:find("\0", 1, true)
+    if nul and nul < n then
+      return "trailing bytes at byte " .. (5 + nul) .. ": " .. (n - nul) ..
+             " byte(s) after the string's terminating NUL"
+    end
+  elseif shape == "stack" then
+    if n ~= 44 and n ~= 48 then return expects(44, 48) end
+  elseif shape == "log" then
+    if n ~= 1 and n ~= 4 then return expects(1, 4) end
+  elseif shape == "start" then
+    if n ~= 3 and n ~= 132 then return expects(3) end
+  end
+  return nil
+end
+
+-- Why a host packet is refused (wire/stackshot.cpp DecodeHostPacket), or nil.
+local function ss_host_error(command, action, data)
+  local shapes, name = SS_SHAPES[command], SS_NAMES[command]
+  if not shapes then return nil end
+  if action > 1 then
+    return "bad value at byte 3: " .. name .. ": host action " .. action ..
+           " is neither READ nor WRITE"
+  end
+  local is_read = action == 0
+  if is_read and #data == 1 and (command == SS_PING_TABLE_ID or command == SS_AUTO_RETURN) then
+    return nil
+  end
+  local shape = shapes[is_read and 1 or 3]
+  if shape == false then
+    return "bad value at byte 3: " .. name .. " is " .. (is_read and "write" or "read") .. "-only"
+  end
+  return ss_shape_error(shape, data, name, is_read and "read request" or "write request")
+end
+
+-- Why a device packet is refused (wire/stackshot.cpp DecodeDevicePacket),
+-- or nil; `asked` is the action of the host's last packet of the command.
+local function ss_device_error(command, status, data, asked)
+  if status ~= 2 then return nil end  -- an error status carries any data
+  if command == SS_PING_TABLE_ID and #data == 2 and (asked == nil or asked == 0) then return nil end
+  local shapes, name = SS_SHAPES[command], SS_NAMES[command]
+  if not shapes or shapes[2] == "raw" then return nil end
+  local read_response
+  if shapes[2] == false then read_response = false
+  elseif shapes[3] == false then read_response = true
+  elseif asked ~= nil then read_response = asked == 0
+  else read_response = #data > 0 end
+  if not read_response then
+    if #data > 0 then
+      return "bad length at byte 4: " .. name .. " write acknowledgement expects 0 data byte(s), got " ..
+             #data
+    end
+    return nil
+  end
+  return ss_shape_error(shapes[2], data, name, "read response")
+end
+
 local SS_ACTIONS = { [0] = "read", "write", "ok", "bad-param", "unsupported-action",
                      "unsupported-cmd", "failed", "not-empty", "busy" }
 local SS_AXES = { [0] = "X", "Y", "Z", "3" }
@@ -483,9 +619,21 @@ local function stackshot_stream(from_host, line)
                      SS_AXES[axis]
         if ab >= 128 then text = text .. " item=2" end
         if math.floor(ab / 64) % 2 == 1 then text = text .. " bit6=1" end
-        if len > 0 then text = text .. " data=" .. tohex(packet:sub(6, 5 + len)) end
+        local data = packet:sub(6, 5 + len)
+        if len > 0 then text = text .. " data=" .. tohex(data) end
+        -- The command's data layout for the action (a reply's in the light of
+        -- the host's last action for the same command), as decode checks it.
+        local err
+        if from_host then
+          err = ss_host_error(command, action, data)
+          line.asked[command] = action
+        else
+          err = ss_device_error(command, action, data, line.asked[command])
+        end
+        if err then text = text .. ": " .. err end
         if not ok then text = text .. " [checksum byte differs from the default algorithm]" end
-        emit({ problem = false, start = st.base, raw = packet, text = text,
+        local problem = err ~= nil
+        emit({ problem = problem, start = st.base, raw = packet, text = text,
                fields = { { "command", command }, { "command_name", name },
                           { "action", SS_ACTIONS[action] or ("action#" .. action) },
                           { "axis", SS_AXES[axis] }, { "length", len },
@@ -494,7 +642,7 @@ local function stackshot_stream(from_host, line)
         st.buf, st.base = b:sub(#packet + 1), st.base + #packet
         if command == 0x109E and from_host and action == 1 then
           -- The latest mode write decides.
-          line.requested = len >= 1 and packet:byte(6) == 8
+          line.requested = err == nil and packet:byte(6) == 8
         elseif command == 0x109E and not from_host and line.requested then
           line.requested = false
           if action == 2 then
@@ -517,18 +665,24 @@ end
 ------------------------------------------------------------------------------
 local DFM_MAX_LINE = 512
 
+-- As wire/dfmoco.cpp splits a line: the word is everything before the first
+-- space (a leading space gives an empty word), the arguments the runs of
+-- non-space bytes after it.
 local function words(line)
-  local w = {}
-  for t in line:gmatch("[^ ]+") do w[#w + 1] = t end
+  local w = { line:match("^[^ ]*") }
+  for t in line:sub(#w[1] + 1):gmatch("[^ ]+") do w[#w + 1] = t end
   return w
 end
+-- Strict decimals: an optional '-' and digits, within int32 ("-0" is 0).
 local function ints(args, first)
   local v = {}
   for i = first, #args do
-    local n = args[i]:match("^[-+]?%d+$")
+    local n = args[i]:match("^%-?%d+$")
     if not n then return nil end
-    v[#v + 1] = tonumber(n)
-    if v[#v] > 2147483647 or v[#v] < -2147483648 then return nil end
+    local x = tonumber(n)
+    if x > 2147483647 or x < -2147483648 then return nil end
+    if x == 0 then x = 0 end
+    v[#v + 1] = x
   end
   return v
 end
@@ -539,7 +693,7 @@ local function dfm_host(line, dialect)
   local n = #a - 1
   local known = { hi = 1, ms = 1, mm = 1, mp = 1, sm = 1, sa = 1, jm = 1, im = 1, pr = 1,
                   zm = 1, np = 1, bf = 1, go = 1 }
-  if not known[w] then return "unknown command " .. quoted(line) .. " (no reply)" end
+  if not known[w] then return "unknown command " .. dfm_quoted(line) .. " (no reply)" end
   if n >= 40 then return nil end
   if w == "mp" and dialect.stackshot and n == 1 and a[2] == "*" then
     return "position query, all motors"
@@ -649,10 +803,11 @@ local function dfmoco_stream(from_host, dialect)
           st.pending_cr = false
           if not st.discarding then
             local line = st.line
-            local text = from_host and dfm_host(line, dialect) or dfm_device(line, dialect)
+            local text
+            if from_host then text = dfm_host(line, dialect) else text = dfm_device(line, dialect) end
             local a = words(line)
             local item = { problem = text == nil, start = st.start, rawlen = st.pos + 1 - st.start,
-                           text = text or (quoted(line) .. ": does not parse"),
+                           text = text or (dfm_quoted(line) .. ": does not parse"),
                            fields = { { "line", line }, { "command", a[1] or "" },
                                       { "args", table.concat(a, " ", 2) } } }
             if from_host and text and text:sub(1, 16) == "unknown command " then
@@ -699,7 +854,7 @@ end
 local function stream_for(protocol, from_host)
   local key = protocol .. (from_host and ":host" or ":device")
   if not streams[key] then
-    streams.line = streams.line or {}
+    streams.line = streams.line or { asked = {} }
     if protocol == "dmc" then streams[key] = dmc_stream(from_host)
     elseif protocol == "stackshot" then streams[key] = stackshot_stream(from_host, streams.line)
     else
@@ -745,8 +900,19 @@ function mocosim.dissector(tvb, pinfo, tree)
     local st = stream_for(protocol, from_host)
     -- r.base: the stream offset of this packet's first byte.
     r = { base = st.fed or 0, items = {}, protocol = protocol }
-    st.feed(tvb:raw(), function(item) r.items[#r.items + 1] = item end)
+    local function keep(item) r.items[#r.items + 1] = item end
+    local t = f_time()
+    local now = t and (t.value.secs * 1000000000 + t.value.nsecs)
+    if st.give_up and now and st.last_ns and now - st.last_ns >= DMC_IDLE_GAP_NS then
+      st.give_up(keep)
+    end
+    st.last_ns = now
+    st.feed(tvb:raw(), keep)
     st.fed = r.base + tvb:len()
+    -- Bytes skipped so far and not yet reported (they are, before the next
+    -- message or at an idle gap): the packet is marked a problem all the
+    -- same, so junk with nothing after it still shows.
+    if (st.skipped or 0) > 0 then r.skipped_so_far = st.skipped end
     if streams.line and streams.line.rest then
       -- The bytes after the acknowledgement of the switch, in the same packet.
       local rest = streams.line.rest
@@ -802,6 +968,12 @@ function mocosim.dissector(tvb, pinfo, tree)
     if item.problem then sub:add(pf.problem, true) end
     if item.from_packet then sub:add(pf.reassembled, item.from_packet) end
     add_fields(sub, nil, item_protocol, item.fields)
+  end
+  if r.skipped_so_far then
+    local sub = root:add(pf.skipped_so_far, r.skipped_so_far)
+    sub:set_text("!! " .. r.skipped_so_far .. " byte(s) skipped so far, not yet reported")
+    root:add(pf.problem, true)
+    if #texts == 0 then texts[1] = "!! (" .. r.skipped_so_far .. " byte(s) skipped so far)" end
   end
   local arrow = from_host and "host -> dev " or "dev  -> host"
   if #texts == 0 then

@@ -48,7 +48,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
   // USB-serial bridge holds a partial packet for at most its 16 ms latency
   // timer), and a fifth of the 250 ms a host waits for an answer, so a request
   // held behind a false header is still answered in time.
-  static constexpr sim::TimeNs kLineIdleGapNs = 50 * sim::kNsPerMs;
+  static constexpr sim::TimeNs kLineIdleGapNs = dmc::kLineIdleGapNs;  // 50 ms
 
   // `scheduler` and `out` must outlive the device. The device starts powered off.
   Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile = {});
