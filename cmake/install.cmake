@@ -45,19 +45,52 @@ endforeach()
 add_custom_target(man_pages ALL DEPENDS ${moco_man_pages})
 install(FILES ${moco_man_pages} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
 
+# The package's maintainer: whoever publishes it. The default is a
+# placeholder with no mailbox behind it (ci/deb-check names it when lintian
+# flags it); a publisher configures with -DMOCOSIM_PACKAGE_CONTACT="Name <address>".
+set(MOCOSIM_PACKAGE_CONTACT "mocosim maintainers <mocosim@invalid>"
+    CACHE STRING "Maintainer of the .deb, as Name <address>")
+
+# Debian's policy asks every package for its copyright file and, a native
+# package, for its changelog as changelog.gz, both in /usr/share/doc/<package>.
+# The changelog's newest entry is this version: a version bump without one
+# stops the configure.
+file(STRINGS ${PROJECT_SOURCE_DIR}/cmake/debian/changelog.in moco_changelog_head LIMIT_COUNT 1)
+if(NOT moco_changelog_head MATCHES "^mocosim \\(${PROJECT_VERSION}\\) ")
+  message(FATAL_ERROR "cmake/debian/changelog.in starts with \"${moco_changelog_head}\", not "
+                      "version ${PROJECT_VERSION}: add an entry for ${PROJECT_VERSION} at its top")
+endif()
+configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/changelog.in ${CMAKE_BINARY_DIR}/debian/changelog
+               @ONLY)
+configure_file(${PROJECT_SOURCE_DIR}/cmake/debian/copyright.in ${CMAKE_BINARY_DIR}/debian/copyright
+               @ONLY)
+add_custom_command(
+  OUTPUT ${CMAKE_BINARY_DIR}/debian/doc/changelog.gz
+  COMMAND ${CMAKE_COMMAND} -E copy ${CMAKE_BINARY_DIR}/debian/changelog
+          ${CMAKE_BINARY_DIR}/debian/doc/changelog
+  COMMAND gzip -9nf ${CMAKE_BINARY_DIR}/debian/doc/changelog
+  DEPENDS ${CMAKE_BINARY_DIR}/debian/changelog
+  COMMENT "changelog.gz for the package"
+  VERBATIM)
+add_custom_target(debian_changelog ALL DEPENDS ${CMAKE_BINARY_DIR}/debian/doc/changelog.gz)
+install(FILES ${CMAKE_BINARY_DIR}/debian/doc/changelog.gz ${CMAKE_BINARY_DIR}/debian/copyright
+        DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
 # CPack: a .deb whose Depends are the Debian runtime packages the programs
 # link (dpkg-shlibdeps, from dpkg-dev), e.g. libc6, libstdc++6, libbullet3.24.
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME mocosim)
 set(CPACK_PACKAGE_VENDOR "mocosim")
-set(CPACK_PACKAGE_CONTACT "mocosim maintainers <mocosim@invalid>")
-set(CPACK_PACKAGE_DESCRIPTION_SUMMARY
-    "emulated motion-control devices (DMC-16, DFMoco, StackShot 3X) and a conformance runner")
-# One string: set() with several would join them with ";".
+set(CPACK_PACKAGE_CONTACT "${MOCOSIM_PACKAGE_CONTACT}")
+# At most 80 characters (Debian policy 3.4.1).
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "motion-control device emulator and conformance checker")
+# Lines of at most 80 characters; one string: set() with several would join
+# them with ";".
 string(CONCAT CPACK_PACKAGE_DESCRIPTION
-       "mocosim emulates a DMC-16 (DMC v2 binary protocol), a DFMoco Arduino and a Cognisys "
-       "StackShot 3X on a PTY or a TCP port; mococheck checks a device's traffic against the "
-       "rules of its protocol. With man pages, device profiles and a Wireshark dissector.")
+       "mocosim emulates a DMC-16 (DMC v2 binary protocol), a DFMoco Arduino\n"
+       "and a Cognisys StackShot 3X on a PTY or a TCP port; mococheck checks a\n"
+       "device's traffic against the rules of its protocol. With man pages,\n"
+       "device profiles and a Wireshark dissector.")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION utils)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
