@@ -479,7 +479,9 @@ int main(int argc, char** argv) {
                        "Inject link faults, e.g. seed=42,dir=to-host,drop=0.01 (dir= applies "
                        "to the rates after it)");
     o->cmd->add_flag("--no-pacing", o->config.no_pacing,
-                     "Deliver bytes at once instead of at the profile's baud rate");
+                     "Deliver bytes at once instead of at the profile's baud rate and in the "
+                     "packets of its USB serial bridge (profile field usb_bridge, "
+                     "docs/profiles.md)");
     o->cmd->add_option("--name", o->config.name,
                        "Name in log lines and on the control socket (default: " + name + ")");
     o->cmd
