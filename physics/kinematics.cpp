@@ -47,24 +47,6 @@ Vec3 Cross(Vec3 a, Vec3 b) {
 }
 double Norm(Vec3 a) { return std::sqrt(Dot(a, a)); }
 
-std::string_view KinErrorName(KinError e) {
-  switch (e) {
-    case KinError::kUnreachable:
-      return "unreachable";
-    case KinError::kInsideSafeDistance:
-      return "inside-safe-distance";
-    case KinError::kTableOutOfRange:
-      return "table-out-of-range";
-    case KinError::kNotMonotonic:
-      return "table-not-monotonic";
-    case KinError::kBadGeometry:
-      return "bad-geometry";
-    case KinError::kBadInput:
-      return "bad-input";
-  }
-  return "?";
-}
-
 std::string_view RigTypeName(RigType t) {
   switch (t) {
     case RigType::kBoomSwingTrack:

@@ -33,9 +33,8 @@ double Dot(Vec3 a, Vec3 b);
 Vec3 Cross(Vec3 a, Vec3 b);
 double Norm(Vec3 a);
 
-// Kuper (X, Y, Z) = (EW, vertical, track) <-> working (x, y, z) = (EW, track, up).
+// Kuper (X, Y, Z) = (EW, vertical, track) -> working (x, y, z) = (EW, track, up).
 inline Vec3 FromKuper(Vec3 k) { return {k.x, k.z, k.y}; }
-inline Vec3 ToKuper(Vec3 w) { return {w.x, w.z, w.y}; }
 
 // Why a pose has no solution. Never a NaN: every failure is one of these.
 enum class KinError : uint8_t {
@@ -46,7 +45,6 @@ enum class KinError : uint8_t {
   kBadGeometry,         // lengths that define no rig (boom length <= 0, non-finite)
   kBadInput,            // a non-finite pose value
 };
-std::string_view KinErrorName(KinError e);
 
 // A value or a KinError.
 template <typename T>

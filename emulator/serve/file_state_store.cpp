@@ -15,8 +15,6 @@ std::string FileStateStore::Target() const {
 
 std::filesystem::path FileStateStore::CorruptPath() const { return Target() + ".corrupt"; }
 
-std::filesystem::path FileStateStore::LockPath() const { return Target() + ".lock"; }
-
 std::optional<std::string> FileStateStore::Open(StateLoad* first) {
   const std::string where = "state file " + path_.string();
   base::OutputTarget target;

@@ -48,8 +48,6 @@ class FileStateStore final : public StateStore {
   const std::filesystem::path& path() const { return path_; }
   // Where the first corrupt copy goes ("<target>.corrupt").
   std::filesystem::path CorruptPath() const;
-  // The lock file Open() holds ("<target>.lock").
-  std::filesystem::path LockPath() const;
 
  private:
   std::string Target() const;

@@ -108,12 +108,6 @@ DmxUniverse::DmxUniverse(Scheduler& scheduler, double ramp_rate_per_s, SettledLi
 
 DmxUniverse::~DmxUniverse() { scheduler_.Cancel(settle_timer_); }
 
-bool DmxUniverse::SetRampRate(double ramp_rate_per_s) {
-  if (!std::isfinite(ramp_rate_per_s) || !(ramp_rate_per_s > 0)) return false;
-  rate_ = ramp_rate_per_s;
-  return true;
-}
-
 void DmxUniverse::Update(int channel, uint8_t value, bool ramp) {
   Channel& c = ch_[static_cast<size_t>(channel - 1)];
   const TimeNs now = scheduler_.Now();

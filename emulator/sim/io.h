@@ -116,8 +116,6 @@ class DmxUniverse {
   DmxUniverse& operator=(const DmxUniverse&) = delete;
 
   void SetListener(SettledListener listener) { listener_ = std::move(listener); }
-  // Returns false (no change) for a non-positive or non-finite rate.
-  bool SetRampRate(double ramp_rate_per_s);
   double ramp_rate_per_s() const { return rate_; }
 
   // Channel outside 1..512: returns false, nothing changes.

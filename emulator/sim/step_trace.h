@@ -56,13 +56,6 @@ class StepTrace final : public StepSink {
   uint64_t total_ = 0;
 };
 
-// Calls sink(edge) for every edge of `plan` with from_ns < time <= to_ns: the
-// analytic enumeration without a motor. Returns the number of edges.
-template <typename Sink>
-int64_t EnumerateEdges(const Plan& plan, TimeNs from_ns, TimeNs to_ns, Sink&& sink) {
-  return plan.ForEachEdge(from_ns, to_ns, std::forward<Sink>(sink));
-}
-
 }  // namespace moco::sim
 
 #endif  // MOCO_SIM_STEP_TRACE_H_

@@ -153,9 +153,6 @@ class Reader {
         DecodeError::Kind::kTrailing, offset(),
         std::to_string(remaining()) + " unexpected trailing byte(s) after " + std::string(what)};
   }
-  DecodeError BadValue(std::string detail) const {
-    return {DecodeError::Kind::kBadValue, offset(), std::move(detail)};
-  }
 
  private:
   ByteView in_;

@@ -137,8 +137,6 @@ class PacketDecoder {
 // kTruncated for a partial packet at the end, kBadLength when one packet is
 // longer than max_bytes.
 Result<std::vector<Bytes>> SplitForWifi(ByteView stream, size_t max_bytes = kWifiMaxPacketBytes);
-// True when a single Wi-Fi transmission of n bytes is within the limit.
-constexpr bool FitsWifiPacket(size_t n) { return n <= kWifiMaxPacketBytes; }
 
 }  // namespace moco::stackshot
 

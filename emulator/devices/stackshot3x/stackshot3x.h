@@ -203,7 +203,6 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // take-up (the first steps after a compensated reversal move only the
   // slack, not the carriage).
   int64_t RailPosition(int axis) const;
-  int64_t RailTarget(int axis) const { return axes_[Index(axis)].target_rail_steps; }
   bool AxisMoving(int axis) const;
   uint32_t SerialNumber() const { return serial_number_; }
   const std::vector<std::string>& Log() const { return log_; }
