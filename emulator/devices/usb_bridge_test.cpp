@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <string>
 
 #include "devices/dfmoco_arduino/dfmoco_profile.h"
@@ -36,12 +37,18 @@ std::string ErrorOf(const std::string& text) {
 
 TEST(UsbBridgeProfile, EachDeviceDefaultsToTheBridgeTheRealDeviceHas) {
   // FACTS "USB serial bridges": the StackShot's FTDI chip, the Uno's and
-  // Mega's 16U2, the DMC boards' own CDC port.
+  // Mega's 16U2; the DMC-16's bridge is not known, so it keeps the UART.
   EXPECT_EQ(Stackshot3xProfile::FromJson(json::object(), "t").usb_bridge, UsbBridge::Ftdi());
   EXPECT_EQ(DfmocoProfile::FromJson(json::object(), "t").usb_bridge, UsbBridge::Arduino16u2());
   EXPECT_EQ(DfmocoProfile::FromJson(json{{"board", "mega"}}, "t").usb_bridge,
             UsbBridge::Arduino16u2());
-  EXPECT_EQ(Dmc16ProfileFromJson(json::object(), "t").usb_bridge, UsbBridge::Cdc());
+  EXPECT_EQ(Dmc16ProfileFromJson(json::object(), "t").usb_bridge, UsbBridge::None());
+  // dmc-lite's GIGA answers on its CDC port (FACTS "DMC v2").
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  EXPECT_EQ(LoadDmc16Profile(std::string(root != nullptr ? root : ".") +
+                             "/fixtures/profiles/dmc-lite.json")
+                .usb_bridge,
+            UsbBridge::Cdc());
 }
 
 TEST(UsbBridgeProfile, PresetsAndTheFtdiLatencyReadBack) {
@@ -65,8 +72,8 @@ TEST(UsbBridgeProfile, PresetsAndTheFtdiLatencyReadBack) {
   s.usb_bridge = UsbBridge::Ftdi(4);
   EXPECT_EQ(Stackshot3xProfile::FromJson(s.ToJson(), "t").usb_bridge, UsbBridge::Ftdi(4));
   Dmc16Profile d = Dmc16ProfileFromJson(json::object(), "t");
-  d.usb_bridge = UsbBridge::None();
-  EXPECT_EQ(Dmc16ProfileFromJson(Dmc16ProfileToJson(d), "t").usb_bridge, UsbBridge::None());
+  d.usb_bridge = UsbBridge::Cdc();
+  EXPECT_EQ(Dmc16ProfileFromJson(Dmc16ProfileToJson(d), "t").usb_bridge, UsbBridge::Cdc());
 }
 
 TEST(UsbBridgeProfile, BadValuesNameTheFieldAndTheFix) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "transport/test_support.h"
+#include "transport/usb_bridge_pacer.h"
 
 namespace moco::transport {
 namespace {
@@ -348,51 +349,101 @@ devices::LineSettings Bridged(uint32_t baud, const devices::UsbBridge& bridge) {
   return line;
 }
 
+// What the bridge makes of the device's writes (LinkTest's recorder: "D:"
+// entries with their scheduler times): the UART's arrival time of each byte,
+// then the packets, as transport/usb_bridge_pacer.h computes them.
+std::vector<UsbBridgePacer::Packet> ExpectedPackets(const std::vector<Recorded>& log,
+                                                    const devices::LineSettings& line) {
+  LinePacer uart(line.bridge.uart_paced ? line.BytesPerSecond() : 0);
+  std::vector<sim::TimeNs> arrivals;
+  for (const Recorded& r : log) {
+    if (!r.what.starts_with("D:")) continue;
+    for (size_t i = 2; i < r.what.size(); ++i) arrivals.push_back(uart.Take(r.t_ns));
+  }
+  UsbBridgePacer bridge(line.bridge);
+  std::vector<UsbBridgePacer::Packet> packets;
+  for (size_t head = 0; head < arrivals.size();) {
+    const auto p = bridge.Next(
+        arrivals.size() - head, [&](size_t i) { return arrivals[head + i]; }, 0);
+    bridge.Sent(p);
+    packets.push_back(p);
+    head += p.bytes;
+  }
+  return packets;
+}
+
+// The law however late the io thread runs: every write to the host is one or
+// more whole packets, in order, and none leaves before its packet is due.
+void ExpectWholePacketsNeverEarly(const std::vector<UsbBridgePacer::Packet>& packets,
+                                  const FakeEnd& end) {
+  ASSERT_EQ(end.write_sizes.size(), end.write_times.size());
+  size_t next = 0;
+  for (size_t w = 0; w < end.write_sizes.size(); ++w) {
+    size_t bytes = 0;
+    sim::TimeNs due = 0;
+    while (bytes < end.write_sizes[w] && next < packets.size()) {
+      bytes += packets[next].bytes;
+      due = packets[next].at_ns;
+      ++next;
+    }
+    EXPECT_EQ(bytes, end.write_sizes[w]) << "write " << w << " splits a packet";
+    EXPECT_GE(end.write_times[w], due) << "write " << w << " left before its packet was due";
+  }
+  EXPECT_EQ(next, packets.size());
+}
+
 // A StackShot's FTDI chip: a 10-byte reply is clocked out at 38400 baud but
-// reaches the host in one piece at the latency timer's tick (every 16 ms of
-// the device's clock), never byte by byte.
+// reaches the host in whole packets at the latency timer's ticks (every
+// 16 ms of the device's clock), never byte by byte.
 TEST_F(LinkTest, FtdiBridgeDeliversAShortReplyInOnePieceAtTheLatencyTick) {
-  Build(LinkOptions{}, Bridged(38400, devices::UsbBridge::Ftdi()));
+  const devices::LineSettings line = Bridged(38400, devices::UsbBridge::Ftdi());
+  Build(LinkOptions{}, line);
   auto end = AttachFake();
   device_->echo = false;
-  const sim::TimeNs sent = driver_.Sync();
   device_->Send("0123456789");
   driver_.Kick();  // the device wrote outside a scheduler callback
   ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 10; }));
   EXPECT_EQ(end->written, "0123456789");
-  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{10}));
-  // The last stop bit ends 10 character times (260.4 us each) after the write.
-  const sim::TimeNs uart_done = sent + 2'604'167;
-  const sim::TimeNs tick = (uart_done + 16 * kNsPerMs - 1) / (16 * kNsPerMs) * (16 * kNsPerMs);
-  ASSERT_EQ(end->write_times.size(), 1u);
-  EXPECT_GE(end->write_times[0], tick);
+  const auto packets = ExpectedPackets(recorder_.log, line);
+  // One packet, unless the reply's 2.6 ms on the UART spans a tick.
+  ASSERT_FALSE(packets.empty());
+  EXPECT_LE(packets.size(), 2u);
+  EXPECT_EQ(packets.back().at_ns % (16 * kNsPerMs), 0);
+  ExpectWholePacketsNeverEarly(packets, *end);
+  EXPECT_LE(end->write_sizes.size(), packets.size());
   EXPECT_EQ(link_->queued_bytes(), 0u);
 }
 
 // A CDC port has no UART: host bytes reach the device at once, and the echo
-// leaves in the next 1 ms USB frame, 64-byte packets together.
+// leaves in the next 1 ms USB frame; 64-byte packets leave when full.
 TEST_F(LinkTest, CdcBridgeIsUnpacedAndDeliversInTheNextUsbFrame) {
-  Build(LinkOptions{}, Bridged(115200, devices::UsbBridge::Cdc()));
+  const devices::LineSettings line = Bridged(115200, devices::UsbBridge::Cdc());
+  Build(LinkOptions{}, line);
   auto end = AttachFake();
-  const sim::TimeNs before = driver_.Sync();
   end->HostSends("abcdef");
-  ASSERT_TRUE(RunUntil(io_, [&] { return end->written == "abcdef"; }));
-  EXPECT_EQ(end->write_sizes, (std::vector<size_t>{6}));
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 6; }));
   // Unpaced: the device got all six in one hand-over.
   size_t host_chunks = 0;
   for (const auto& r : recorder_.log) host_chunks += r.what.starts_with("H:") ? 1 : 0;
   EXPECT_EQ(host_chunks, 1u);
-  ASSERT_EQ(end->write_times.size(), 1u);
-  EXPECT_EQ(end->write_times[0] % kNsPerMs, 0);  // on a frame boundary
-  EXPECT_GT(end->write_times[0], before);
-  // 200 bytes at once: three full packets go together, the last 8 a frame on.
   device_->echo = false;
   device_->Send(std::string(200, 'z'));
   driver_.Kick();
-  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == 206; }));
-  ASSERT_EQ(end->write_sizes.size(), 3u);
-  EXPECT_EQ(end->write_sizes[1], 192u);
-  EXPECT_EQ(end->write_sizes[2], 8u);
+  ASSERT_TRUE(RunUntil(io_, [&] { return link_->stats().bytes_to_host == 206; }));
+  EXPECT_EQ(end->written, "abcdef" + std::string(200, 'z'));
+  const auto packets = ExpectedPackets(recorder_.log, line);
+  // The echo: one short packet at the next frame. The 200: three full
+  // packets at once, the last 8 bytes at the frame after.
+  ASSERT_EQ(packets.size(), 5u);
+  EXPECT_EQ(packets[0].bytes, 6u);
+  EXPECT_EQ(packets[0].at_ns % kNsPerMs, 0);
+  for (int i = 1; i <= 3; ++i) {
+    EXPECT_EQ(packets[i].bytes, 64u);
+    EXPECT_TRUE(packets[i].full);
+  }
+  EXPECT_EQ(packets[4].bytes, 8u);
+  EXPECT_EQ(packets[4].at_ns % kNsPerMs, 0);
+  ExpectWholePacketsNeverEarly(packets, *end);
 }
 
 // Bytes the bridge holds when the host closes the port are not lost or

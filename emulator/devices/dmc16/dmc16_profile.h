@@ -145,9 +145,10 @@ struct Dmc16Profile {
   std::optional<uint16_t> protocol_version = 2;
   dmc::AckWidth ack_width = dmc::AckWidth::k16;
   uint32_t baud = 115200;
-  // The USB serial bridge to the host: the DMC boards' own USB port in CDC
-  // mode (FACTS "USB serial bridges"; the baud setting does not pace it).
-  UsbBridge usb_bridge = UsbBridge::Cdc();
+  // The USB serial bridge to the host. No bridge (bytes as the UART at
+  // `baud` completes them): the DMC-16's own bridge has not been measured.
+  // dmc-lite's GIGA is CDC (FACTS "DMC v2"), which its profile sets.
+  UsbBridge usb_bridge = UsbBridge::None();
 
   // Unsolicited MOTOR_GET_POSITION cadence while anything moves (spec: "about
   // every 0.10 seconds"; dmc-lite uses 50 ms).
