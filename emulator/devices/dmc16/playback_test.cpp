@@ -550,7 +550,9 @@ void UploadRamp(Host& h, uint32_t start, uint32_t n, int32_t step, bool dmx = tr
   }
   ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, pos}), kAckOk);
   ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{2, 0, true, {50}}), kAckOk);
-  if (dmx) ASSERT_EQ(h.Request(dmc::RtUploadMoveDmx{3, 0, true, levels}), kAckOk);
+  if (dmx) {
+    ASSERT_EQ(h.Request(dmc::RtUploadMoveDmx{3, 0, true, levels}), kAckOk);
+  }
   ASSERT_EQ(h.Request(dmc::RtUploadMoveTriggers{0x3, {{5, 0x1}, {6, 0x3}}}), kAckOk);
   ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kAckOk);
 }
