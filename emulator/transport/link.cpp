@@ -141,20 +141,27 @@ void Link::StartWrite() {
   stream_->AsyncWriteAll(asio::buffer(write_buf_), Guard(&Link::OnWritten));
 }
 
-sim::TimeNs Link::TakeBridged(sim::TimeNs now) {
-  sim::TimeNs next = sim::kTimeNever;
-  // The UART hands the bridge each byte as its stop bit ends.
-  while (!out_.empty()) {
+sim::TimeNs Link::ClockOutUart(sim::TimeNs now, bool to_bridge) {
+  // The UART sends each byte as its stop bit ends: into the bridge, or with
+  // no bridge straight into the next write (at most a chunk of it).
+  const size_t chunk = WriteChunk();
+  while (!out_.empty() && (to_bridge || write_buf_.size() < chunk)) {
     const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
     const sim::TimeNs due = out_pacer_.DueTime(ready);
-    if (due > now) {
-      next = due;
-      break;
-    }
+    if (due > now) return due;
     out_pacer_.Take(ready);
-    bridged_.push_back({due, out_.front().byte});
+    if (to_bridge) {
+      bridged_.push_back({due, out_.front().byte});
+    } else {
+      write_buf_.push_back(out_.front().byte);
+    }
     out_.pop_front();
   }
+  return sim::kTimeNever;
+}
+
+sim::TimeNs Link::TakeBridged(sim::TimeNs now) {
+  sim::TimeNs next = ClockOutUart(now, /*to_bridge=*/true);
   // The bridge sends whole packets: a host never sees one trickle in.
   const size_t chunk = WriteChunk();
   const auto arrival = [this](size_t i) { return bridged_[i].ready_ns; };
@@ -186,35 +193,12 @@ void Link::PumpWriter() {
   CancelTimer(out_wake_);
   const sim::TimeNs now = driver_.NowNs();
   write_buf_.clear();
-  if (bridge_pacer_.active()) {
-    const sim::TimeNs next = TakeBridged(now);
-    if (!write_buf_.empty()) {
-      StartWrite();
-    } else if (next != sim::kTimeNever) {
-      out_wake_ = scheduler_.At(next, [this] {
-        out_wake_ = sim::Scheduler::kNoTimer;
-        PumpWriter();
-      });
-    }
-    return;
-  }
-  sim::TimeNs next_due = now;
-  const size_t chunk = WriteChunk();
-  while (!out_.empty() && write_buf_.size() < chunk) {
-    const sim::TimeNs ready = std::max(out_.front().ready_ns, send_floor_ns_);
-    const sim::TimeNs due = out_pacer_.DueTime(ready);
-    if (due > now) {
-      next_due = due;
-      break;
-    }
-    out_pacer_.Take(ready);
-    write_buf_.push_back(out_.front().byte);
-    out_.pop_front();
-  }
+  const sim::TimeNs next =
+      bridge_pacer_.active() ? TakeBridged(now) : ClockOutUart(now, /*to_bridge=*/false);
   if (!write_buf_.empty()) {
     StartWrite();
-  } else if (!out_.empty()) {
-    out_wake_ = scheduler_.At(next_due, [this] {
+  } else if (next != sim::kTimeNever) {
+    out_wake_ = scheduler_.At(next, [this] {
       out_wake_ = sim::Scheduler::kNoTimer;
       PumpWriter();
     });

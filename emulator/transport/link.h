@@ -231,6 +231,10 @@ class Link final : public devices::ByteSink {
     return line_rate_ == 0 && (dir == Direction::kToDevice || !bridge_pacer_.active()) &&
            faults_.PassesUnchanged(dir);
   }
+  // Moves the bytes whose character time has ended on the UART into the
+  // bridge (to_bridge) or into write_buf_; returns when the next one ends
+  // (kTimeNever: none waits, or write_buf_ holds a chunk).
+  sim::TimeNs ClockOutUart(sim::TimeNs now, bool to_bridge);
   // Moves the bytes whose character time has ended into the bridge and the
   // bridge's packets that are due into write_buf_; returns when to look
   // again (kTimeNever: nothing waits).

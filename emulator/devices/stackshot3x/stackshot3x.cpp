@@ -60,8 +60,8 @@ Stackshot3x::~Stackshot3x() {
 }
 
 LineSettings Stackshot3x::Line() const {
-  return LineSettings{SpeaksDfmoco() ? stackshot::kDfMocoBaudRate : stackshot::kBaudRate, 8, 1,
-                      'N', profile_.usb_bridge};
+  return LineSettings{SpeaksDfmoco() ? stackshot::kDfMocoBaudRate : stackshot::kBaudRate, 8, 1, 'N',
+                      profile_.usb_bridge};
 }
 
 bool Stackshot3x::InDfmocoMode() const {
