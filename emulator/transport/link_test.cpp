@@ -19,9 +19,11 @@ using testing::RunUntil;
 struct FakeEnd {
   asio::io_context* io = nullptr;
   std::string written;
-  std::vector<size_t> write_sizes;       // one entry per AsyncWriteAll
-  std::vector<sim::TimeNs> write_times;  // the scheduler's time of each
-  const sim::Scheduler* clock = nullptr;
+  std::vector<size_t> write_sizes;  // one entry per AsyncWriteAll
+  // The link's clock when each write began: the driver's NowNs(), which the
+  // link's writer decides by (the scheduler's Now() may lag behind it).
+  std::vector<sim::TimeNs> write_times;
+  RealtimeDriver* clock = nullptr;
   ByteStream::Handler pending_read;
   asio::mutable_buffer read_buf;
   bool closed = false;
@@ -51,7 +53,7 @@ class FakeStream final : public ByteStream {
   void AsyncWriteAll(asio::const_buffer buffer, Handler handler) override {
     end_->written.append(static_cast<const char*>(buffer.data()), buffer.size());
     end_->write_sizes.push_back(buffer.size());
-    if (end_->clock != nullptr) end_->write_times.push_back(end_->clock->Now());
+    if (end_->clock != nullptr) end_->write_times.push_back(end_->clock->NowNs());
     asio::post(*end_->io, [h = std::move(handler), n = buffer.size()] { h(ErrorCode(), n); });
   }
   void Close() override {
@@ -102,7 +104,7 @@ class LinkTest : public ::testing::Test {
   std::shared_ptr<FakeEnd> AttachFake() {
     auto end = std::make_shared<FakeEnd>();
     end->io = &io_;
-    end->clock = &scheduler_;
+    end->clock = &driver_;
     link_->Attach(std::make_unique<FakeStream>(end));
     return end;
   }
