@@ -28,6 +28,9 @@
 //     static std::optional<Device> Greet(Host& host, Target& target, const Device& discovered);
 //     // The motor positions the device reported in `traffic`, for plots.
 //     static PositionSeries Positions(const std::vector<Chunk>& traffic);
+//     // The fuzzer's and replay's hooks of each protocol the folder speaks
+//     // (core/fuzz_protocol.h).
+//     static std::span<const FuzzHooks> Fuzz();
 //   };
 //
 // The introduction is sent twice, as a host retries after its answer timeout;
@@ -52,6 +55,7 @@
 #include <vector>
 
 #include "conformance/core/cases.h"
+#include "conformance/core/fuzz_protocol.h"
 #include "conformance/core/pin_judge.h"
 #include "conformance/core/run_report.h"
 #include "conformance/core/transcript.h"

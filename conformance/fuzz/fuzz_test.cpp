@@ -12,6 +12,7 @@
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
+#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "devices/faulty_sink.h"
 #include "devices/registry.h"
 #include "session/session.h"
@@ -148,7 +149,7 @@ TEST(SessionMutator, MutantsStayWithinTheirBounds) {
     Messages m = s.messages;
     for (int k = 0; k < 5; ++k) mut.Mutate(m, {s.messages});
     ASSERT_LE(m.size(), SessionMutator::kMaxMessages);
-    for (const wire::Bytes& line : m) ASSERT_LE(line.size(), SessionMutator::kMaxDfmocoLine + 2);
+    for (const wire::Bytes& line : m) ASSERT_LE(line.size(), DfmocoProtocol::kMaxFuzzLine + 2);
   }
 }
 

@@ -1,21 +1,15 @@
 // Session replay (see replay.h). Messages match when their bytes are equal or
-// when they differ only within the tolerances: DMC position reports
-// (MOTOR_GET_POSITION) and DFMoco `mp` / `mm` positions by the step
-// tolerance, the ID of an unsolicited DMC message (the device numbers those
-// itself, dmc-v2-protocol.txt "Message Format"), and arrival times by the
-// time tolerance.
+// when the protocol's matcher (FuzzHooks::matcher: positions within the step
+// tolerance, a device's own message IDs) accepts their difference, and
+// arrive within the time tolerance.
 #include "conformance/fuzz/replay.h"
 
 #include "base/format.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
-#include <map>
 #include <string_view>
 
-#include "wire/dmc.h"
-#include "wire/dmc_frame.h"
+#include "conformance/protocols/registry.h"
 #include "wire/protocol.h"
 #include "wire/transcript.h"
 
@@ -29,81 +23,6 @@ std::string Describe(Protocol protocol, const wire::Bytes& bytes) {
   for (const auto& l : d.Finish()) s += (s.empty() ? "" : "; ") + l.text;
   if (s.empty()) s = wire::ToHex(bytes);
   return s;
-}
-
-// Whether two DFMoco lines differ only in numbers within `tol` (positions).
-bool DfmocoClose(std::string_view a, std::string_view b, int64_t tol) {
-  auto split = [](std::string_view s) {
-    std::vector<std::string_view> t;
-    size_t i = 0;
-    while (i < s.size()) {
-      while (i < s.size() && (s[i] == ' ' || s[i] == '\r' || s[i] == '\n')) ++i;
-      size_t j = i;
-      while (j < s.size() && s[j] != ' ' && s[j] != '\r' && s[j] != '\n') ++j;
-      if (j > i) t.push_back(s.substr(i, j - i));
-      i = j;
-    }
-    return t;
-  };
-  const auto ta = split(a), tb = split(b);
-  if (ta.size() != tb.size() || ta.empty() || ta[0] != tb[0]) return false;
-  if (ta[0] != "mp" && ta[0] != "mm") return false;
-  for (size_t i = 1; i < ta.size(); ++i) {
-    if (ta[i] == tb[i]) continue;
-    if (i == 1) return false;  // the motor number must agree
-    char* end_a = nullptr;
-    char* end_b = nullptr;
-    const std::string sa(ta[i]), sb(tb[i]);
-    const long long va = std::strtoll(sa.c_str(), &end_a, 10);
-    const long long vb = std::strtoll(sb.c_str(), &end_b, 10);
-    if (*end_a != 0 || *end_b != 0 || std::llabs(va - vb) > tol) return false;
-  }
-  return true;
-}
-
-// Whether DMC frames `e` (recorded) and `o` (observed) match; `why` says why not.
-bool DmcMatch(const wire::Bytes& e, const wire::Bytes& o,
-              const std::map<uint32_t, TimeNs>& host_ids, TimeNs t_ns, int64_t tol,
-              std::string& why) {
-  auto fe = dmc::DecodeFrame(e);
-  auto fo = dmc::DecodeFrame(o);
-  if (!fe.ok() || !fo.ok()) {
-    why = "the bytes differ and one of the frames does not decode";
-    return false;
-  }
-  const dmc::Frame& a = fe.value();
-  const dmc::Frame& b = fo.value();
-  if (a.type != b.type) {
-    why = "a different message type";
-    return false;
-  }
-  // An answer: its ID is one the host had sent by then.
-  const auto sent = host_ids.find(a.id);
-  if (a.id != b.id && sent != host_ids.end() && sent->second <= t_ns) {
-    why = "the ID of an answer differs (an answer carries its request's ID)";
-    return false;
-  }
-  if (a.data == b.data) return true;
-  auto ma = dmc::DecodeDeviceMessage(a);
-  auto mb = dmc::DecodeDeviceMessage(b);
-  if (ma.ok() && mb.ok()) {
-    const auto* pa = std::get_if<dmc::MotorPositionReport>(&ma.value());
-    const auto* pb = std::get_if<dmc::MotorPositionReport>(&mb.value());
-    if (pa != nullptr && pb != nullptr && pa->move_time_x1000 == pb->move_time_x1000 &&
-        pa->positions_steps.size() == pb->positions_steps.size()) {
-      for (size_t i = 0; i < pa->positions_steps.size(); ++i) {
-        const int64_t d = static_cast<int64_t>(pa->positions_steps[i]) - pb->positions_steps[i];
-        if (std::llabs(d) > tol) {
-          why = "motor " + std::to_string(i + 1) + " is " + std::to_string(d) +
-                " steps off (tolerance " + std::to_string(tol) + ")";
-          return false;
-        }
-      }
-      return true;
-    }
-  }
-  why = "the data differ";
-  return false;
 }
 
 }  // namespace
@@ -162,8 +81,9 @@ ReplayResult Replay(const session::Session& session, Protocol protocol, Target& 
   }
   for (TimedMessage& m : expected) m.t_ns -= base;
 
-  // Host IDs (DMC): answers carry them; unsolicited messages carry the device's own.
-  std::map<uint32_t, TimeNs> host_ids;  // ID -> when first sent (recorded time - base)
+  const FuzzHooks* hooks = FindFuzzHooks(protocol);
+  const std::unique_ptr<ReplayMatcher> matcher =
+      hooks != nullptr && hooks->matcher != nullptr ? hooks->matcher() : nullptr;
   std::vector<TimedMessage> observed_chunks;
   auto pump_until = [&](TimeNs t_target) {
     while (true) {
@@ -176,11 +96,7 @@ ReplayResult Replay(const session::Session& session, Protocol protocol, Target& 
   for (const session::SessionEntry& e : session.entries) {
     if (e.is_event || e.from != session::Origin::kHost) continue;
     if (!pump_until(origin + (e.t_ns - base))) break;
-    if (protocol == Protocol::kDmc) {
-      for (const wire::Bytes& m : wire::SplitMessages(protocol, wire::Side::kHost, e.bytes)) {
-        if (const auto h = dmc::PeekHeader(m)) host_ids.emplace(h->id, e.t_ns - base);
-      }
-    }
+    if (matcher != nullptr) matcher->HostSent(e.bytes, e.t_ns - base);
     if (!target.Send(e.bytes)) break;
     ++result.host_messages_sent;
   }
@@ -220,22 +136,10 @@ ReplayResult Replay(const session::Session& session, Protocol protocol, Target& 
     bool same = e == o;
     std::string why;
     if (!same) {
-      switch (protocol) {
-        case Protocol::kDmc:
-          same = DmcMatch(e, o, host_ids, expected[i].t_ns, result.position_tolerance_steps, why);
-          break;
-        case Protocol::kDfmoco:
-          same = DfmocoClose(std::string_view(reinterpret_cast<const char*>(e.data()), e.size()),
-                             std::string_view(reinterpret_cast<const char*>(o.data()), o.size()),
-                             result.position_tolerance_steps);
-          if (!same) why = "the line differs";
-          break;
-        case Protocol::kStackshot:
-          why = "the packet differs";
-          break;
-        case Protocol::kStackshotDfmoco:
-          why = "the line differs";
-          break;
+      if (matcher != nullptr) {
+        same = matcher->Match(e, o, expected[i].t_ns, result.position_tolerance_steps, why);
+      } else {
+        why = "the bytes differ";
       }
     }
     const TimeNs dt = observed[i].t_ns - expected[i].t_ns;

@@ -11,7 +11,7 @@ namespace {
 template <typename Traits>
 constexpr ProtocolRunner RunnerOf() {
   return {Traits::kProtocol, &Traits::Rules, &Run<Traits>,
-          [] { return CaseInfos(Traits::Cases()); }};
+          [] { return CaseInfos(Traits::Cases()); }, &Traits::Fuzz};
 }
 
 const ProtocolRunner kRunners[] = {
@@ -27,6 +27,15 @@ std::span<const ProtocolRunner> Runners() { return kRunners; }
 const ProtocolRunner* FindRunner(Protocol p) {
   for (const ProtocolRunner& r : kRunners) {
     if (r.protocol == p) return &r;
+  }
+  return nullptr;
+}
+
+const FuzzHooks* FindFuzzHooks(Protocol p) {
+  for (const ProtocolRunner& r : kRunners) {
+    for (const FuzzHooks& h : r.fuzz()) {
+      if (h.protocol == p) return &h;
+    }
   }
   return nullptr;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "conformance/core/cases.h"
+#include "conformance/core/fuzz_protocol.h"
 #include "conformance/core/run_report.h"
 #include "conformance/rules/catalogue.h"
 #include "conformance/targets/target.h"
@@ -20,12 +21,17 @@ struct ProtocolRunner {
   const std::vector<Rule>& (*rules)();
   RunReport (*run)(Target& target, const RunOptions& options);
   std::vector<CaseInfo> (*cases)();
+  // How the fuzzer and replay treat each protocol this folder speaks (its
+  // own, and a dialect another device switches to).
+  std::span<const FuzzHooks> (*fuzz)();
 };
 
 // Every protocol with suites, in the catalogue's order.
 std::span<const ProtocolRunner> Runners();
 // nullptr when the protocol has no runner.
 const ProtocolRunner* FindRunner(Protocol p);
+// The fuzz hooks of `p`, from whichever runner speaks it; nullptr when none does.
+const FuzzHooks* FindFuzzHooks(Protocol p);
 
 }  // namespace moco::conformance
 

@@ -51,6 +51,25 @@ TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
   EXPECT_EQ(FindRunner(Protocol::kStackshotDfmoco), nullptr);
 }
 
+// Every protocol on the wire can be mutated and replayed, by exactly one
+// runner's hooks, and every protocol with a runner can be fuzzed.
+TEST(Registry, EveryWireProtocolHasExactlyOneSetOfFuzzHooks) {
+  for (const wire::ProtocolInfo& info : wire::Protocols()) {
+    SCOPED_TRACE(std::string(info.name));
+    size_t owners = 0;
+    for (const ProtocolRunner& r : Runners()) {
+      for (const FuzzHooks& h : r.fuzz()) owners += h.protocol == info.id ? 1 : 0;
+    }
+    EXPECT_EQ(owners, 1u);
+    const FuzzHooks* hooks = FindFuzzHooks(info.id);
+    ASSERT_NE(hooks, nullptr);
+    EXPECT_NE(hooks->mutate, nullptr);
+    EXPECT_NE(hooks->matcher, nullptr);
+    EXPECT_GT(hooks->gap_ns, 0);
+    if (FindRunner(info.id) != nullptr) EXPECT_NE(hooks->run, nullptr);
+  }
+}
+
 // A device that sends nothing at all to the introduction (asked twice) gives
 // no verdict under any protocol: a target error (exit 2) in every subset and
 // every shard, with no case run and no rule judged, never a PASS.

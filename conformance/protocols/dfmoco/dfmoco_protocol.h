@@ -58,6 +58,10 @@ struct DfmocoProtocol {
   }
   // Every `mp` line the device sent.
   static PositionSeries Positions(const std::vector<Chunk>& traffic);
+  // The fuzzer's hooks (core/fuzz_protocol.h), in dfmoco_fuzz_hooks.cpp.
+  static std::span<const FuzzHooks> Fuzz();
+  // The longest line a fuzz mutant carries (its line end aside).
+  static constexpr size_t kMaxFuzzLine = 96;
 };
 
 // The runner over DfmocoProtocol (registry.cpp runs it the same way).

@@ -37,6 +37,8 @@ struct DmcProtocol {
                                               const dmc::HiResponse& discovered);
   // Every MOTOR_GET_POSITION message the device sent.
   static PositionSeries Positions(const std::vector<Chunk>& traffic);
+  // The fuzzer's hooks (core/fuzz_protocol.h), in dmc_fuzz_hooks.cpp.
+  static std::span<const FuzzHooks> Fuzz();
 };
 
 // The runner over DmcProtocol (registry.cpp runs it the same way).

@@ -31,6 +31,8 @@ struct StackshotProtocol {
                                            const SsDeviceInfo& discovered);
   // Rail positions are read, not reported: nothing to plot.
   static PositionSeries Positions(const std::vector<Chunk>& /*traffic*/) { return {}; }
+  // The fuzzer's hooks (core/fuzz_protocol.h), in stackshot_fuzz_hooks.cpp.
+  static std::span<const FuzzHooks> Fuzz();
 };
 
 // The runner over StackshotProtocol (registry.cpp runs it the same way).

@@ -1,0 +1,102 @@
+// What `mococheck fuzz`, `mococheck replay` and the libFuzzer targets need
+// from a protocol, and nothing else: how to mutate one host message, how to
+// play a mutated session into an in-process device and judge the invariants
+// every device keeps whatever the host sends, and when two device messages
+// are the same within a replay's tolerances. Each protocol's folder
+// (conformance/protocols/*/..._fuzz_hooks.cpp) fills one FuzzHooks per
+// protocol it speaks; the shared fuzz code (conformance/fuzz/) finds them in
+// the registry (conformance/protocols/registry.h) and never names a protocol.
+#ifndef MOCO_CONFORMANCE_CORE_FUZZ_PROTOCOL_H_
+#define MOCO_CONFORMANCE_CORE_FUZZ_PROTOCOL_H_
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "conformance/targets/target.h"
+#include "wire/bytes.h"
+#include "wire/protocol.h"
+
+namespace moco::conformance {
+
+// One host message as it goes on the wire: a DMC frame, a DFMoco line with its
+// line end, a StackShot packet; or bytes that frame as nothing (noise).
+using Messages = std::vector<wire::Bytes>;
+
+// What one run of a mutated session found.
+struct FuzzVerdict {
+  bool ok = true;
+  std::string violation;  // the invariant broken and what was seen; empty when ok
+  size_t messages = 0;    // host messages sent
+  size_t replies = 0;     // device messages received
+};
+
+inline FuzzVerdict Violation(std::string what, size_t messages, size_t replies) {
+  return FuzzVerdict{false, std::move(what), messages, replies};
+}
+
+// The seeded generator (splitmix64) a mutator draws from, and the names of the
+// mutations it applied, for reports. Deterministic: the same seed gives the
+// same mutants.
+class MutationSource {
+ public:
+  explicit MutationSource(uint64_t seed);
+
+  uint64_t Next();
+  uint64_t Below(uint64_t n);  // uniform in [0, n); n > 0
+  bool Chance(uint32_t percent);
+
+  // Records a mutation by name ("bit-flip", "type", ...).
+  void Note(std::string_view name) { applied_.emplace_back(name); }
+  const std::vector<std::string>& applied() const { return applied_; }
+  void ClearApplied() { applied_.clear(); }
+
+  // One mutation of a binary data section: a bit flip, an interesting value
+  // at an integer edge (1, 2 or 4 bytes, little-endian), a random byte,
+  // truncation, extension (rarely past a receive buffer), or an int32
+  // negated.
+  void MutateDataBytes(wire::Bytes& data);
+
+ private:
+  uint64_t state_;
+  std::vector<std::string> applied_;
+};
+
+// Decides, during one replay, whether a recorded device message and an
+// observed one are the same within the tolerances.
+class ReplayMatcher {
+ public:
+  virtual ~ReplayMatcher() = default;
+  // The host sent `bytes` (one recorded chunk) at recorded time `t_ns`.
+  virtual void HostSent(wire::ByteView bytes, TimeNs t_ns) { (void)bytes, (void)t_ns; }
+  // `expected` (recorded at `t_ns`) and `observed` differ in their bytes:
+  // whether they still match within `position_steps`; `why` says why not.
+  virtual bool Match(const wire::Bytes& expected, const wire::Bytes& observed, TimeNs t_ns,
+                     int64_t position_steps, std::string& why) = 0;
+};
+
+// A matcher that accepts no difference, saying `why` ("the packet differs").
+std::unique_ptr<ReplayMatcher> ExactMatcher(std::string why);
+
+struct FuzzHooks {
+  wire::Protocol protocol = wire::Protocol::kDmc;
+  // Virtual time a run leaves between two host messages.
+  TimeNs gap_ns = 0;
+  // Mutates one host message in place (its fields, then re-framed: length,
+  // checksum or line end repaired, except where a mutation breaks it on
+  // purpose), noting each mutation in `source`.
+  void (*mutate)(MutationSource& source, wire::Bytes& message) = nullptr;
+  // Plays `messages` into a freshly restarted in-process device in virtual
+  // time, `gap_ns` apart, and judges the invariants. nullptr: sessions of this
+  // protocol are mutated and replayed, not run by the fuzzer.
+  FuzzVerdict (*run)(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) = nullptr;
+  // A matcher for one replay.
+  std::unique_ptr<ReplayMatcher> (*matcher)() = nullptr;
+};
+
+}  // namespace moco::conformance
+
+#endif  // MOCO_CONFORMANCE_CORE_FUZZ_PROTOCOL_H_
