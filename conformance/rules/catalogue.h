@@ -6,7 +6,10 @@
 #ifndef MOCO_CONFORMANCE_RULES_CATALOGUE_H_
 #define MOCO_CONFORMANCE_RULES_CATALOGUE_H_
 
+#include <array>
+#include <iterator>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,10 +22,6 @@ namespace moco::conformance {
 // A protocol is the wire table's (names, titles, rule prefixes: wire/protocol.h).
 using wire::Protocol;
 using wire::ProtocolName;
-// The protocols with rules, in the catalogue's order.
-inline constexpr Protocol kAllProtocols[] = {Protocol::kDmc, Protocol::kDfmoco,
-                                             Protocol::kStackshot};
-
 // MUST failures fail the run (exit 1); SHOULD failures are reported only;
 // NOTE marks a reading the spec leaves open (ERRATA) and never fails.
 enum class Level { kMust, kShould, kNote };
@@ -71,7 +70,8 @@ struct Rule {
   std::string_view source;  // where the clause is: "MSG_FLAG_ACK", "ERRATA 1.4", ...
 };
 
-// Every DMC v2 rule, ordered by id family as the catalogue lists them.
+// Every DMC v2 rule, ordered by id family as the catalogue lists them
+// (conformance/rules/dmc_rules.cpp).
 const std::vector<Rule>& DmcRules();
 // Every DFMoco rule (conformance/rules/dfmoco_rules.cpp).
 const std::vector<Rule>& DfmocoRules();
@@ -79,7 +79,26 @@ const std::vector<Rule>& DfmocoRules();
 const std::vector<Rule>& DfmocoPinRules();
 // Every StackShot 3X rule (conformance/rules/stackshot_rules.cpp).
 const std::vector<Rule>& StackshotRules();
-// The rules of one protocol.
+
+// The rules layer's registry: each protocol with rules, in the catalogue's
+// order, and its rule table. A new protocol is one line here.
+struct RuleSet {
+  Protocol protocol;
+  const std::vector<Rule>& (*rules)();
+};
+inline constexpr RuleSet kRuleSets[] = {
+    {Protocol::kDmc, &DmcRules},
+    {Protocol::kDfmoco, &DfmocoRules},
+    {Protocol::kStackshot, &StackshotRules},
+};
+// The protocols with rules, in the catalogue's order (from kRuleSets).
+inline constexpr auto kAllProtocols = [] {
+  std::array<Protocol, std::size(kRuleSets)> protocols{};
+  for (size_t i = 0; i < protocols.size(); ++i) protocols[i] = kRuleSets[i].protocol;
+  return protocols;
+}();
+
+// The rules of one protocol; empty for a protocol without rules of its own.
 const std::vector<Rule>& RulesFor(Protocol p);
 // Total number of rules over every protocol.
 size_t RuleCount();
@@ -96,6 +115,17 @@ std::string_view LevelReasonOf(std::string_view id);
 // What is wrong with those tables: a malformed line, an id no rule has, a rule
 // listed twice in the reasons; empty when they are sound.
 std::vector<std::string> RuleTableProblems();
+
+namespace detail {
+// The text of one protocol's proofs and reasons tables, compiled in
+// (rule_tables.cpp.in, one entry per rules/proofs/<protocol>.tsv).
+struct RuleTableText {
+  std::string_view protocol;  // the files' name: "dmc"
+  std::string_view proofs;
+  std::string_view reasons;
+};
+std::span<const RuleTableText> RuleTableTexts();
+}  // namespace detail
 
 // Shell-style match: '*' any run, '?' one character; a comma separates
 // alternatives ("DMC-HI-*,DMC-ACK-00?").

@@ -180,6 +180,20 @@ TEST(Catalogue, RuleTablesNameOnlyRulesThatExist) {
                                 << (problems.empty() ? "" : problems.front());
 }
 
+// One pair of tables per protocol with rules, named as the protocol is, and
+// none for a protocol without rules.
+TEST(Catalogue, EveryProtocolWithRulesHasItsProofAndReasonTables) {
+  std::set<std::string_view> tables;
+  for (const detail::RuleTableText& t : detail::RuleTableTexts()) {
+    EXPECT_TRUE(tables.insert(t.protocol).second) << t.protocol;
+    EXPECT_FALSE(t.proofs.empty()) << t.protocol;
+    EXPECT_FALSE(t.reasons.empty()) << t.protocol;
+  }
+  std::set<std::string_view> with_rules;
+  for (Protocol p : kAllProtocols) with_rules.insert(ProtocolName(p));
+  EXPECT_EQ(tables, with_rules);
+}
+
 // Every rule says why it has its level (conformance/rules/reasons/*.tsv), and
 // the reason opens with the level's word, so a level changed later without its
 // reason fails here instead of showing a reason that argues for another level.
