@@ -223,6 +223,8 @@ class Stackshot3x : public Device, private sim::RigObserver {
   const std::vector<ShutterPulse>& ShutterPulses() const { return pulses_; }
 
  private:
+  // A time in seconds as the device's timers count it: whole microseconds.
+  static sim::TimeNs SecondsToNs(double s);
   struct Takeup {
     int dir = 0;  // 0: none in progress
     int64_t start_motor_steps = 0;
