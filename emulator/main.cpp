@@ -2,6 +2,7 @@
 // 3X) served over PTY or TCP, and tools for their session recordings.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <csignal>
@@ -523,7 +524,20 @@ int main(int argc, char** argv) {
                   "What the device speaks: dmc, dfmoco or stackshot. Sets the header's "
                   "protocol, the decoding and the default baud. Example: --protocol stackshot")
       ->required()
-      ->check(CLI::IsMember({"dmc", "dmc2", "dfmoco", "stackshot", "stackshot3x"}));
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            // A device is tapped from its power-on protocol: one with rules
+            // of its own (wire/protocol.h), by name or alias.
+            std::vector<moco::wire::Protocol> tappable;
+            for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
+              if (!info.rule_prefix.empty()) tappable.push_back(info.id);
+            }
+            const auto p = moco::wire::ParseProtocolOrAlias(text);
+            if (p && std::find(tappable.begin(), tappable.end(), *p) != tappable.end()) return "";
+            return "'" + text + "' is no protocol a device starts in: give " +
+                   moco::wire::NameList(tappable);
+          },
+          "PROTOCOL"));
   tap->add_option("--device", tap_config.device,
                   "The real device's side: serial:PATH (a serial port, raw 8N1 at --baud; a "
                   "bare path works too) or tcp:HOST:PORT. Example: --device serial:/dev/ttyUSB0")
