@@ -701,6 +701,7 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
   // without flags that stops moving motors sets the hard-stop state.
   if (profile_.behaviour.stop_all_lockout_ms > 0 && rig_.AnyMoving() && m.flags.value_or(0) == 0) {
     hard_stop_lock_ = true;
+    hard_stop_lock_ns_ = now;
   }
   // hard_stop_window_ms 0: never (dmc-lite: a motor already stopping keeps
   // its deceleration).
@@ -960,14 +961,11 @@ int64_t Dmc16::ReportedPosition(int motor) const {
 
 bool Dmc16::LockoutActive() const {
   if (!hard_stop_lock_) return false;
+  // dmc-lite counts its velocity updates from the STOP_ALL and ends the
+  // state at the first one past ~100 with the motors still.
   if (rig_.AnyMoving()) return true;
-  // The motors have been still since the last of them came to rest (a plan
-  // at rest starts where its motor stopped).
-  TimeNs rest_ns = 0;
-  for (int m = 1; m <= rig_.motor_count(); ++m) {
-    rest_ns = std::max(rest_ns, rig_.motor(m).CurrentPlan().origin_ns());
-  }
-  return scheduler_.Now() - rest_ns < TimeNs{profile_.behaviour.stop_all_lockout_ms} * kNsPerMs;
+  return scheduler_.Now() - hard_stop_lock_ns_ <
+         TimeNs{profile_.behaviour.stop_all_lockout_ms} * kNsPerMs;
 }
 
 bool Dmc16::HardStopLockout(uint16_t type) {

@@ -187,8 +187,10 @@ class Dmc16 final : public Device, private sim::RigObserver {
   uint32_t reported_inputs_ = 0;
   sim::TimeNs last_stop_all_ns_ = -1;
   bool silent_stop_ = false;
-  // The hard-stop state of behaviour.stop_all_lockout_ms.
+  // The hard-stop state of behaviour.stop_all_lockout_ms, and when the
+  // STOP_ALL that set it came.
   bool hard_stop_lock_ = false;
+  sim::TimeNs hard_stop_lock_ns_ = 0;
   // Per motor (index motor-1): the MSG_MOTOR_CONFIGURE flags as last
   // received; and the uploaded frame position a POSITION_FRAME brought the
   // motor to that reads one step short (behaviour.positions_truncate).

@@ -104,8 +104,9 @@ struct Dmc16Behaviour {
   uint32_t arming_ms = 0;
   // STOP_ALL (no flags) while moving sets a hard-stop state: every command
   // from MSG_MOTOR_MOVE (0x0031) up except MOTOR_GET_POSITION is refused
-  // with ERR_HARD_LOW until this long after the motors are still, a second
-  // STOP_ALL included (dmc-lite: ~100 velocity updates, about 2 s). 0: none.
+  // with ERR_HARD_LOW, a second STOP_ALL included, until this long after
+  // that STOP_ALL and the motors still (dmc-lite: 100 velocity updates of
+  // 20 ms counted from the STOP_ALL). 0: none.
   uint32_t stop_all_lockout_ms = 0;
   // A position read right after an upload's POSITION_FRAME lands can be one
   // step short of the uploaded one (dmc-lite truncates its float position):

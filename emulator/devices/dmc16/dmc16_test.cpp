@@ -1314,6 +1314,7 @@ TEST(Dmc16Behaviour, StopAllLockout) {
     EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
     h.RunMs(1000);
     ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    const sim::TimeNs stop_ns = h.now();
     const sim::TimeNs rest_ns = h.device().rig_ref().motor(1).CurrentPlan().EndNs();
     EXPECT_EQ(rest_ns - h.now(), 500 * kNsPerMs);
     // A second STOP_ALL: refused in the hard-stop state (no hard stop then).
@@ -1326,15 +1327,28 @@ TEST(Dmc16Behaviour, StopAllLockout) {
     const uint32_t st = h.Send(dmc::MotorStatusRequest{});
     EXPECT_NE(std::get_if<dmc::MotorStatusResponse>(&h.Reply(st).msg), nullptr);
     h.Settle();
-    h.scheduler().RunUntil(h.device().rig_ref().motor(1).CurrentPlan().origin_ns() +
-                           1999 * kNsPerMs);
+    // Counted from the STOP_ALL (the motors rested 500 ms after it).
+    h.scheduler().RunUntil(stop_ns + 1999 * kNsPerMs);
     if (lockout_ms != 0) {
-      EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "1999 ms after the motors stopped";
+      EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "1999 ms after the STOP_ALL";
     } else {
       EXPECT_EQ(MoveTaken(h, 1, 0), 1);
     }
     h.RunMs(1);
     EXPECT_EQ(MoveTaken(h, 1, 0), 1);
+    h.Settle();
+    if (lockout_ms == 0) continue;
+    // ... and never over before the motors rest: a stop of 5 s.
+    ASSERT_EQ(h.Request(dmc::MotorSetSpeed{1, 5000, 1000}), kOk);
+    EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+    h.RunMs(6000);
+    ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    const sim::TimeNs slow_rest_ns = h.device().rig_ref().motor(1).CurrentPlan().EndNs();
+    EXPECT_EQ(slow_rest_ns - h.now(), 5000 * kNsPerMs);
+    h.RunMs(4999);
+    EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "still stopping";
+    h.scheduler().RunUntil(slow_rest_ns);
+    EXPECT_EQ(MoveTaken(h, 1, 0), 1) << "at rest, long after the STOP_ALL";
   }
 }
 
