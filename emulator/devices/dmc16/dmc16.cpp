@@ -759,17 +759,52 @@ AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   }
   if (IgnoresMotion(m.motor)) return AckCode::kOk;
   sim::StepperMotor& motor = rig_.motor(m.motor);
-  const int64_t destination = m.destination_steps + UncountedSteps(m.motor);
-  sim::MoveStatus status;
+  const sim::MotionProfile& mp = motor.profile();
+  int64_t destination = m.destination_steps + UncountedSteps(m.motor);
+  double velocity = 0;
+  double accel = 0;
   if (per_10000) {
     // dmc-lite: the max velocity and acceleration times SPEED/10000, no
-    // upper bound, at least kJogMinRate each.
+    // upper bound, at least kJogMinRate each; the acceleration no less
+    // than brings the present speed to rest in max velocity / max accel.
     const double share = speed / static_cast<double>(dmc::kJogSpeedMax);
-    status = motor.JogAt(destination,
-                         std::max(kJogMinRate, motor.profile().max_velocity_steps_per_s * share),
-                         std::max(kJogMinRate, motor.profile().max_accel_steps_per_s2 * share));
+    velocity = std::max(kJogMinRate, mp.max_velocity_steps_per_s * share);
+    accel = std::max(
+        {kJogMinRate, mp.max_accel_steps_per_s2 * share,
+         std::abs(motor.Velocity()) * mp.max_accel_steps_per_s2 / mp.max_velocity_steps_per_s});
   } else {
-    status = motor.Jog(destination, speed);
+    velocity = mp.max_velocity_steps_per_s * sim::JogSpeedFraction(speed);
+    accel = mp.max_accel_steps_per_s2 * sim::JogSpeedFraction(speed);
+  }
+  sim::MoveStatus status = sim::MoveStatus::kOk;
+  if (profile_.behaviour.jog_horizon_ms == 0 || motor.following()) {
+    status = motor.JogAt(destination, velocity, accel);
+  } else {
+    // behaviour.jog_horizon_ms: the jog goes no further than where, having
+    // sped up towards its velocity for at most the horizon (then kept it for
+    // the rest of it), it would brake to rest; against the present motion
+    // it only stops the motor.
+    const int64_t at = motor.Position();
+    const double v0 = motor.Velocity();
+    const int dir = destination > at ? 1 : -1;
+    if (v0 * dir < 0) {
+      motor.Stop();
+    } else if (destination != at) {
+      const double horizon_s = profile_.behaviour.jog_horizon_ms / 1000.0;
+      const double vi = std::abs(v0);
+      double t_accel = 0;
+      double t_cruise = horizon_s;
+      if (vi < velocity) {
+        t_accel = std::min((velocity - vi) / accel, horizon_s);
+        t_cruise = horizon_s - t_accel;
+      }
+      const double v_top = vi + accel * t_accel;
+      const double reach = vi * t_accel + 0.5 * accel * t_accel * t_accel + v_top * t_cruise +
+                           0.5 * v_top * v_top / accel;
+      const auto far = static_cast<int64_t>(std::llround(static_cast<double>(at) + dir * reach));
+      destination = dir > 0 ? std::min(destination, far) : std::max(destination, far);
+      status = motor.JogAt(destination, velocity, accel);
+    }
   }
   const AckCode code = AckForMoveStatus(status);
   if (code == AckCode::kOk) {

@@ -227,6 +227,8 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
     v.set_speed_checked = b.GetBool("set_speed_checked", v.set_speed_checked);
     v.position_confirm = GetChoice(b, "position_confirm", v.position_confirm, kPositionConfirm);
     v.jog_speed_scale = GetChoice(b, "jog_speed_scale", v.jog_speed_scale, kJogSpeedScale);
+    v.jog_horizon_ms =
+        static_cast<uint32_t>(b.GetInt("jog_horizon_ms", v.jog_horizon_ms, 0, 60'000));
     v.coupling = GetChoice(b, "coupling", v.coupling, kCoupling);
     b.Finish();
   }
@@ -317,6 +319,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"set_speed_checked", p.behaviour.set_speed_checked},
         {"position_confirm", ChoiceName(p.behaviour.position_confirm, kPositionConfirm)},
         {"jog_speed_scale", ChoiceName(p.behaviour.jog_speed_scale, kJogSpeedScale)},
+        {"jog_horizon_ms", p.behaviour.jog_horizon_ms},
         {"coupling", ChoiceName(p.behaviour.coupling, kCoupling)}}},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},

@@ -151,6 +151,12 @@ struct Dmc16Behaviour {
   // least 4 (steps/s, steps/s^2), with no upper bound (dmc-lite).
   enum class JogSpeedScale : uint8_t { kSpec, kPer10000 };
   JogSpeedScale jog_speed_scale = JogSpeedScale::kSpec;
+  // 0: a MOTOR_JOG goes on to its DESTINATION (spec). n: no further than
+  // where, speeding up towards the jog velocity for at most n ms (keeping it
+  // for the rest of them), it would brake to rest, so a host keeps jogging by
+  // repeating the message; a JOG against the present motion only stops the
+  // motor (dmc-lite: 500).
+  uint32_t jog_horizon_ms = 0;
   // MOTOR_CONFIGURE coupling flags (0x10, 0x20 reversed): the flagged motor
   // follows the motor before it and reports the steps it makes (this
   // project's reading); kDrivesNext: the flagged motor drives the motor after

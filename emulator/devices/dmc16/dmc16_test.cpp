@@ -1547,6 +1547,50 @@ TEST(Dmc16Behaviour, JogSpeedScale) {
   EXPECT_EQ(h.Request(dmc::MotorJog{1, 10001, 100}), AckCode::kErrRange);
 }
 
+// jog_horizon_ms: a JOG goes on to its DESTINATION (spec), or only as far as
+// half a second's speeding up and cruising then braking would take it.
+TEST(Dmc16Behaviour, JogHorizon) {
+  for (const uint32_t horizon_ms : {0u, 500u}) {
+    SCOPED_TRACE("jog_horizon_ms " + std::to_string(horizon_ms));
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.jog_horizon_ms = horizon_ms;
+    Host h(p);
+    ASSERT_EQ(h.Request(dmc::MotorSetSpeed{1, 2000, 4000}), kOk);
+    // From rest: 0.5 s to reach 2000 steps/s (500 steps), then braking (500).
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), horizon_ms != 0 ? 1000 : 100000);
+    // A nearer DESTINATION is reached either way.
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 900}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 900);
+    // Repeated while under way, the jog goes on: 600 ms in, braking at 1600
+    // steps/s, a renewal reaches 0.1 s back up to 2000 steps/s (180 steps),
+    // 0.4 s at it (800) and the braking (500) further.
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.RunMs(600);
+    const int64_t at = h.Pos(1);
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.Settle();
+    if (horizon_ms != 0) {
+      EXPECT_NEAR(static_cast<double>(h.Pos(1)), static_cast<double>(at) + 180 + 800 + 500, 1);
+    } else {
+      EXPECT_EQ(h.Pos(1), 100000);
+    }
+    // Against the present motion: the spec's jog turns back, dmc-lite's stops.
+    ASSERT_EQ(MoveTaken(h, 1, 200000), 1);
+    h.RunMs(1000);
+    const int64_t before = h.Pos(1);
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 0}), kOk);
+    h.Settle();
+    if (horizon_ms != 0) {
+      EXPECT_EQ(h.Pos(1), before + 500) << "braked from 2000 steps/s at 4000 steps/s^2";
+    } else {
+      EXPECT_EQ(h.Pos(1), 0);
+    }
+  }
+}
+
 // coupling: a flagged motor follows the motor before it (this project's
 // reading), or drives the motor after it, which does not count those steps
 // in its reported position until its own next motion ends (dmc-lite).
