@@ -111,6 +111,18 @@ MoveStatus StepperMotor::MoveTo(int64_t target_steps) {
 MoveStatus StepperMotor::Jog(int64_t destination_steps, int speed) {
   if (following_) return MoveStatus::kCoupled;
   if (speed < kJogSpeedMin || speed > kJogSpeedMax) return MoveStatus::kBadArgument;
+  const double scale = JogSpeedFraction(speed);
+  return JogAt(destination_steps, profile_.max_velocity_steps_per_s * scale,
+               profile_.max_accel_steps_per_s2 * scale);
+}
+
+MoveStatus StepperMotor::JogAt(int64_t destination_steps, double velocity_steps_per_s,
+                               double accel_steps_per_s2) {
+  if (following_) return MoveStatus::kCoupled;
+  if (!(velocity_steps_per_s > 0) || !(accel_steps_per_s2 > 0) ||
+      !std::isfinite(velocity_steps_per_s) || !std::isfinite(accel_steps_per_s2)) {
+    return MoveStatus::kBadArgument;
+  }
   const int64_t p = Position();
   int64_t dest = destination_steps;
   if (soft_bounds_moves_ && soft_.upper_enabled && dest > soft_.upper_steps) {
@@ -123,15 +135,14 @@ MoveStatus StepperMotor::Jog(int64_t destination_steps, int speed) {
   }
   const MoveStatus status = CheckCanMove(dest);
   if (status != MoveStatus::kOk) return status;
-  const double scale = JogSpeedFraction(speed);
   PlanRequest req;
   req.kind = PlanRequest::Kind::kMoveTo;
   req.target_steps = dest;
-  req.max_velocity_steps_per_s = profile_.max_velocity_steps_per_s * scale;
-  req.max_accel_steps_per_s2 = profile_.max_accel_steps_per_s2 * scale;
+  req.max_velocity_steps_per_s = velocity_steps_per_s;
+  req.max_accel_steps_per_s2 = accel_steps_per_s2;
   // Braking (to reverse, to slow to the jog speed, to arrive) uses the full
   // deceleration: a slow jog must not coast for minutes after a fast move.
-  req.decel_steps_per_s2 = profile_.max_accel_steps_per_s2;
+  req.decel_steps_per_s2 = std::max(profile_.max_accel_steps_per_s2, accel_steps_per_s2);
   Replan(req);
   return MoveStatus::kOk;
 }

@@ -131,6 +131,11 @@ class StepperMotor {
   // soft limit stops at the limit instead (refused if already there), unless
   // soft limits do not bound moves (SetSoftLimitsBoundMoves).
   MoveStatus Jog(int64_t destination_steps, int speed);
+  // Jog() at the given velocity and acceleration (REQUIRES: both positive
+  // and finite) instead of a share of the profile's; braking uses the larger
+  // of the acceleration and the profile's max acceleration.
+  MoveStatus JogAt(int64_t destination_steps, double velocity_steps_per_s,
+                   double accel_steps_per_s2);
   // Decelerates to rest at max acceleration. No-op at rest, and for a
   // following motor (its leader's stop carries it). Soft limits bound the
   // stop: a motor inside an enabled soft limit whose ramp would carry it past

@@ -17,30 +17,33 @@ using Kind = DecodeError::Kind;
 
 class Fields {
  public:
-  Fields(Reader& r, TrailingBytes trailing) : r_(r), ignore_(trailing == TrailingBytes::kIgnore) {}
+  Fields(Reader& r, TrailingBytes trailing, MissingFields missing = MissingFields::kError)
+      : r_(r),
+        ignore_(trailing == TrailingBytes::kIgnore),
+        zero_(missing == MissingFields::kZero) {}
   // Whether an optional field or another list entry of `n` bytes is to be
   // read: strictly, any byte left starts one (a short one is then
   // kTruncated); ignoring trailing bytes, only `n` whole bytes do.
   bool Has(size_t n) const { return ignore_ ? r_.remaining() >= n : !r_.empty(); }
   bool ignoring_trailing() const { return ignore_; }
   Fields& U8(uint8_t& v, const char* name) {
-    if (!err_ && !r_.U8(v)) err_ = r_.Truncated(name);
+    if (!err_ && !r_.U8(v)) Missing(v, name);
     return *this;
   }
   Fields& U16(uint16_t& v, const char* name) {
-    if (!err_ && !r_.U16Le(v)) err_ = r_.Truncated(name);
+    if (!err_ && !r_.U16Le(v)) Missing(v, name);
     return *this;
   }
   Fields& I16(int16_t& v, const char* name) {
-    if (!err_ && !r_.I16Le(v)) err_ = r_.Truncated(name);
+    if (!err_ && !r_.I16Le(v)) Missing(v, name);
     return *this;
   }
   Fields& U32(uint32_t& v, const char* name) {
-    if (!err_ && !r_.U32Le(v)) err_ = r_.Truncated(name);
+    if (!err_ && !r_.U32Le(v)) Missing(v, name);
     return *this;
   }
   Fields& I32(int32_t& v, const char* name) {
-    if (!err_ && !r_.I32Le(v)) err_ = r_.Truncated(name);
+    if (!err_ && !r_.I32Le(v)) Missing(v, name);
     return *this;
   }
   Fields& Optional(std::optional<uint16_t>& v, const char* name) {
@@ -59,9 +62,10 @@ class Fields {
     last = (raw & kLastSetFlag) != 0;
     return *this;
   }
-  // At least one more entry of `n` bytes must follow (a list of "one or more").
+  // At least one more entry of `n` bytes must follow (a list of "one or more"),
+  // unless missing fields read as zero (MissingFields::kZero).
   Fields& NotEmpty(const char* name, size_t n = 1) {
-    if (!err_ && !Has(n)) err_ = r_.Truncated(name);
+    if (!err_ && !zero_ && !Has(n)) err_ = r_.Truncated(name);
     return *this;
   }
   void Fail(DecodeError e) {
@@ -72,8 +76,20 @@ class Fields {
   std::optional<DecodeError>& error() { return err_; }
 
  private:
+  // A field the data lacks: an error, or 0 with the rest of the data consumed.
+  template <class T>
+  void Missing(T& v, const char* name) {
+    if (!zero_) {
+      err_ = r_.Truncated(name);
+      return;
+    }
+    v = 0;
+    r_.Rest();
+  }
+
   Reader& r_;
   bool ignore_;
+  bool zero_;
   std::optional<DecodeError> err_;
 };
 
@@ -598,10 +614,11 @@ void Get(Fields& f, VirtPositionReport& m) {
 // --- Dispatch --------------------------------------------------------------------
 
 template <class T, class Variant>
-Result<Variant> DecodeAs(ByteView data, TrailingBytes trailing) {
+Result<Variant> DecodeAs(ByteView data, TrailingBytes trailing,
+                         MissingFields missing = MissingFields::kError) {
   T m{};
   Reader r(data);
-  Fields f(r, trailing);
+  Fields f(r, trailing, missing);
   Get(f, m);
   if (f.error()) return *f.error();
   if (!r.empty() && trailing == TrailingBytes::kReject) {
@@ -686,78 +703,79 @@ std::array<uint8_t, kHiNameSize> HiResponse::MakeName(std::string_view text) {
   return out;
 }
 
-Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data, TrailingBytes trailing) {
+Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data, TrailingBytes trailing,
+                                      MissingFields missing) {
   using M = HostMessage;
   if ((type & kFlagAck) != 0) return DecodeAck<M>(type, data);
   switch (static_cast<MsgType>(type)) {
     case MsgType::kHi:
-      return DecodeAs<HiRequest, M>(data, trailing);
+      return DecodeAs<HiRequest, M>(data, trailing, missing);
     case MsgType::kDmx:
-      return DecodeAs<Dmx, M>(data, trailing);
+      return DecodeAs<Dmx, M>(data, trailing, missing);
     case MsgType::kGioOut:
-      return DecodeAs<GioOut, M>(data, trailing);
+      return DecodeAs<GioOut, M>(data, trailing, missing);
     case MsgType::kGioIn:
-      return DecodeAs<GioInRequest, M>(data, trailing);
+      return DecodeAs<GioInRequest, M>(data, trailing, missing);
     case MsgType::kGioCam:
-      return DecodeAs<GioCam, M>(data, trailing);
+      return DecodeAs<GioCam, M>(data, trailing, missing);
     case MsgType::kMotorStatus:
-      return DecodeAs<MotorStatusRequest, M>(data, trailing);
+      return DecodeAs<MotorStatusRequest, M>(data, trailing, missing);
     case MsgType::kMotorMove:
-      return DecodeAs<MotorMove, M>(data, trailing);
+      return DecodeAs<MotorMove, M>(data, trailing, missing);
     case MsgType::kMotorStop:
-      return DecodeAs<MotorStop, M>(data, trailing);
+      return DecodeAs<MotorStop, M>(data, trailing, missing);
     case MsgType::kMotorStopAll:
-      return DecodeAs<MotorStopAll, M>(data, trailing);
+      return DecodeAs<MotorStopAll, M>(data, trailing, missing);
     case MsgType::kMotorGetPosition:
-      return DecodeAs<MotorGetPositionRequest, M>(data, trailing);
+      return DecodeAs<MotorGetPositionRequest, M>(data, trailing, missing);
     case MsgType::kMotorResetPosition:
-      return DecodeAs<MotorResetPosition, M>(data, trailing);
+      return DecodeAs<MotorResetPosition, M>(data, trailing, missing);
     case MsgType::kMotorJog:
-      return DecodeAs<MotorJog, M>(data, trailing);
+      return DecodeAs<MotorJog, M>(data, trailing, missing);
     case MsgType::kMotorConfigure:
-      return DecodeAs<MotorConfigure, M>(data, trailing);
+      return DecodeAs<MotorConfigure, M>(data, trailing, missing);
     case MsgType::kMotorSetSpeed:
-      return DecodeAs<MotorSetSpeed, M>(data, trailing);
+      return DecodeAs<MotorSetSpeed, M>(data, trailing, missing);
     case MsgType::kMotorSetLimits:
-      return DecodeAs<MotorSetLimits, M>(data, trailing);
+      return DecodeAs<MotorSetLimits, M>(data, trailing, missing);
     case MsgType::kRtUploadMoveBegin:
-      return DecodeAs<RtUploadMoveBegin, M>(data, trailing);
+      return DecodeAs<RtUploadMoveBegin, M>(data, trailing, missing);
     case MsgType::kRtUploadMoveAxis:
-      return DecodeAs<RtUploadMoveAxis, M>(data, trailing);
+      return DecodeAs<RtUploadMoveAxis, M>(data, trailing, missing);
     case MsgType::kRtUploadMoveDmx:
-      return DecodeAs<RtUploadMoveDmx, M>(data, trailing);
+      return DecodeAs<RtUploadMoveDmx, M>(data, trailing, missing);
     case MsgType::kRtUploadMoveTriggers:
-      return DecodeAs<RtUploadMoveTriggers, M>(data, trailing);
+      return DecodeAs<RtUploadMoveTriggers, M>(data, trailing, missing);
     case MsgType::kRtUploadMoveEnd:
-      return DecodeAs<RtUploadMoveEnd, M>(data, trailing);
+      return DecodeAs<RtUploadMoveEnd, M>(data, trailing, missing);
     case MsgType::kRtPositionFrame:
-      return DecodeAs<RtPositionFrame, M>(data, trailing);
+      return DecodeAs<RtPositionFrame, M>(data, trailing, missing);
     case MsgType::kRtRunMove:
-      return DecodeAs<RtRunMove, M>(data, trailing);
+      return DecodeAs<RtRunMove, M>(data, trailing, missing);
     case MsgType::kRtShootFrame:
-      return DecodeAs<RtShootFrame, M>(data, trailing);
+      return DecodeAs<RtShootFrame, M>(data, trailing, missing);
     case MsgType::kRtShootFrame2:
-      return DecodeAs<RtShootFrame2, M>(data, trailing);
+      return DecodeAs<RtShootFrame2, M>(data, trailing, missing);
     case MsgType::kRtGo:
-      return DecodeAs<RtGo, M>(data, trailing);
+      return DecodeAs<RtGo, M>(data, trailing, missing);
     case MsgType::kRtStopLoop:
-      return DecodeAs<RtStopLoop, M>(data, trailing);
+      return DecodeAs<RtStopLoop, M>(data, trailing, missing);
     case MsgType::kRtJogAll:
-      return DecodeAs<RtJogAll, M>(data, trailing);
+      return DecodeAs<RtJogAll, M>(data, trailing, missing);
     case MsgType::kVirtConfig:
-      return DecodeAs<VirtConfig, M>(data, trailing);
+      return DecodeAs<VirtConfig, M>(data, trailing, missing);
     case MsgType::kVirtMove:
-      return DecodeAs<VirtMove, M>(data, trailing);
+      return DecodeAs<VirtMove, M>(data, trailing, missing);
     case MsgType::kVirtStop:
-      return DecodeAs<VirtStop, M>(data, trailing);
+      return DecodeAs<VirtStop, M>(data, trailing, missing);
     case MsgType::kVirtJog:
-      return DecodeAs<VirtJog, M>(data, trailing);
+      return DecodeAs<VirtJog, M>(data, trailing, missing);
     case MsgType::kVirtJogOnLine:
-      return DecodeAs<VirtJogOnLine, M>(data, trailing);
+      return DecodeAs<VirtJogOnLine, M>(data, trailing, missing);
     case MsgType::kVirtGetPosition:
-      return DecodeAs<VirtGetPositionRequest, M>(data, trailing);
+      return DecodeAs<VirtGetPositionRequest, M>(data, trailing, missing);
     case MsgType::kVirtAimPoint:
-      return DecodeAs<VirtAimPoint, M>(data, trailing);
+      return DecodeAs<VirtAimPoint, M>(data, trailing, missing);
     // Sent only by devices: Dragonframe never sends these without kFlagAck.
     case MsgType::kMotorHardStop:
     case MsgType::kRtEnd:

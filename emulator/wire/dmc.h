@@ -496,16 +496,29 @@ enum class TrailingBytes : uint8_t {
   kIgnore,
 };
 
+// What decoding a request does with a field its data lacks or holds only part of.
+enum class MissingFields : uint8_t {
+  // A kTruncated DecodeError (the spec's layouts; ERR_GENERAL by SuggestedAck).
+  kError,
+  // The field reads as 0, and so does every field after it (the rest of the
+  // data is consumed): a list then has no entries, an optional field is
+  // absent, a "one or more" list may be empty. This is how Dragonframe's
+  // reference firmware reads its requests (docs/devices/dmc16.md
+  // "length_checks").
+  kZero,
+};
+
 // Decodes a frame sent by Dragonframe. A type with kFlagAck is an Ack (2 or 4
 // data bytes), whatever the acknowledged type; a type with no request layout
 // is Unknown. A known layout with the wrong data length is a DecodeError
-// (kTruncated / kTrailing, offset into the data section); see TrailingBytes.
-// Encoding is always exact: what is decoded with kIgnore re-encodes without
-// the ignored bytes.
+// (kTruncated / kTrailing, offset into the data section); see TrailingBytes
+// and MissingFields. Encoding is always exact: what is decoded with kIgnore
+// re-encodes without the ignored bytes.
 Result<HostMessage> DecodeHostMessage(const Frame& frame,
                                       TrailingBytes trailing = TrailingBytes::kReject);
 Result<HostMessage> DecodeHostMessage(uint16_t type, ByteView data,
-                                      TrailingBytes trailing = TrailingBytes::kReject);
+                                      TrailingBytes trailing = TrailingBytes::kReject,
+                                      MissingFields missing = MissingFields::kError);
 
 // Decodes a frame sent by a device; same rules with the response layouts.
 Result<DeviceMessage> DecodeDeviceMessage(const Frame& frame,

@@ -647,6 +647,39 @@ RC_GTEST_PROP(DmcDecodeProp, AnythingDecodedReencodesToTheSameData, ()) {
   }
 }
 
+// --- Missing fields (MissingFields::kZero) ------------------------------------------------
+// As Dragonframe's reference firmware reads a request: a field the data lacks,
+// or holds only part of, reads 0, and so does every field after it.
+
+TEST(DmcMissingFieldsTest, AFieldCutShortAndAllAfterItReadZero) {
+  const auto zero = [](MsgType t, const Bytes& data) {
+    return DecodeHostMessage(ToWire(t), data, TrailingBytes::kIgnore, MissingFields::kZero);
+  };
+  const auto g = zero(MsgType::kGioOut, Bytes{1, 0});
+  ASSERT_TRUE(g.ok());
+  EXPECT_EQ(std::get<GioOut>(g.value()).triggers, 0u) << "its two bytes are not used";
+  const auto s = zero(MsgType::kMotorSetSpeed, Bytes{2, 0xd0, 0x07, 0, 0, 9});
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(std::get<MotorSetSpeed>(s.value()), (MotorSetSpeed{2, 2000, 0}));
+  const auto j = zero(MsgType::kMotorJog, Bytes{3, 0x10});
+  ASSERT_TRUE(j.ok());
+  EXPECT_EQ(std::get<MotorJog>(j.value()), (MotorJog{3, 0, 0}));
+  const auto stop = zero(MsgType::kMotorStop, Bytes{});
+  ASSERT_TRUE(stop.ok());
+  EXPECT_EQ(std::get<MotorStop>(stop.value()).motor, 0);
+  // A "one or more" list may be empty; whole fields and trailing bytes read as ever.
+  const auto axis = zero(MsgType::kRtUploadMoveAxis, Bytes{1, 0, 0, 0, 0, 7});
+  ASSERT_TRUE(axis.ok());
+  EXPECT_TRUE(std::get<RtUploadMoveAxis>(axis.value()).positions_steps.empty());
+  const auto move = zero(MsgType::kMotorMove, Bytes{1, 5, 0, 0, 0, 9});
+  ASSERT_TRUE(move.ok());
+  EXPECT_EQ(std::get<MotorMove>(move.value()), (MotorMove{1, 5}));
+  // The default is the spec's: shorter data is an error.
+  EXPECT_EQ(
+      DecodeHostMessage(ToWire(MsgType::kGioOut), Bytes{1, 0}, TrailingBytes::kIgnore).error().kind,
+      Kind::kTruncated);
+}
+
 // --- Trailing bytes ---------------------------------------------------------------------
 // The protocol grows by appending fields ("Document Revision History": PROTOCOL
 // VERSION at the end of HI, STOP_ALL Flags, RUN_MOVE FLAGS and camera angles,

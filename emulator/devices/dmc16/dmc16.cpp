@@ -3,6 +3,7 @@
 #include "devices/dmc16/dmc16.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <limits>
 #include <utility>
 
@@ -12,6 +13,17 @@ using dmc::AckCode;
 using dmc::MsgType;
 using sim::kNsPerMs;
 using sim::TimeNs;
+
+namespace {
+// behaviour.set_speed_checked false: the slowest MAX VELOCITY taken (steps/s).
+constexpr double kSetSpeedMinVelocity = 10;
+// behaviour.jog_speed_scale kPer10000: the least jog velocity (steps/s) and
+// acceleration (steps/s^2).
+constexpr double kJogMinRate = 4;
+// behaviour.coupling kDrivesNext: a resynchronised count this far (steps)
+// from the reported position raises an engine exception.
+constexpr int64_t kResyncExceptionSteps = 10;
+}  // namespace
 
 Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
     : scheduler_(scheduler),
@@ -71,6 +83,9 @@ void Dmc16::ResetState() {
   config_flags_.assign(static_cast<size_t>(rig_.motor_count()),
                        profile_.motors_enabled ? dmc::kMotorEnabled | dmc::kMotorBlurEnabled : 0);
   truncated_.assign(static_cast<size_t>(rig_.motor_count()), std::nullopt);
+  uncounted_.assign(static_cast<size_t>(rig_.motor_count()), 0);
+  follow_origin_.assign(static_cast<size_t>(rig_.motor_count()), std::nullopt);
+  engine_exception_sent_ = false;
   hard_stop_lock_ = false;
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     sim::StepperMotor& motor = rig_.motor(m);
@@ -286,9 +301,10 @@ void Dmc16::OnFrame(const dmc::FrameRef& f) {
     // ERRATA 1.9: the host's ACK of an unsolicited message; never waited for.
     ++stats_.host_acks;
     if (profile_.behaviour.host_acks_silent) return;
-    // dmc-lite answers it like any message it does not take as a request.
+    // dmc-lite answers it like any message it does not take as a request
+    // (in its hard-stop state, as any type from 0x0031 up).
     ++stats_.requests;
-    Ack(f.id, f.type, AckCode::kErrUnsupported);
+    Ack(f.id, f.type, HardStopLockout(f.type) ? AckCode::kErrHardLow : AckCode::kErrUnsupported);
     return;
   }
   ++stats_.requests;
@@ -302,9 +318,23 @@ void Dmc16::OnFrame(const dmc::FrameRef& f) {
   }
   // The protocol grows by appending fields ("Document Revision History"):
   // bytes after a message's known layout are ignored; shorter data is an
-  // error (docs/protocol-notes.md "Trailing bytes").
+  // error (docs/protocol-notes.md "Trailing bytes"). behaviour.length_checks
+  // kMoveAndResetOnly: MOVE and RESET_POSITION must be exactly 5 bytes, any
+  // other request reads what its data lacks as zeros.
+  const bool lengths_lax =
+      profile_.behaviour.length_checks == Dmc16Behaviour::LengthChecks::kMoveAndResetOnly;
+  if (lengths_lax && f.data.size() != 5 &&
+      (f.type == dmc::ToWire(MsgType::kMotorMove) ||
+       f.type == dmc::ToWire(MsgType::kMotorResetPosition))) {
+    // RESET_POSITION answers ERR_MOVING first while anything moves.
+    const bool moving_first = f.type == dmc::ToWire(MsgType::kMotorResetPosition) &&
+                              (rig_.AnyMoving() || playback_.Playing());
+    Ack(f.id, f.type, moving_first ? AckCode::kErrMoving : AckCode::kErrGeneral);
+    return;
+  }
   dmc::Result<dmc::HostMessage> decoded =
-      dmc::DecodeHostMessage(f.type, f.data, dmc::TrailingBytes::kIgnore);
+      dmc::DecodeHostMessage(f.type, f.data, dmc::TrailingBytes::kIgnore,
+                             lengths_lax ? dmc::MissingFields::kZero : dmc::MissingFields::kError);
   if (!decoded.ok()) {
     Ack(f.id, f.type, dmc::SuggestedAck(decoded.error()));
     return;
@@ -412,10 +442,14 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
           },
           [&](const dmc::MotorResetPosition& m) {
             const AckCode code = OnResetPosition(m);
-            Ack(id, type, code);
             // "After changing the internal position and responding to this
-            // message, the device should send a MSG_MOTOR_GET_POSITION".
-            if (code == AckCode::kOk) SendPositionUpdate();
+            // message, the device should send a MSG_MOTOR_GET_POSITION";
+            // behaviour.position_confirm kBeforeAck sends it first.
+            const bool before =
+                profile_.behaviour.position_confirm == Dmc16Behaviour::PositionConfirm::kBeforeAck;
+            if (code == AckCode::kOk && before) SendPositionUpdate();
+            Ack(id, type, code);
+            if (code == AckCode::kOk && !before) SendPositionUpdate();
           },
           [&](const dmc::MotorJog& m) { Ack(id, type, OnJog(m)); },
           [&](const dmc::MotorConfigure& m) { Ack(id, type, OnConfigure(m)); },
@@ -615,16 +649,26 @@ AckCode Dmc16::OnGioOut(const dmc::GioOut& m) {
 void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
   const uint16_t type = dmc::ToWire(MsgType::kMotorMove);
   AckCode code = AckCode::kOk;
+  bool standing = false;
   if (!MotorValid(m.motor)) {
     code = AckCode::kErrRange;
   } else if (playback_.Playing()) {
     code = AckCode::kErrMoving;
   } else {
+    const sim::StepperMotor& motor = rig_.motor(m.motor);
+    standing = !motor.IsMoving() && ReportedPosition(m.motor) == m.position_steps &&
+               !truncated_[static_cast<size_t>(m.motor - 1)];
     code = MoveMotor(m.motor, m.position_steps);
   }
   if (code != AckCode::kOk) {
     Ack(id, type, code);
     return;
+  }
+  // behaviour.position_confirm kBeforeAck: a move to the step the motor
+  // stands on sends the positions before the answer.
+  if (standing &&
+      profile_.behaviour.position_confirm == Dmc16Behaviour::PositionConfirm::kBeforeAck) {
+    SendPositionUpdate();
   }
   playback_.OnDirectMotion();
   virtual_.CancelJog();  // a motor commanded directly leaves the line
@@ -657,8 +701,11 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
   // without flags that stops moving motors sets the hard-stop state.
   if (profile_.behaviour.stop_all_lockout_ms > 0 && rig_.AnyMoving() && m.flags.value_or(0) == 0) {
     hard_stop_lock_ = true;
+    hard_stop_lock_ns_ = now;
   }
-  const bool second = last_stop_all_ns_ >= 0 &&
+  // hard_stop_window_ms 0: never (dmc-lite: a motor already stopping keeps
+  // its deceleration).
+  const bool second = profile_.hard_stop_window_ms > 0 && last_stop_all_ns_ >= 0 &&
                       now - last_stop_all_ns_ <= TimeNs{profile_.hard_stop_window_ms} * kNsPerMs;
   last_stop_all_ns_ = now;
   virtual_.CancelJog();
@@ -681,7 +728,11 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   if (playback_.Playing()) return AckCode::kErrMoving;
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
   if (code == AckCode::kOk) {
-    truncated_[static_cast<size_t>(m.motor - 1)].reset();
+    const size_t i = static_cast<size_t>(m.motor - 1);
+    truncated_[i].reset();
+    // The count and the reported position agree again (behaviour.coupling).
+    uncounted_[i] = 0;
+    if (follow_origin_[i]) follow_origin_[i] = m.position_steps;
     playback_.ForgetFrame();
     // The count is renamed, nothing moves: the physical joint stays put.
     if (physical_) physical_->Rebase();
@@ -691,20 +742,71 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
 
 AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
-  // "SPEED WORD 1=inching, 10000=jog at max velocity". dmc-lite takes any
-  // SPEED; then 0 jogs as 1 and above 10000 as 10000, so a jog never exceeds
-  // the motor's max velocity and acceleration (sim::JogSpeedFraction).
+  // "SPEED WORD 1=inching, 10000=jog at max velocity". With
+  // jog_speed_checked false any SPEED is taken; on the spec's scale 0 then
+  // jogs as 1 and above 10000 as 10000 (sim::JogSpeedFraction), on
+  // jog_speed_scale kPer10000 it scales on without bound.
   uint16_t speed = m.speed;
+  const bool per_10000 =
+      profile_.behaviour.jog_speed_scale == Dmc16Behaviour::JogSpeedScale::kPer10000;
   if (profile_.behaviour.jog_speed_checked) {
     if (speed < dmc::kJogSpeedInch || speed > dmc::kJogSpeedMax) return AckCode::kErrRange;
-  } else {
+  } else if (!per_10000) {
     speed = std::clamp(speed, dmc::kJogSpeedInch, dmc::kJogSpeedMax);
   }
   if (playback_.Playing()) {
     return AckCode::kErrMoving;
   }
   if (IgnoresMotion(m.motor)) return AckCode::kOk;
-  const AckCode code = AckForMoveStatus(rig_.motor(m.motor).Jog(m.destination_steps, speed));
+  sim::StepperMotor& motor = rig_.motor(m.motor);
+  const sim::MotionProfile& mp = motor.profile();
+  int64_t destination = m.destination_steps + UncountedSteps(m.motor);
+  double velocity = 0;
+  double accel = 0;
+  if (per_10000) {
+    // dmc-lite: the max velocity and acceleration times SPEED/10000, no
+    // upper bound, at least kJogMinRate each; the acceleration no less
+    // than brings the present speed to rest in max velocity / max accel.
+    const double share = speed / static_cast<double>(dmc::kJogSpeedMax);
+    velocity = std::max(kJogMinRate, mp.max_velocity_steps_per_s * share);
+    accel = std::max(
+        {kJogMinRate, mp.max_accel_steps_per_s2 * share,
+         std::abs(motor.Velocity()) * mp.max_accel_steps_per_s2 / mp.max_velocity_steps_per_s});
+  } else {
+    velocity = mp.max_velocity_steps_per_s * sim::JogSpeedFraction(speed);
+    accel = mp.max_accel_steps_per_s2 * sim::JogSpeedFraction(speed);
+  }
+  sim::MoveStatus status = sim::MoveStatus::kOk;
+  if (profile_.behaviour.jog_horizon_ms == 0 || motor.following()) {
+    status = motor.JogAt(destination, velocity, accel);
+  } else {
+    // behaviour.jog_horizon_ms: the jog goes no further than where, having
+    // sped up towards its velocity for at most the horizon (then kept it for
+    // the rest of it), it would brake to rest; against the present motion
+    // it only stops the motor.
+    const int64_t at = motor.Position();
+    const double v0 = motor.Velocity();
+    const int dir = destination > at ? 1 : -1;
+    if (v0 * dir < 0) {
+      motor.Stop();
+    } else if (destination != at) {
+      const double horizon_s = profile_.behaviour.jog_horizon_ms / 1000.0;
+      const double vi = std::abs(v0);
+      double t_accel = 0;
+      double t_cruise = horizon_s;
+      if (vi < velocity) {
+        t_accel = std::min((velocity - vi) / accel, horizon_s);
+        t_cruise = horizon_s - t_accel;
+      }
+      const double v_top = vi + accel * t_accel;
+      const double reach = vi * t_accel + 0.5 * accel * t_accel * t_accel + v_top * t_cruise +
+                           0.5 * v_top * v_top / accel;
+      const auto far = static_cast<int64_t>(std::llround(static_cast<double>(at) + dir * reach));
+      destination = dir > 0 ? std::min(destination, far) : std::max(destination, far);
+      status = motor.JogAt(destination, velocity, accel);
+    }
+  }
+  const AckCode code = AckForMoveStatus(status);
   if (code == AckCode::kOk) {
     playback_.OnDirectMotion();
     virtual_.CancelJog();
@@ -715,6 +817,9 @@ AckCode Dmc16::OnJog(const dmc::MotorJog& m) {
 
 AckCode Dmc16::OnConfigure(const dmc::MotorConfigure& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
+  if (profile_.behaviour.coupling == Dmc16Behaviour::Coupling::kDrivesNext) {
+    return ConfigureDrivingNext(m);
+  }
   // Couple motors (capability 0x0100; FACTS "DMC v2": dmc-lite's flags 0x10
   // coupled, 0x20 coupled reversed). The request names no second motor, so
   // a coupled motor follows the motor before it (docs/protocol-notes.md);
@@ -739,10 +844,18 @@ AckCode Dmc16::OnConfigure(const dmc::MotorConfigure& m) {
 
 AckCode Dmc16::OnSetSpeed(const dmc::MotorSetSpeed& m) {
   if (!MotorValid(m.motor)) return AckCode::kErrRange;
-  if (m.max_velocity_steps_per_s == 0 || m.max_accel_steps_per_s2 == 0) return AckCode::kErrRange;
+  double velocity = m.max_velocity_steps_per_s;
+  double accel = m.max_accel_steps_per_s2;
+  if (profile_.behaviour.set_speed_checked) {
+    if (velocity == 0 || accel == 0) return AckCode::kErrRange;
+  } else {
+    // dmc-lite: no MAX VELOCITY under 10 steps/s; MAX ACCEL 0 is half of it.
+    velocity = std::max(velocity, kSetSpeedMinVelocity);
+    if (accel == 0) accel = velocity / 2;
+  }
   sim::MotionProfile p = rig_.motor(m.motor).profile();
-  p.max_velocity_steps_per_s = m.max_velocity_steps_per_s;
-  p.max_accel_steps_per_s2 = m.max_accel_steps_per_s2;
+  p.max_velocity_steps_per_s = velocity;
+  p.max_accel_steps_per_s2 = accel;
   return AckForMoveStatus(rig_.motor(m.motor).SetProfile(p));
 }
 
@@ -765,9 +878,89 @@ AckCode Dmc16::OnSetLimits(const dmc::MotorSetLimits& m) {
 
 // --- motion and the reference firmware's departures ---------------------------------------
 
+AckCode Dmc16::ConfigureDrivingNext(const dmc::MotorConfigure& m) {
+  // behaviour.coupling kDrivesNext (dmc-lite): with every motor's flags, a
+  // flagged motor drives the motor after it unless it is itself driven; the
+  // last motor drives none.
+  std::vector<uint8_t> flags = config_flags_;
+  flags[static_cast<size_t>(m.motor - 1)] = m.flags;
+  const int count = rig_.motor_count();
+  std::vector<int> leader(static_cast<size_t>(count + 1), 0);
+  std::vector<bool> reversed(static_cast<size_t>(count + 1), false);
+  const uint8_t kCoupleBits = dmc::kMotorCoupled | dmc::kMotorCoupledReversed;
+  if (profile_.Has(dmc::kCapCoupleMotors)) {
+    for (int k = 1; k < count; ++k) {
+      const uint8_t f = flags[static_cast<size_t>(k - 1)];
+      if ((f & kCoupleBits) == 0) continue;
+      leader[static_cast<size_t>(k + 1)] = k;
+      reversed[static_cast<size_t>(k + 1)] = (f & dmc::kMotorCoupledReversed) != 0;
+      ++k;  // the driven motor's own flags drive nothing
+    }
+  }
+  const auto changes = [&](int k) {
+    return leader[static_cast<size_t>(k)] != rig_.leader(k) ||
+           reversed[static_cast<size_t>(k)] != rig_.coupled_reversed(k);
+  };
+  // Nothing changes while a motor it concerns moves (sim::Rig::Couple).
+  for (int k = 1; k <= count; ++k) {
+    if (!changes(k)) continue;
+    const int old_leader = rig_.leader(k), new_leader = leader[static_cast<size_t>(k)];
+    if (rig_.motor(k).IsMoving() || (old_leader != 0 && rig_.motor(old_leader).IsMoving()) ||
+        (new_leader != 0 && rig_.motor(new_leader).IsMoving())) {
+      return AckCode::kErrMoving;
+    }
+  }
+  for (int k = 1; k <= count; ++k) {
+    if (!changes(k)) continue;
+    const size_t i = static_cast<size_t>(k - 1);
+    const int64_t at = rig_.motor(k).Position();
+    // The steps a driven motor makes are not counted in its reported
+    // position: they are set aside when it is let go.
+    if (follow_origin_[i]) uncounted_[i] += at - *follow_origin_[i];
+    follow_origin_[i].reset();
+    const int new_leader = leader[static_cast<size_t>(k)];
+    const sim::MoveStatus s = new_leader != 0
+                                  ? rig_.Couple(k, new_leader, reversed[static_cast<size_t>(k)])
+                                  : rig_.Uncouple(k);
+    if (s != sim::MoveStatus::kOk) return AckForMoveStatus(s);
+    if (new_leader != 0) follow_origin_[i] = at;
+  }
+  config_flags_ = std::move(flags);
+  rig_.motor(m.motor).SetEnabled((m.flags & dmc::kMotorEnabled) != 0);
+  rig_.motor(m.motor).SetBlur((m.flags & dmc::kMotorBlurEnabled) != 0);
+  return AckCode::kOk;
+}
+
+int64_t Dmc16::UncountedSteps(int motor) const {
+  const size_t i = static_cast<size_t>(motor - 1);
+  int64_t n = uncounted_[i];
+  if (follow_origin_[i]) n += rig_.motor(motor).Position() - *follow_origin_[i];
+  return n;
+}
+
+void Dmc16::ResyncUncounted(int motor) {
+  // behaviour.coupling kDrivesNext: a motor's own motion ending reads its
+  // step count again, the steps it made while driven included; a jump of
+  // more than kResyncExceptionSteps is reported once per power-on as an
+  // engine exception (MOTOR_HARD_STOP REASON 100), and everything stops.
+  const size_t i = static_cast<size_t>(motor - 1);
+  if (uncounted_[i] == 0 || follow_origin_[i]) return;
+  const int64_t jump = uncounted_[i];
+  uncounted_[i] = 0;
+  if (engine_exception_sent_ || std::abs(jump) <= kResyncExceptionSteps) return;
+  engine_exception_sent_ = true;
+  SendUnsolicited(dmc::MotorHardStop{static_cast<uint8_t>(dmc::HardStopReason::kEngineException),
+                                     static_cast<uint8_t>(motor)});
+  virtual_.CancelJog();
+  playback_.Abort(true);
+  rig_.StopAll();
+}
+
 AckCode Dmc16::MoveMotor(int motor, int64_t target_steps) {
   if (IgnoresMotion(motor)) return AckCode::kOk;
-  return AckForMoveStatus(rig_.motor(motor).MoveTo(target_steps));
+  // The target is in reported steps (behaviour.coupling: steps made while
+  // driven are not counted in them).
+  return AckForMoveStatus(rig_.motor(motor).MoveTo(target_steps + UncountedSteps(motor)));
 }
 
 AckCode Dmc16::OnPositionFrame(uint32_t frame) {
@@ -796,20 +989,18 @@ int64_t Dmc16::ReportedPosition(int motor) const {
   const sim::StepperMotor& m = rig_.motor(motor);
   const int64_t p = m.Position();
   const std::optional<int64_t>& t = truncated_[static_cast<size_t>(motor - 1)];
-  if (t && !m.IsMoving() && p == *t) return p > 0 ? p - 1 : p + 1;
-  return p;
+  const int64_t uncounted = UncountedSteps(motor);
+  if (t && !m.IsMoving() && p == *t) return (p > 0 ? p - 1 : p + 1) - uncounted;
+  return p - uncounted;
 }
 
 bool Dmc16::LockoutActive() const {
   if (!hard_stop_lock_) return false;
+  // dmc-lite counts its velocity updates from the STOP_ALL and ends the
+  // state at the first one past ~100 with the motors still.
   if (rig_.AnyMoving()) return true;
-  // The motors have been still since the last of them came to rest (a plan
-  // at rest starts where its motor stopped).
-  TimeNs rest_ns = 0;
-  for (int m = 1; m <= rig_.motor_count(); ++m) {
-    rest_ns = std::max(rest_ns, rig_.motor(m).CurrentPlan().origin_ns());
-  }
-  return scheduler_.Now() - rest_ns < TimeNs{profile_.behaviour.stop_all_lockout_ms} * kNsPerMs;
+  return scheduler_.Now() - hard_stop_lock_ns_ <
+         TimeNs{profile_.behaviour.stop_all_lockout_ms} * kNsPerMs;
 }
 
 bool Dmc16::HardStopLockout(uint16_t type) {
@@ -825,7 +1016,8 @@ bool Dmc16::HardStopLockout(uint16_t type) {
 
 // --- what the rig and the inputs report --------------------------------------------------
 
-void Dmc16::OnMotionFinished(int, TimeNs, int64_t) {
+void Dmc16::OnMotionFinished(int motor_id, TimeNs, int64_t) {
+  ResyncUncounted(motor_id);
   if (rig_.AnyMoving()) return;
   // A loop or ping-pong pass that repositioned plays on by itself; during
   // playback the per-frame reports stand in for this one.

@@ -119,6 +119,9 @@ class Dmc16 final : public Device, private sim::RigObserver {
   dmc::AckCode OnResetPosition(const dmc::MotorResetPosition& m);
   dmc::AckCode OnJog(const dmc::MotorJog& m);
   dmc::AckCode OnConfigure(const dmc::MotorConfigure& m);
+  // behaviour.coupling kDrivesNext: MOTOR_CONFIGURE with the couplings
+  // taken from every motor's flags.
+  dmc::AckCode ConfigureDrivingNext(const dmc::MotorConfigure& m);
   dmc::AckCode OnSetSpeed(const dmc::MotorSetSpeed& m);
   dmc::AckCode OnSetLimits(const dmc::MotorSetLimits& m);
   dmc::AckCode OnPositionFrame(uint32_t frame);
@@ -132,8 +135,14 @@ class Dmc16 final : public Device, private sim::RigObserver {
   }
   // MSG_MOTOR_MOVE's motion (not answered here).
   dmc::AckCode MoveMotor(int motor, int64_t target_steps);
-  // The position the device reports for `motor` (behaviour.positions_truncate).
+  // The position the device reports for `motor` (behaviour.positions_truncate,
+  // behaviour.coupling).
   int64_t ReportedPosition(int motor) const;
+  // behaviour.coupling kDrivesNext: steps `motor` made while driven by
+  // another, which its reported position leaves out.
+  int64_t UncountedSteps(int motor) const;
+  // ... until its own motion ends (OnMotionFinished).
+  void ResyncUncounted(int motor);
   // behaviour.stop_all_lockout_ms: the hard-stop state after a STOP_ALL
   // refuses a request of `type`.
   bool HardStopLockout(uint16_t type);
@@ -178,13 +187,21 @@ class Dmc16 final : public Device, private sim::RigObserver {
   uint32_t reported_inputs_ = 0;
   sim::TimeNs last_stop_all_ns_ = -1;
   bool silent_stop_ = false;
-  // The hard-stop state of behaviour.stop_all_lockout_ms.
+  // The hard-stop state of behaviour.stop_all_lockout_ms, and when the
+  // STOP_ALL that set it came.
   bool hard_stop_lock_ = false;
+  sim::TimeNs hard_stop_lock_ns_ = 0;
   // Per motor (index motor-1): the MSG_MOTOR_CONFIGURE flags as last
   // received; and the uploaded frame position a POSITION_FRAME brought the
   // motor to that reads one step short (behaviour.positions_truncate).
   std::vector<uint8_t> config_flags_;
   std::vector<std::optional<int64_t>> truncated_;
+  // behaviour.coupling kDrivesNext, per motor: steps made while driven and
+  // since let go; the step count when the current driving began; whether the
+  // engine exception went out since power-on.
+  std::vector<int64_t> uncounted_;
+  std::vector<std::optional<int64_t>> follow_origin_;
+  bool engine_exception_sent_ = false;
 
   sim::Scheduler::TimerId report_timer_ = sim::Scheduler::kNoTimer;
   // The line-idle gap: fires kLineIdleGapNs after the last host chunk.

@@ -11,6 +11,48 @@
 #include "devices/profile.h"
 
 namespace moco::devices {
+namespace {
+
+// The names of the behaviour switches that take one of a few values.
+template <class E>
+struct Choice {
+  const char* name;
+  E value;
+};
+constexpr Choice<Dmc16Behaviour::LengthChecks> kLengthChecks[] = {
+    {"spec", Dmc16Behaviour::LengthChecks::kSpec},
+    {"move_and_reset_only", Dmc16Behaviour::LengthChecks::kMoveAndResetOnly}};
+constexpr Choice<Dmc16Behaviour::PositionConfirm> kPositionConfirm[] = {
+    {"after_ack", Dmc16Behaviour::PositionConfirm::kAfterAck},
+    {"before_ack", Dmc16Behaviour::PositionConfirm::kBeforeAck}};
+constexpr Choice<Dmc16Behaviour::JogSpeedScale> kJogSpeedScale[] = {
+    {"spec", Dmc16Behaviour::JogSpeedScale::kSpec},
+    {"per_10000", Dmc16Behaviour::JogSpeedScale::kPer10000}};
+constexpr Choice<Dmc16Behaviour::Coupling> kCoupling[] = {
+    {"follows_previous", Dmc16Behaviour::Coupling::kFollowsPrevious},
+    {"drives_next", Dmc16Behaviour::Coupling::kDrivesNext}};
+
+template <class E, size_t N>
+E GetChoice(ProfileReader& r, std::string_view key, E def, const Choice<E> (&choices)[N]) {
+  if (!r.Has(key)) return def;
+  const std::string text = r.GetString(key, "", 64);
+  std::string names;
+  for (const Choice<E>& c : choices) {
+    if (text == c.name) return c.value;
+    names += std::string(names.empty() ? "" : " or ") + "\"" + c.name + "\"";
+  }
+  r.Fail(key, "is \"" + text + "\"", "use " + names);
+}
+
+template <class E, size_t N>
+const char* ChoiceName(E value, const Choice<E> (&choices)[N]) {
+  for (const Choice<E>& c : choices) {
+    if (c.value == value) return c.name;
+  }
+  return choices[0].name;
+}
+
+}  // namespace
 
 dmc::HiResponse Dmc16Profile::Hi() const {
   dmc::HiResponse hi;
@@ -181,6 +223,13 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
         b.GetBool("preroll_move_time_is_start_frame", v.preroll_move_time_is_start_frame);
     v.rt_end_at_last_frame = b.GetBool("rt_end_at_last_frame", v.rt_end_at_last_frame);
     v.rt_end_after_shot = b.GetBool("rt_end_after_shot", v.rt_end_after_shot);
+    v.length_checks = GetChoice(b, "length_checks", v.length_checks, kLengthChecks);
+    v.set_speed_checked = b.GetBool("set_speed_checked", v.set_speed_checked);
+    v.position_confirm = GetChoice(b, "position_confirm", v.position_confirm, kPositionConfirm);
+    v.jog_speed_scale = GetChoice(b, "jog_speed_scale", v.jog_speed_scale, kJogSpeedScale);
+    v.jog_horizon_ms =
+        static_cast<uint32_t>(b.GetInt("jog_horizon_ms", v.jog_horizon_ms, 0, 60'000));
+    v.coupling = GetChoice(b, "coupling", v.coupling, kCoupling);
     b.Finish();
   }
   const nlohmann::json& sets = r.GetRaw("limit_sets");
@@ -265,7 +314,13 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"positions_truncate", p.behaviour.positions_truncate},
         {"preroll_move_time_is_start_frame", p.behaviour.preroll_move_time_is_start_frame},
         {"rt_end_at_last_frame", p.behaviour.rt_end_at_last_frame},
-        {"rt_end_after_shot", p.behaviour.rt_end_after_shot}}},
+        {"rt_end_after_shot", p.behaviour.rt_end_after_shot},
+        {"length_checks", ChoiceName(p.behaviour.length_checks, kLengthChecks)},
+        {"set_speed_checked", p.behaviour.set_speed_checked},
+        {"position_confirm", ChoiceName(p.behaviour.position_confirm, kPositionConfirm)},
+        {"jog_speed_scale", ChoiceName(p.behaviour.jog_speed_scale, kJogSpeedScale)},
+        {"jog_horizon_ms", p.behaviour.jog_horizon_ms},
+        {"coupling", ChoiceName(p.behaviour.coupling, kCoupling)}}},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},
         {"capabilities", base::Hex(p.virtual_axes.capabilities, 4)},

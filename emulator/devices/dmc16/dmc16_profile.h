@@ -104,8 +104,9 @@ struct Dmc16Behaviour {
   uint32_t arming_ms = 0;
   // STOP_ALL (no flags) while moving sets a hard-stop state: every command
   // from MSG_MOTOR_MOVE (0x0031) up except MOTOR_GET_POSITION is refused
-  // with ERR_HARD_LOW until this long after the motors are still, a second
-  // STOP_ALL included (dmc-lite: ~100 velocity updates, about 2 s). 0: none.
+  // with ERR_HARD_LOW, a second STOP_ALL included, until this long after
+  // that STOP_ALL and the motors still (dmc-lite: 100 velocity updates of
+  // 20 ms counted from the STOP_ALL). 0: none.
   uint32_t stop_all_lockout_ms = 0;
   // A position read right after an upload's POSITION_FRAME lands can be one
   // step short of the uploaded one (dmc-lite truncates its float position):
@@ -122,6 +123,47 @@ struct Dmc16Behaviour {
   bool rt_end_at_last_frame = false;
   // RT_END after SHOOT_FRAME / SHOOT_FRAME2 go-motion (spec); false: none (dmc-lite).
   bool rt_end_after_shot = true;
+
+  // --- how requests are read and answered (docs/devices/dmc16.md) ---
+  enum class LengthChecks : uint8_t {
+    // Data shorter than a request's layout is ERR_GENERAL; bytes after it
+    // are ignored (docs/protocol-notes.md "Trailing bytes").
+    kSpec,
+    // MOTOR_MOVE and MOTOR_RESET_POSITION are ERR_GENERAL unless their data
+    // is exactly 5 bytes; every other request is carried out whatever its
+    // length, a field its data lacks (or holds only part of) reading as 0,
+    // and the fields after it too (dmc-lite).
+    kMoveAndResetOnly,
+  };
+  LengthChecks length_checks = LengthChecks::kSpec;
+  // MOTOR_SET_SPEED MAX VELOCITY or MAX ACCEL 0 refused with ERR_RANGE
+  // (spec reading); false: taken, a MAX VELOCITY under 10 as 10 steps/s and
+  // a MAX ACCEL of 0 as half the max velocity (dmc-lite).
+  bool set_speed_checked = true;
+  // RESET_POSITION's confirming MOTOR_GET_POSITION goes after its ACK
+  // ("after ... responding", spec); kBeforeAck: before it, and a MOTOR_MOVE
+  // to the step a resting motor stands on sends the positions before its
+  // answer too (dmc-lite).
+  enum class PositionConfirm : uint8_t { kAfterAck, kBeforeAck };
+  PositionConfirm position_confirm = PositionConfirm::kAfterAck;
+  // MOTOR_JOG SPEED: 1 = 1 % of the max velocity and acceleration, 10000 =
+  // 100 %, linear between (spec); kPer10000: both times SPEED/10000, each at
+  // least 4 (steps/s, steps/s^2), with no upper bound (dmc-lite).
+  enum class JogSpeedScale : uint8_t { kSpec, kPer10000 };
+  JogSpeedScale jog_speed_scale = JogSpeedScale::kSpec;
+  // 0: a MOTOR_JOG goes on to its DESTINATION (spec). n: no further than
+  // where, speeding up towards the jog velocity for at most n ms (keeping it
+  // for the rest of them), it would brake to rest, so a host keeps jogging by
+  // repeating the message; a JOG against the present motion only stops the
+  // motor (dmc-lite: 500).
+  uint32_t jog_horizon_ms = 0;
+  // MOTOR_CONFIGURE coupling flags (0x10, 0x20 reversed): the flagged motor
+  // follows the motor before it and reports the steps it makes (this
+  // project's reading); kDrivesNext: the flagged motor drives the motor after
+  // it (unless it is itself driven), whose reported position stays as it was
+  // (dmc-lite).
+  enum class Coupling : uint8_t { kFollowsPrevious, kDrivesNext };
+  Coupling coupling = Coupling::kFollowsPrevious;
 };
 
 struct Dmc16Profile {
@@ -153,7 +195,8 @@ struct Dmc16Profile {
   // Unsolicited MOTOR_GET_POSITION cadence while anything moves (spec: "about
   // every 0.10 seconds"; dmc-lite uses 50 ms).
   uint32_t position_report_interval_ms = 100;
-  // A second STOP_ALL within this window hard-stops (MSG_MOTOR_STOP_ALL).
+  // A second STOP_ALL within this window hard-stops (MSG_MOTOR_STOP_ALL); 0:
+  // none ever does (dmc-lite: a motor already stopping keeps its deceleration).
   uint32_t hard_stop_window_ms = 1000;
   uint32_t gio_debounce_ms = 20;
   double dmx_ramp_rate_per_s = 255;  // MSG_DMX RAMP=1 speed, value units per second

@@ -106,6 +106,16 @@ TEST(Dmc16Profile, BehaviourErrorsNameTheField) {
       << ErrorOf({{"behaviour", {{"receive_buffer_bytes", 512}}}});
   EXPECT_NE(ErrorOf({{"behaviour", {{"move_reponse", false}}}}).find("\"behaviour.move_reponse\""),
             std::string::npos);
+  // The switches of a few values name them.
+  const std::string lengths = ErrorOf({{"behaviour", {{"length_checks", "none"}}}});
+  EXPECT_NE(lengths.find("\"behaviour.length_checks\" is \"none\""), std::string::npos) << lengths;
+  EXPECT_NE(lengths.find("use \"spec\" or \"move_and_reset_only\""), std::string::npos) << lengths;
+  EXPECT_NE(ErrorOf({{"behaviour", {{"coupling", 2}}}}).find("\"behaviour.coupling\""),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({{"behaviour", {{"position_confirm", "later"}}}}).find("\"after_ack\""),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({{"behaviour", {{"jog_speed_scale", "log"}}}}).find("\"per_10000\""),
+            std::string::npos);
 }
 
 TEST(Dmc16Profile, MissingFileNamesThePath) {

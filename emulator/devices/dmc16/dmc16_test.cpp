@@ -1314,6 +1314,7 @@ TEST(Dmc16Behaviour, StopAllLockout) {
     EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
     h.RunMs(1000);
     ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    const sim::TimeNs stop_ns = h.now();
     const sim::TimeNs rest_ns = h.device().rig_ref().motor(1).CurrentPlan().EndNs();
     EXPECT_EQ(rest_ns - h.now(), 500 * kNsPerMs);
     // A second STOP_ALL: refused in the hard-stop state (no hard stop then).
@@ -1326,15 +1327,28 @@ TEST(Dmc16Behaviour, StopAllLockout) {
     const uint32_t st = h.Send(dmc::MotorStatusRequest{});
     EXPECT_NE(std::get_if<dmc::MotorStatusResponse>(&h.Reply(st).msg), nullptr);
     h.Settle();
-    h.scheduler().RunUntil(h.device().rig_ref().motor(1).CurrentPlan().origin_ns() +
-                           1999 * kNsPerMs);
+    // Counted from the STOP_ALL (the motors rested 500 ms after it).
+    h.scheduler().RunUntil(stop_ns + 1999 * kNsPerMs);
     if (lockout_ms != 0) {
-      EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "1999 ms after the motors stopped";
+      EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "1999 ms after the STOP_ALL";
     } else {
       EXPECT_EQ(MoveTaken(h, 1, 0), 1);
     }
     h.RunMs(1);
     EXPECT_EQ(MoveTaken(h, 1, 0), 1);
+    h.Settle();
+    if (lockout_ms == 0) continue;
+    // ... and never over before the motors rest: a stop of 5 s.
+    ASSERT_EQ(h.Request(dmc::MotorSetSpeed{1, 5000, 1000}), kOk);
+    EXPECT_EQ(MoveTaken(h, 1, 100000), 1);
+    h.RunMs(6000);
+    ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    const sim::TimeNs slow_rest_ns = h.device().rig_ref().motor(1).CurrentPlan().EndNs();
+    EXPECT_EQ(slow_rest_ns - h.now(), 5000 * kNsPerMs);
+    h.RunMs(4999);
+    EXPECT_EQ(h.Request(dmc::MotorMove{1, 0}), locked) << "still stopping";
+    h.scheduler().RunUntil(slow_rest_ns);
+    EXPECT_EQ(MoveTaken(h, 1, 0), 1) << "at rest, long after the STOP_ALL";
   }
 }
 
@@ -1371,6 +1385,280 @@ TEST(Dmc16Behaviour, PositionsTruncate) {
     EXPECT_EQ(Positions(h).at(0), 301) << "a plain move reads exact";
     EXPECT_EQ(frame(2), 300) << "toward zero again";
   }
+}
+
+// --- how the reference firmware reads requests (Dmc16Behaviour; dmc-lite) ------------------
+
+// A request of `type` with exactly `data` (any length).
+uint32_t SendData(Host& h, uint32_t id, dmc::MsgType type, const wire::Bytes& data) {
+  wire::Bytes frame;
+  dmc::EncodeFrame(id, dmc::ToWire(type), data, frame);
+  h.SendRaw(frame);
+  return id;
+}
+
+// length_checks: the spec's ERR_GENERAL for data shorter than the layout,
+// or dmc-lite's exact 5 bytes for MOVE and RESET_POSITION only, every other
+// request reading what it lacks as zeros.
+TEST(Dmc16Behaviour, LengthChecks) {
+  using Lc = Dmc16Behaviour::LengthChecks;
+  using T = dmc::MsgType;
+  for (const Lc lc : {Lc::kSpec, Lc::kMoveAndResetOnly}) {
+    const bool lite = lc == Lc::kMoveAndResetOnly;
+    SCOPED_TRACE(lite ? "move_and_reset_only" : "spec");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.length_checks = lc;
+    p.behaviour.set_speed_checked = !lite;
+    p.behaviour.jog_speed_checked = !lite;
+    Host h(p);
+    const std::optional<AckCode> short_ok = lite ? kOk : AckCode::kErrGeneral;
+    // GIO_OUT: a TRIGGERS cut short reads 0 (its two bytes are not used).
+    ASSERT_EQ(h.Request(dmc::GioOut{3}), kOk);
+    EXPECT_EQ(h.AckOf(SendData(h, 201, T::kGioOut, {1, 0})), short_ok);
+    EXPECT_EQ(h.device().gio_ref().outputs(), lite ? 0u : 3u);
+    ASSERT_EQ(h.Request(dmc::GioOut{3}), kOk);
+    EXPECT_EQ(h.AckOf(SendData(h, 202, T::kGioOut, {})), short_ok);
+    EXPECT_EQ(h.device().gio_ref().outputs(), lite ? 0u : 3u);
+    // MOTOR_STOP without data names motor 0.
+    EXPECT_EQ(h.AckOf(SendData(h, 203, T::kMotorStop, {})),
+              lite ? AckCode::kErrRange : AckCode::kErrGeneral);
+    // SET_SPEED without MAX ACCEL: MAX ACCEL 0, half the max velocity.
+    EXPECT_EQ(h.AckOf(SendData(h, 204, T::kMotorSetSpeed, {2, 0xd0, 0x07, 0, 0})), short_ok);
+    const sim::MotionProfile& mp = h.device().rig_ref().motor(2).profile();
+    EXPECT_EQ(mp.max_velocity_steps_per_s, lite ? 2000 : 5000);
+    EXPECT_EQ(mp.max_accel_steps_per_s2, lite ? 1000 : 10000);
+    // JOG with only its MOTOR: SPEED 0 towards step 0, where motor 1 stands.
+    EXPECT_EQ(h.AckOf(SendData(h, 205, T::kMotorJog, {1})), short_ok);
+    // MOVE shorter or longer than 5 bytes: ERR_GENERAL in dmc-lite, and
+    // the move is not made; the spec's reading ignores the extra byte.
+    EXPECT_EQ(h.AckOf(SendData(h, 206, T::kMotorMove, {1, 0x10, 0})), AckCode::kErrGeneral);
+    const Out& longer = h.Reply(SendData(h, 207, T::kMotorMove, {1, 0x10, 0, 0, 0, 9}));
+    if (lite) {
+      EXPECT_EQ(std::get<dmc::Ack>(longer.msg).code, dmc::ToWire(AckCode::kErrGeneral));
+    } else {
+      EXPECT_EQ(std::get<dmc::MotorMoveResponse>(longer.msg).moving, 1);
+    }
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), lite ? 0 : 16);
+    // RESET_POSITION with a trailing byte: refused in dmc-lite.
+    EXPECT_EQ(h.AckOf(SendData(h, 208, T::kMotorResetPosition, {2, 5, 0, 0, 0, 1})),
+              lite ? AckCode::kErrGeneral : AckCode::kOk);
+    EXPECT_EQ(h.Pos(2), lite ? 0 : 5);
+    // ... and ERR_MOVING first while anything moves.
+    ASSERT_EQ(MoveTaken(h, 1, 5000), 1);
+    EXPECT_EQ(h.AckOf(SendData(h, 209, T::kMotorResetPosition, {2, 5})),
+              lite ? AckCode::kErrMoving : AckCode::kErrGeneral);
+    h.Settle();
+    // Bytes after the layout of other requests are ignored either way.
+    const Out& status = h.Reply(SendData(h, 210, T::kMotorStatus, {1}));
+    EXPECT_NE(std::get_if<dmc::MotorStatusResponse>(&status.msg), nullptr);
+  }
+}
+
+// set_speed_checked: MAX VELOCITY or MAX ACCEL 0 refused (spec reading), or
+// taken as dmc-lite takes them: velocity at least 10, accel 0 as half of it.
+TEST(Dmc16Behaviour, SetSpeedChecked) {
+  Host spec(SmallProfile());
+  EXPECT_EQ(spec.Request(dmc::MotorSetSpeed{1, 0, 100}), AckCode::kErrRange);
+  EXPECT_EQ(spec.Request(dmc::MotorSetSpeed{1, 100, 0}), AckCode::kErrRange);
+  EXPECT_EQ(spec.Request(dmc::MotorSetSpeed{1, 3, 100}), kOk);
+  EXPECT_EQ(spec.device().rig_ref().motor(1).profile().max_velocity_steps_per_s, 3);
+  Host lite(Switched([](Dmc16Behaviour& b) { b.set_speed_checked = false; }));
+  const auto speeds = [&](uint32_t v, uint32_t a) {
+    EXPECT_EQ(lite.Request(dmc::MotorSetSpeed{1, v, a}), kOk) << v << " " << a;
+    const sim::MotionProfile& mp = lite.device().rig_ref().motor(1).profile();
+    return std::pair(mp.max_velocity_steps_per_s, mp.max_accel_steps_per_s2);
+  };
+  EXPECT_EQ(speeds(0, 0), std::pair(10.0, 5.0));
+  EXPECT_EQ(speeds(3, 100), std::pair(10.0, 100.0));
+  EXPECT_EQ(speeds(2001, 0), std::pair(2001.0, 1000.5));
+  EXPECT_EQ(speeds(2000, 4000), std::pair(2000.0, 4000.0));
+  EXPECT_EQ(lite.Request(dmc::MotorSetSpeed{9, 0, 0}), AckCode::kErrRange);
+}
+
+// position_confirm: RESET_POSITION's confirming MOTOR_GET_POSITION after its
+// ACK (spec) or before it, and then also on a MOVE to where a motor stands.
+TEST(Dmc16Behaviour, PositionConfirm) {
+  using Pc = Dmc16Behaviour::PositionConfirm;
+  for (const Pc pc : {Pc::kAfterAck, Pc::kBeforeAck}) {
+    const bool before = pc == Pc::kBeforeAck;
+    SCOPED_TRACE(before ? "before_ack" : "after_ack");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.position_confirm = pc;
+    Host h(p);
+    size_t mark = h.out().size();
+    const uint32_t id = h.Send(dmc::MotorResetPosition{2, 777});
+    h.Settle();
+    ASSERT_EQ(h.out().size(), mark + 2) << "the ACK and one update, nothing later";
+    const Out& first = h.out()[mark];
+    const Out& second = h.out()[mark + 1];
+    const Out& ack = before ? second : first;
+    const Out& update = before ? first : second;
+    EXPECT_EQ(ack.id, id);
+    EXPECT_EQ(std::get<dmc::Ack>(ack.msg).code, dmc::ToWire(AckCode::kOk));
+    EXPECT_LT(update.id, 0x10000u);
+    EXPECT_EQ(std::get<dmc::MotorPositionReport>(update.msg).positions_steps[1], 777);
+    // A refused reset confirms nothing.
+    mark = h.out().size();
+    EXPECT_EQ(h.Request(dmc::MotorResetPosition{9, 1}), AckCode::kErrRange);
+    EXPECT_EQ(h.out().size(), mark + 1);
+    // MOVE to the step the motor stands on.
+    mark = h.out().size();
+    const uint32_t mv = h.Send(dmc::MotorMove{2, 777});
+    ASSERT_EQ(h.out().size(), mark + (before ? 2 : 1));
+    EXPECT_EQ(h.out().back().id, mv);
+    if (before) {
+      EXPECT_EQ(std::get<dmc::MotorPositionReport>(h.out()[mark].msg).positions_steps[1], 777);
+    }
+    // A MOVE elsewhere sends no positions before its answer.
+    mark = h.out().size();
+    h.Send(dmc::MotorMove{2, 800});
+    EXPECT_EQ(h.out().size(), mark + 1);
+    h.Settle();
+  }
+}
+
+// jog_speed_scale: 1..10000 as 1 %..100 % (spec), or the max velocity and
+// acceleration times SPEED/10000, at least 4 each, without bound (dmc-lite).
+TEST(Dmc16Behaviour, JogSpeedScale) {
+  // The velocity a jog towards a far destination settles at.
+  const auto cruise = [](Dmc16Behaviour::JogSpeedScale scale, uint16_t speed) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.jog_speed_checked = false;
+    p.behaviour.jog_speed_scale = scale;
+    Host h(p);
+    EXPECT_EQ(h.Request(dmc::MotorSetSpeed{1, 2000, 4000}), kOk);
+    EXPECT_EQ(h.Request(dmc::MotorJog{1, speed, 1'000'000}), kOk) << speed;
+    h.RunMs(3000);
+    return h.device().rig_ref().motor(1).Velocity();
+  };
+  using S = Dmc16Behaviour::JogSpeedScale;
+  EXPECT_DOUBLE_EQ(cruise(S::kSpec, 10000), 2000);
+  EXPECT_DOUBLE_EQ(cruise(S::kSpec, 20000), 2000);
+  EXPECT_DOUBLE_EQ(cruise(S::kSpec, 0), 2000 * sim::JogSpeedFraction(1));
+  EXPECT_DOUBLE_EQ(cruise(S::kSpec, 5000), 2000 * sim::JogSpeedFraction(5000));
+  EXPECT_DOUBLE_EQ(cruise(S::kPer10000, 10000), 2000);
+  EXPECT_DOUBLE_EQ(cruise(S::kPer10000, 5000), 1000);
+  EXPECT_DOUBLE_EQ(cruise(S::kPer10000, 20000), 4000);
+  EXPECT_DOUBLE_EQ(cruise(S::kPer10000, 1), 4);
+  EXPECT_DOUBLE_EQ(cruise(S::kPer10000, 0), 4);
+  // With SPEED checked, the range is the spec's on either scale.
+  Host h(Switched([](Dmc16Behaviour& b) { b.jog_speed_scale = S::kPer10000; }));
+  EXPECT_EQ(h.Request(dmc::MotorJog{1, 10001, 100}), AckCode::kErrRange);
+}
+
+// jog_horizon_ms: a JOG goes on to its DESTINATION (spec), or only as far as
+// half a second's speeding up and cruising then braking would take it.
+TEST(Dmc16Behaviour, JogHorizon) {
+  for (const uint32_t horizon_ms : {0u, 500u}) {
+    SCOPED_TRACE("jog_horizon_ms " + std::to_string(horizon_ms));
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.jog_horizon_ms = horizon_ms;
+    Host h(p);
+    ASSERT_EQ(h.Request(dmc::MotorSetSpeed{1, 2000, 4000}), kOk);
+    // From rest: 0.5 s to reach 2000 steps/s (500 steps), then braking (500).
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), horizon_ms != 0 ? 1000 : 100000);
+    // A nearer DESTINATION is reached either way.
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 900}), kOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 900);
+    // Repeated while under way, the jog goes on: 600 ms in, braking at 1600
+    // steps/s, a renewal reaches 0.1 s back up to 2000 steps/s (180 steps),
+    // 0.4 s at it (800) and the braking (500) further.
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.RunMs(600);
+    const int64_t at = h.Pos(1);
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 100000}), kOk);
+    h.Settle();
+    if (horizon_ms != 0) {
+      EXPECT_NEAR(static_cast<double>(h.Pos(1)), static_cast<double>(at) + 180 + 800 + 500, 1);
+    } else {
+      EXPECT_EQ(h.Pos(1), 100000);
+    }
+    // Against the present motion: the spec's jog turns back, dmc-lite's stops.
+    ASSERT_EQ(MoveTaken(h, 1, 200000), 1);
+    h.RunMs(1000);
+    const int64_t before = h.Pos(1);
+    ASSERT_EQ(h.Request(dmc::MotorJog{1, 10000, 0}), kOk);
+    h.Settle();
+    if (horizon_ms != 0) {
+      EXPECT_EQ(h.Pos(1), before + 500) << "braked from 2000 steps/s at 4000 steps/s^2";
+    } else {
+      EXPECT_EQ(h.Pos(1), 0);
+    }
+  }
+}
+
+// coupling: a flagged motor follows the motor before it (this project's
+// reading), or drives the motor after it, which does not count those steps
+// in its reported position until its own next motion ends (dmc-lite).
+TEST(Dmc16Behaviour, CouplingDrivesTheNextMotorUncounted) {
+  Host spec(SmallProfile());
+  ASSERT_EQ(spec.Request(dmc::MotorConfigure{2, kCoupled}), kOk);
+  ASSERT_EQ(MoveTaken(spec, 1, 400), 1);
+  spec.Settle();
+  EXPECT_EQ(Positions(spec), (std::vector<int32_t>{400, 400, 0, 0}));
+
+  Host h(Switched([](Dmc16Behaviour& b) { b.coupling = Dmc16Behaviour::Coupling::kDrivesNext; }));
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{1, kOn}), kOk);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupled}), kOk);
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{3, kCoupled}), kOk);  // driven: drives nothing
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{4, kCoupled}), kOk);  // the last: none after it
+  EXPECT_EQ(h.device().rig_ref().leader(3), 2);
+  EXPECT_EQ(h.device().rig_ref().leader(4), 0);
+  EXPECT_EQ(h.device().rig_ref().leader(2), 0);
+  ASSERT_EQ(MoveTaken(h, 1, 400), 1);
+  h.Settle();
+  EXPECT_EQ(Positions(h), (std::vector<int32_t>{400, 0, 0, 0})) << "motor 2 is not driven";
+  ASSERT_EQ(MoveTaken(h, 2, 300), 1);
+  h.Settle();
+  EXPECT_EQ(h.Pos(3), 300) << "motor 3 makes motor 2's steps";
+  EXPECT_EQ(Positions(h), (std::vector<int32_t>{400, 300, 0, 0})) << "but reports none";
+  // Reversed: motor 3 mirrors motor 2, still uncounted.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupledReversed}), kOk);
+  ASSERT_EQ(MoveTaken(h, 2, 400), 1);
+  h.Settle();
+  EXPECT_EQ(h.Pos(3), 200);
+  EXPECT_EQ(Positions(h)[2], 0);
+  // Let go, motor 3 still reports 0; its own moves are in reported steps.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kOn}), kOk);
+  EXPECT_EQ(Positions(h)[2], 0);
+  const size_t mark = h.out().size();
+  ASSERT_EQ(MoveTaken(h, 3, 5), 1);
+  h.Settle();
+  // At the end of its own move its count (205) is read again: a jump of 200
+  // is an engine exception, sent once.
+  EXPECT_EQ(h.Pos(3), 205);
+  EXPECT_EQ(Positions(h)[2], 205);
+  std::vector<dmc::MotorHardStop> stops;
+  for (size_t k = mark; k < h.out().size(); ++k) {
+    if (const auto* s = std::get_if<dmc::MotorHardStop>(&h.out()[k].msg)) stops.push_back(*s);
+  }
+  ASSERT_EQ(stops.size(), 1u);
+  EXPECT_EQ(stops[0].reason, static_cast<uint8_t>(dmc::HardStopReason::kEngineException));
+  EXPECT_EQ(stops[0].motor, std::optional<uint8_t>(3));
+  // RESET_POSITION makes the count and the report agree at once.
+  ASSERT_EQ(h.Request(dmc::MotorConfigure{2, kCoupled}), kOk);
+  ASSERT_EQ(MoveTaken(h, 2, 0), 1);
+  h.Settle();
+  EXPECT_EQ(Positions(h)[2], 205);
+  ASSERT_EQ(h.Request(dmc::MotorResetPosition{3, 50}), kOk);
+  EXPECT_EQ(Positions(h)[2], 50);
+  EXPECT_EQ(h.Pos(3), 50);
+}
+
+// hard_stop_window_ms 0: a second STOP_ALL decelerates as the first.
+TEST(Dmc16Motor, HardStopWindowZeroNeverHardStops) {
+  Dmc16Profile p = SmallProfile();
+  p.hard_stop_window_ms = 0;
+  Host h(p);
+  h.Send(dmc::MotorMove{1, 100000});
+  h.RunMs(1000);
+  EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+  EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+  EXPECT_EQ(h.device().rig_ref().motor(1).CurrentPlan().EndNs() - h.now(), 500 * kNsPerMs);
 }
 
 // --- laws -------------------------------------------------------------------------------------
