@@ -106,6 +106,25 @@ TEST(Dmc16Profile, BehaviourErrorsNameTheField) {
       << ErrorOf({{"behaviour", {{"receive_buffer_bytes", 512}}}});
   EXPECT_NE(ErrorOf({{"behaviour", {{"move_reponse", false}}}}).find("\"behaviour.move_reponse\""),
             std::string::npos);
+  // The real-time engine: a tick of 5..100 ms; the upload's indexing and the
+  // NaN pre-roll are the tick engine's, so they need one.
+  EXPECT_NE(ErrorOf({{"behaviour", {{"playback_tick_ms", 3}}}})
+                .find("\"behaviour.playback_tick_ms\" is 3"),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf({{"behaviour", {{"playback_tick_ms", 101}}}}).find("\"behaviour.playback_tick_ms\""),
+      std::string::npos);
+  EXPECT_NE(ErrorOf({{"behaviour", {{"upload_index_from_start_frame", true}}}})
+                .find("set \"playback_tick_ms\""),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf({{"behaviour", {{"zero_preroll_nan", true}}}}).find("\"behaviour.zero_preroll_nan\""),
+      std::string::npos);
+  EXPECT_EQ(ErrorOf({{"behaviour",
+                      {{"playback_tick_ms", 20},
+                       {"upload_index_from_start_frame", true},
+                       {"zero_preroll_nan", true}}}}),
+            "");
 }
 
 TEST(Dmc16Profile, MissingFileNamesThePath) {
