@@ -1299,8 +1299,15 @@ void Playback::FrameReached(int64_t frame) {
                });
   }
   if (pass_.stills) {
-    // Open while the clock is within the frame's angles, whichever way it runs.
+    // Open while the clock is within the frame's angles, whichever way it
+    // runs. A window from 0 to 360 degrees or past them never closes between
+    // frames: one exposure until the clock's end, as dmc-lite's shutter
+    // follows the clock's fraction of a frame.
     const auto [open, close] = StillsExposure(req);
+    if (open <= 0 && close >= 1) {
+      camera_.Set(sim::CameraPort::kShutter, true);
+      return;
+    }
     const double rate = std::fabs(static_cast<double>(r.rate));
     const double from = r.clock_from;
     const double t_a = std::fabs(static_cast<double>(frame) + open - from) / rate;
@@ -1354,6 +1361,7 @@ void Playback::OnTick() {
       move_time_x1000_ = ClockX1000(r.clock_from + r.move_s * r.rate);
       r.phase = TickRun::Phase::kPostroll;
       r.t -= r.move_s;
+      if (pass_.stills) camera_.Set(sim::CameraPort::kShutter, false);
       hooks_.send_position_update();
       if (profile_.behaviour.rt_end_at_last_frame) {
         // dmc-lite: RT_END here, on every pass of a loop or ping-pong.
