@@ -593,7 +593,9 @@ void Dmc16::SendPositionUpdate() {
 // apart than the interval.
 void Dmc16::EnsurePositionReports() {
   if (Tick() > 0) {
-    if (rig_.AnyMoving() || playback_.Playing() || report_due_) EnsureTick();
+    if (rig_.AnyMoving() || playback_.Playing() || playback_.Ticking() || report_due_) {
+      EnsureTick();
+    }
     return;
   }
   if (report_timer_ != sim::Scheduler::kNoTimer || !rig_.AnyMoving()) return;

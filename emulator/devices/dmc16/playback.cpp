@@ -1199,15 +1199,9 @@ AckCode Playback::RunMoveTicked(const dmc::RtRunMove& m) {
     if (outside(a.ramp_from)) return AckCode::kErrPreroll;
     if (outside(FirmwareInt(a.post_from + a.post_v * (post * 0.5f)))) return AckCode::kErrPostroll;
   }
-  // To the pre-roll start; GO plays from there.
-  for (const TickAxis& a : r.axes) {
-    const AckCode code =
-        AckForMoveStatus(rig_.motor(a.motor).MoveTo(static_cast<int64_t>(a.ramp_from)));
-    if (code != AckCode::kOk) {
-      rig_.StopAll();
-      return code;
-    }
-  }
+  // To the pre-roll start from the next tick (until then a RUN_MOVE re-arms);
+  // GO plays from there.
+  r.to_preroll = true;
   run_ = RunSetup{m, PlaybackMotors()};
   tick_run_ = std::move(r);
   stop_loop_ = false;
@@ -1223,7 +1217,7 @@ AckCode Playback::RunMoveTicked(const dmc::RtRunMove& m) {
 // MSG_RT_GO on the tick: taken once the armed rig rests (else
 // ERR_NOT_IN_POSITION, the firmware's one answer when it is not waiting for GO).
 AckCode Playback::GoTicked() {
-  if (mode_ != Mode::kArmedRun || !tick_run_ || rig_.AnyMoving()) {
+  if (mode_ != Mode::kArmedRun || !tick_run_ || tick_run_->to_preroll || rig_.AnyMoving()) {
     return AckCode::kErrNotInPosition;
   }
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
@@ -1249,7 +1243,7 @@ AckCode Playback::GoTicked() {
 }
 
 std::optional<int64_t> Playback::ModelPosition(int motor) const {
-  if (!Ticking()) return std::nullopt;
+  if (mode_ != Mode::kPass || !tick_run_) return std::nullopt;
   for (const TickAxis& a : tick_run_->axes) {
     if (a.motor != motor) continue;
     // behaviour.positions_truncate: the position truncated toward zero, as
@@ -1326,6 +1320,21 @@ void Playback::FrameReached(int64_t frame) {
 void Playback::OnTick() {
   if (!Ticking()) return;
   TickRun& r = *tick_run_;
+  if (mode_ == Mode::kArmedRun) {
+    // The armed run's motors leave for their pre-roll start.
+    r.to_preroll = false;
+    for (const TickAxis& a : r.axes) {
+      if (rig_.motor(a.motor).MoveTo(static_cast<int64_t>(a.ramp_from)) != sim::MoveStatus::kOk) {
+        rig_.StopAll();
+        mode_ = Mode::kIdle;
+        tick_run_.reset();
+        run_.reset();
+        break;
+      }
+    }
+    hooks_.ensure_position_reports();
+    return;
+  }
   // The tick in seconds, single precision (0.02f at 20 ms).
   const auto tick_s = static_cast<float>(profile_.behaviour.playback_tick_ms / 1000.0);
   std::vector<float> x;

@@ -132,8 +132,11 @@ class Playback {
   std::optional<uint32_t> on_frame() const { return on_frame_; }
   // Passes completed since the run started (loop and ping-pong count each).
   uint32_t passes_done() const { return passes_done_; }
-  // A live run is played on the velocity tick (it needs OnTick()).
-  bool Ticking() const { return mode_ == Mode::kPass && tick_run_.has_value(); }
+  // A live run on the velocity tick needs OnTick(): one armed waiting for its
+  // pre-roll to begin, or one playing.
+  bool Ticking() const {
+    return tick_run_.has_value() && (mode_ == Mode::kPass || tick_run_->to_preroll);
+  }
   // A run is armed or playing, a shot or a jog-all under way: the device is
   // out of its plain jog state (the tick sends a due update at once).
   bool InRealTimeState() const { return mode_ != Mode::kIdle; }
@@ -202,6 +205,7 @@ class Playback {
     float move_s = 0;            // the move phase's length
     float rate = 0;              // frames per second along the clock (signed)
     sim::TimeNs move_t0_ns = 0;  // when the move phase began
+    bool to_preroll = false;     // armed: the motors leave for the pre-roll at the next tick
     std::vector<TickAxis> axes;
   };
 

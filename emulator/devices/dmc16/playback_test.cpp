@@ -1330,6 +1330,12 @@ TEST(Dmc16PlaybackTick, RunMoveNeedsAFrameAndRestAndGoAnswersNotInPosition) {
   EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), AckCode::kErrMoving);
   h.Settle();
   ASSERT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk);
+  // Its motors leave for the pre-roll at the next tick: until then RUN_MOVE
+  // re-arms, after it the rig moves.
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+  h.RunMs(20);
+  ASSERT_TRUE(h.device().rig_ref().AnyMoving());
   EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition) << "still going to its pre-roll";
   EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), AckCode::kErrMoving);
   h.Settle();
