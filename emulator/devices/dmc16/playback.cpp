@@ -1436,8 +1436,8 @@ void Playback::EndTickPass(const std::vector<float>& x, float tick_s) {
 // POSITION_FRAME's move with a tick (dmc-lite): from rest, a point-to-point
 // move that takes at least 0.5 s to accelerate and as long to brake (a
 // gentler acceleration for short moves), cruising at max velocity only when
-// the distance needs more than twice the ramps' distance; while the motor
-// moves, a plain move.
+// the distance needs more than twice the ramps' distance, and at rest a tick
+// after it arrives; while the motor moves, a plain move.
 sim::MoveStatus Playback::MoveToFrame(int motor_id, int64_t target_steps) {
   sim::StepperMotor& motor = rig_.motor(motor_id);
   const double dist = std::fabs(static_cast<double>(target_steps - motor.Position()));
@@ -1462,6 +1462,8 @@ sim::MoveStatus Playback::MoveToFrame(int motor_id, int64_t target_steps) {
     segs = {Seg(t, 0, sign * a), Seg((dist - ramps) / v_max, sign * v_max, 0),
             Seg(t, sign * v_max, -sign * a)};
   }
+  // At rest one tick after it arrives, as the tick finds it there.
+  segs.push_back(Seg(static_cast<double>(profile_.behaviour.playback_tick_ms) / 1000.0, 0, 0));
   ScriptPlanner* planner = planners_[static_cast<size_t>(motor_id - 1)];
   planner->Load(std::move(segs));
   const sim::MoveStatus s = motor.MoveTo(target_steps);
