@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -1178,6 +1179,56 @@ TEST(Dmc16PlaybackTick, DmcLiteReplaysTheMeasuredPingPongStoppedOnTheWayBack) {
       EXPECT_EQ(o.id, 0u);
     }
   }
+}
+
+// The same ping-pong from START FRAME 1, measured on dmc-lite: on the upload,
+// MOVE TIME from 1000 to 12000 and back; STOP_LOOP after the first RT_END
+// ends the run on frame 1 (MOVE TIME 1000, no post-roll) and the rig moves
+// onto frame 1's positions. (dmc-lite then read 1199 for 1200: its step
+// accumulator's rounding, which the model reads exact.)
+TEST(Dmc16PlaybackTick, DmcLiteReplaysTheMeasuredPingPongFromStartFrame1) {
+  Host h(DmcLite());
+  Ready(h, 1200, 0);
+  UploadClimb(h, 1, 1200, 0);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{1}), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(RunMove(1, 11, 24000, 500, 500, dmc::kPlayPingPong)), kAckOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 960);
+  EXPECT_EQ(h.Pos(2), 150);
+  h.RunMs(100);
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  RunUntil(h, [&] { return !h.All<dmc::RtEnd>().empty(); });
+  h.RunMs(80);
+  ASSERT_EQ(h.Request(dmc::RtStopLoop{}), kAckOk);
+  h.Settle();
+  std::map<uint32_t, std::pair<int32_t, int32_t>> at;  // the first update of each MOVE TIME
+  for (const Seen& s : Seens(h, t_go)) at.emplace(s.move_time, std::pair{s.p1, s.p2});
+  const std::vector<std::array<int32_t, 3>> measured = {
+      {2440, 1257, -36},   {3400, 1296, -60},   {11080, 1600, -250},
+      {12000, 1600, -250}, {11520, 1600, -250}, {10560, 1582, -238},
+      {9600, 1544, -215},  {4799, 1352, -94},   {1919, 1236, -22}};
+  for (const auto& [mt, p1, p2] : measured) {
+    SCOPED_TRACE("MOVE TIME " + std::to_string(mt));
+    ASSERT_EQ(at.count(static_cast<uint32_t>(mt)), 1u);
+    EXPECT_EQ(at[static_cast<uint32_t>(mt)].first, p1);
+    EXPECT_EQ(at[static_cast<uint32_t>(mt)].second, p2);
+  }
+  // The way back ends at MOVE TIME 1000 with the positions of the tick
+  // before, with its RT_END; then the rig rests on frame 1.
+  const auto ups = Updates(h, t_go);
+  const auto ends = h.All<dmc::RtEnd>();
+  ASSERT_EQ(ends.size(), 2u);
+  for (const auto& [t, r] : ups) {
+    if (t != ends[1].first) continue;
+    EXPECT_EQ(r.move_time_x1000, 1000u);
+    EXPECT_EQ(r.positions_steps[0], 1217);
+    EXPECT_EQ(r.positions_steps[1], -10);
+  }
+  EXPECT_EQ(ups.back().second.move_time_x1000, 1000u);
+  EXPECT_EQ(h.Pos(1), 1200);
+  EXPECT_EQ(h.Pos(2), 0);
 }
 
 // START FRAME 0 runs one frame behind the upload, 1 on it, 5 four frames
