@@ -59,10 +59,9 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       // SHOULD: ERR_HARD_LOW as a busy code after STOP_ALL.
       {"DMC-ACK-010", Status::kFail},
       {"DMC-ACK-011", Status::kFail},
-      // NOTE: updates every 50 ms, answers to the host's ACKs, 199 for 200.
+      // NOTE: updates every 60 ms, answers to the host's ACKs.
       {"DMC-POS-003", Status::kNoted},
       {"DMC-UNS-004", Status::kNoted},
-      {"DMC-RT-016", Status::kNoted},
       // How it reads requests (docs/devices/dmc16.md, behaviour.length_checks,
       // position_confirm, coupling, hard_stop_window_ms 0):
       // MUST: GIO_OUT and SET_SPEED cut short are carried out, ACK OK;
@@ -78,6 +77,31 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       {"DMC-STOP-004", Status::kFail},
       // NOTE: motor 2 flagged drives motor 3, and motor 3 does not count it.
       {"DMC-CFG-008", Status::kNoted},
+      // Its live runs (docs/devices/dmc16.md "The 20 ms velocity tick"), as
+      // the firmware natively is judged over a PTY. SHOULD: START FRAME 0
+      // plays one frame behind the upload; a trigger frame past the upload
+      // and stills angles past 360 are taken; a 0 ms pre-roll answers
+      // ERR_PREROLL where only the post-roll crosses the limit. NOTE:
+      // POSITION_FRAME outside the upload is clamped; no RT_END after
+      // STOP_ALL. (DMC-RT-021 passes: the case's three stills RUN_MOVEs come
+      // within one 20 ms tick, before the motors leave for the pre-roll, so
+      // the last re-arms; natively a tick between them made one run answer
+      // ERR_MOVING.)
+      {"DMC-RT-008", Status::kFail},
+      {"DMC-RT-018", Status::kFail},
+      {"DMC-RT-024", Status::kFail},
+      {"DMC-RT-027", Status::kFail},
+      {"DMC-RT-010", Status::kNoted},
+      {"DMC-RT-012", Status::kNoted},
+      // Observed in-process only (over a PTY none of the firmware's outputs
+      // can be read). Its frame reports carry the tick's fractional MOVE
+      // TIMEs, which the I/O cases do not take for a frame's report, so
+      // SHOULD: the trigger outputs are not tied to a frame, no stills
+      // exposure is timed against its frame, and the video presses (the
+      // first at GO, before the pre-roll) are not placed.
+      {"DMC-RT-019", Status::kFail},
+      {"DMC-RT-023", Status::kFail},
+      {"DMC-RT-025", Status::kFail},
       // Not exercised: no soft-limit refusal, so nothing to leave in place.
       {"DMC-LIM-003", Status::kNotExercised},
       // HI as the firmware sends it (docs/calibration.md, as the real device
@@ -141,7 +165,8 @@ TEST(Runner, TheReferenceFirmwareWithoutAControlChannelFailsNothingMore) {
   const RunReport r = RunDmc(target, {});
   const std::set<std::string> may_fail = {
       "DMC-ACK-008", "DMC-MOVE-001", "DMC-MOVE-002", "DMC-GIO-001", "DMC-GM-001",  "DMC-GM-002",
-      "DMC-CFG-004", "DMC-ACK-010",  "DMC-ACK-011",  "DMC-ERR-005", "DMC-RST-002", "DMC-STOP-004"};
+      "DMC-CFG-004", "DMC-ACK-010",  "DMC-ACK-011",  "DMC-ERR-005", "DMC-RST-002", "DMC-STOP-004",
+      "DMC-RT-008",  "DMC-RT-018",   "DMC-RT-024",   "DMC-RT-027"};
   std::set<std::string> failed;
   for (const auto& [id, s] : r.rules) {
     if (s.status == Status::kFail) failed.insert(id);

@@ -3,6 +3,7 @@
 #include "devices/dmc16/dmc16.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <utility>
@@ -48,7 +49,13 @@ Dmc16::Dmc16(sim::Scheduler& scheduler, ByteSink& out, Dmc16Profile profile)
                         },
                     .send_rt_end = [this] { SendUnsolicited(dmc::RtEnd{}); },
                     .ensure_position_reports = [this] { EnsurePositionReports(); },
+                    .flag_position_update =
+                        [this] {
+                          report_due_ = true;
+                          EnsureTick();
+                        },
                 }) {
+  upload_.SetTriggerFramesChecked(profile_.behaviour.trigger_frames_checked);
   for (int m = 1; m <= rig_.motor_count(); ++m) {
     auto planner = std::make_unique<ScriptPlanner>();
     planners_.push_back(planner.get());
@@ -82,7 +89,6 @@ void Dmc16::ResetState() {
   for (int m = 1; m <= rig_.motor_count(); ++m) rig_.motor(m).EmergencyHalt();
   config_flags_.assign(static_cast<size_t>(rig_.motor_count()),
                        profile_.motors_enabled ? dmc::kMotorEnabled | dmc::kMotorBlurEnabled : 0);
-  truncated_.assign(static_cast<size_t>(rig_.motor_count()), std::nullopt);
   uncounted_.assign(static_cast<size_t>(rig_.motor_count()), 0);
   follow_origin_.assign(static_cast<size_t>(rig_.motor_count()), std::nullopt);
   engine_exception_sent_ = false;
@@ -112,6 +118,7 @@ void Dmc16::ResetState() {
   ResetFraming();
   playback_.Reset();
   last_stop_all_ns_ = -1;
+  last_report_ns_ = -1;
   silent_stop_ = false;
   reported_inputs_ = gio_.inputs() & GioMask(profile_.gio_inputs);
 }
@@ -128,9 +135,7 @@ void Dmc16::PowerOn() {
   SendUnsolicited(profile_.Hi());
 }
 
-void Dmc16::OnMotionStarted(int motor_id, sim::TimeNs /*time_ns*/) {
-  // A new motion ends a truncated reading (behaviour.positions_truncate).
-  truncated_[static_cast<size_t>(motor_id - 1)].reset();
+void Dmc16::OnMotionStarted(int /*motor_id*/, sim::TimeNs /*time_ns*/) {
   // Whatever started it (a request, a playback frame, a shot, a jog), the
   // physical rig follows the motors again (it sleeps while nothing moves).
   if (physical_) physical_->Wake();
@@ -223,6 +228,8 @@ void Dmc16::CancelTimer(sim::Scheduler::TimerId& id) {
 
 void Dmc16::CancelAllTimers() {
   CancelTimer(report_timer_);
+  CancelTimer(tick_timer_);
+  report_due_ = false;
   playback_.Halt();
 }
 
@@ -576,9 +583,12 @@ void Dmc16::Send(uint32_t id, const dmc::DeviceMessage& m) {
   out_.Write(tx_);
 }
 
+// ERRATA 1.9: a device-side sequence ID; dmc-lite sends 0 (behaviour.unsolicited_id_zero).
+uint32_t Dmc16::UnsolicitedId() { return profile_.behaviour.unsolicited_id_zero ? 0 : next_id_++; }
+
 void Dmc16::SendUnsolicited(const dmc::DeviceMessage& m) {
   ++stats_.unsolicited;
-  Send(next_id_++, m);
+  Send(UnsolicitedId(), m);
 }
 
 void Dmc16::Ack(uint32_t id, uint16_t type, AckCode code) {
@@ -591,6 +601,7 @@ void Dmc16::Ack(uint32_t id, uint16_t type, AckCode code) {
 }
 
 void Dmc16::SendPositions(uint32_t id) {
+  last_report_ns_ = scheduler_.Now();
   dmc::MotorPositionReport r;
   r.move_time_x1000 = playback_.MoveTimeX1000();
   r.positions_steps.reserve(static_cast<size_t>(rig_.motor_count()));
@@ -605,7 +616,7 @@ void Dmc16::SendPositions(uint32_t id) {
 
 void Dmc16::SendPositionUpdate() {
   ++stats_.unsolicited;
-  SendPositions(next_id_++);
+  SendPositions(UnsolicitedId());
 }
 
 // "The device should send these out, about every 0.10 seconds, if any of the
@@ -615,6 +626,12 @@ void Dmc16::SendPositionUpdate() {
 // besides it, each restarting its count, so updates are never further
 // apart than the interval.
 void Dmc16::EnsurePositionReports() {
+  if (Tick() > 0) {
+    if (rig_.AnyMoving() || playback_.Playing() || playback_.Ticking() || report_due_) {
+      EnsureTick();
+    }
+    return;
+  }
   if (report_timer_ != sim::Scheduler::kNoTimer || !rig_.AnyMoving()) return;
   report_timer_ = scheduler_.After(TimeNs{profile_.position_report_interval_ms} * kNsPerMs,
                                    [this] { OnReportTimer(); });
@@ -625,6 +642,36 @@ void Dmc16::OnReportTimer() {
   if (!rig_.AnyMoving()) return;
   SendPositionUpdate();
   EnsurePositionReports();
+}
+
+// The velocity tick (behaviour.playback_tick_ms; docs/devices/dmc16.md "The
+// 20 ms velocity tick"): on the device clock's multiples of the tick, while
+// anything moves, a run plays or an update is due.
+void Dmc16::EnsureTick() {
+  if (Tick() == 0 || tick_timer_ != sim::Scheduler::kNoTimer) return;
+  tick_timer_ = scheduler_.At((scheduler_.Now() / Tick() + 1) * Tick(), [this] { OnTick(); });
+}
+
+// One tick: playback moves first, then the updates are decided as dmc-lite
+// decides them: one that is due (a new frame, a pass's end, a motor come to
+// rest) goes at once in a real-time state and otherwise once 100 ms have
+// passed since the last update; while anything moves, one goes once
+// position_report_interval_ms have passed (so every 60 ms at 50 ms on a 20 ms
+// tick: "about every 0.10 seconds, if any of the motors are moving").
+void Dmc16::OnTick() {
+  tick_timer_ = sim::Scheduler::kNoTimer;
+  playback_.OnTick();
+  const TimeNs now = scheduler_.Now();
+  const bool moving = rig_.AnyMoving() || playback_.Playing();
+  const TimeNs since =
+      last_report_ns_ < 0 ? std::numeric_limits<TimeNs>::max() : now - last_report_ns_;
+  constexpr TimeNs kAtRestUpdateNs = 100 * kNsPerMs;
+  if ((report_due_ && (playback_.InRealTimeState() || since > kAtRestUpdateNs)) ||
+      (moving && since > TimeNs{profile_.position_report_interval_ms} * kNsPerMs)) {
+    report_due_ = false;
+    SendPositionUpdate();
+  }
+  if (moving || report_due_ || playback_.Ticking()) EnsureTick();
 }
 
 // --- simple commands ------------------------------------------------------------------------
@@ -729,7 +776,6 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
   if (code == AckCode::kOk) {
     const size_t i = static_cast<size_t>(m.motor - 1);
-    truncated_[i].reset();
     // The count and the reported position agree again (behaviour.coupling).
     uncounted_[i] = 0;
     if (follow_origin_[i]) follow_origin_[i] = m.position_steps;
@@ -963,35 +1009,22 @@ AckCode Dmc16::MoveMotor(int motor, int64_t target_steps) {
   return AckForMoveStatus(rig_.motor(motor).MoveTo(target_steps + UncountedSteps(motor)));
 }
 
-AckCode Dmc16::OnPositionFrame(uint32_t frame) {
-  std::vector<int64_t> before;
-  for (int m = 1; m <= rig_.motor_count(); ++m) before.push_back(rig_.motor(m).Position());
-  const AckCode code = playback_.PositionFrame(frame);
-  if (code != AckCode::kOk || !profile_.behaviour.positions_truncate) return code;
-  // dmc-lite's position is a float that lands a hair short of the target in
-  // the direction of travel, and it reports it truncated toward zero: one
-  // step short when the motor moved away from zero to reach the frame
-  // (200 reads 199, -200 reads -199), exact when it moved toward zero.
-  for (int m : upload_.Motors()) {
-    if (!MotorValid(m)) continue;
-    const sim::StepperMotor& motor = rig_.motor(m);
-    if (!motor.IsMoving() || rig_.leader(m) != 0) continue;
-    const int64_t target = motor.Target();
-    const int64_t from = before[static_cast<size_t>(m - 1)];
-    if ((target > 0 && target > from) || (target < 0 && target < from)) {
-      truncated_[static_cast<size_t>(m - 1)] = target;
-    }
-  }
-  return code;
-}
+AckCode Dmc16::OnPositionFrame(uint32_t frame) { return playback_.PositionFrame(frame); }
 
+// behaviour.positions_truncate: dmc-lite reports its position (a float
+// between steps while moving) truncated toward zero, not the nearest step.
+// A live run on the tick reports the position the engine sent the motor to.
 int64_t Dmc16::ReportedPosition(int motor) const {
+  if (const std::optional<int64_t> p = playback_.ModelPosition(motor)) return *p;
   const sim::StepperMotor& m = rig_.motor(motor);
-  const int64_t p = m.Position();
-  const std::optional<int64_t>& t = truncated_[static_cast<size_t>(motor - 1)];
+  // Steps made while driven are not counted (behaviour.coupling).
   const int64_t uncounted = UncountedSteps(motor);
-  if (t && !m.IsMoving() && p == *t) return (p > 0 ? p - 1 : p + 1) - uncounted;
-  return p - uncounted;
+  if (!profile_.behaviour.positions_truncate || m.Velocity() == 0) {
+    return m.Position() - uncounted;
+  }
+  const double x = static_cast<double>(m.CurrentPlan().origin_steps()) +
+                   m.CurrentPlan().StateAt(scheduler_.Now()).x_steps;
+  return static_cast<int64_t>(std::trunc(x)) - uncounted;
 }
 
 bool Dmc16::LockoutActive() const {
@@ -1018,6 +1051,13 @@ bool Dmc16::HardStopLockout(uint16_t type) {
 
 void Dmc16::OnMotionFinished(int motor_id, TimeNs, int64_t) {
   ResyncUncounted(motor_id);
+  if (Tick() > 0) {
+    // On the tick each motor that comes to rest makes an update due.
+    report_due_ = true;
+    EnsureTick();
+    if (!rig_.AnyMoving()) playback_.OnRigAtRest();
+    return;
+  }
   if (rig_.AnyMoving()) return;
   // A loop or ping-pong pass that repositioned plays on by itself; during
   // playback the per-frame reports stand in for this one.

@@ -108,6 +108,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
   void Ack(uint32_t id, uint16_t type, dmc::AckCode code);
   void SendPositions(uint32_t id);
   void SendPositionUpdate();
+  uint32_t UnsolicitedId();
   bool Advertised(uint16_t type) const;
 
   // --- handlers: each returns the ACK code, or sends its specific response ---
@@ -149,6 +150,12 @@ class Dmc16 final : public Device, private sim::RigObserver {
   bool LockoutActive() const;
   void EnsurePositionReports();
   void OnReportTimer();
+  // The velocity tick (behaviour.playback_tick_ms), in ns; 0 without one.
+  sim::TimeNs Tick() const {
+    return sim::TimeNs{profile_.behaviour.playback_tick_ms} * sim::kNsPerMs;
+  }
+  void EnsureTick();
+  void OnTick();
   void CancelTimer(sim::Scheduler::TimerId& id);
   void CancelAllTimers();
   // Builds the physical rig from the profile (none when not enabled).
@@ -191,11 +198,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
   // STOP_ALL that set it came.
   bool hard_stop_lock_ = false;
   sim::TimeNs hard_stop_lock_ns_ = 0;
-  // Per motor (index motor-1): the MSG_MOTOR_CONFIGURE flags as last
-  // received; and the uploaded frame position a POSITION_FRAME brought the
-  // motor to that reads one step short (behaviour.positions_truncate).
+  // Per motor (index motor-1): the MSG_MOTOR_CONFIGURE flags as last received.
   std::vector<uint8_t> config_flags_;
-  std::vector<std::optional<int64_t>> truncated_;
   // behaviour.coupling kDrivesNext, per motor: steps made while driven and
   // since let go; the step count when the current driving began; whether the
   // engine exception went out since power-on.
@@ -204,6 +208,11 @@ class Dmc16 final : public Device, private sim::RigObserver {
   bool engine_exception_sent_ = false;
 
   sim::Scheduler::TimerId report_timer_ = sim::Scheduler::kNoTimer;
+  // The velocity tick's timer; an update due at the next tick; the last
+  // position message sent (any, answers included).
+  sim::Scheduler::TimerId tick_timer_ = sim::Scheduler::kNoTimer;
+  bool report_due_ = false;
+  sim::TimeNs last_report_ns_ = -1;
   // The line-idle gap: fires kLineIdleGapNs after the last host chunk.
   sim::Scheduler::TimerId idle_timer_ = sim::Scheduler::kNoTimer;
   sim::TimeNs last_host_bytes_ns_ = 0;

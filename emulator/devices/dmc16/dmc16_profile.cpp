@@ -230,6 +230,29 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
     v.jog_horizon_ms =
         static_cast<uint32_t>(b.GetInt("jog_horizon_ms", v.jog_horizon_ms, 0, 60'000));
     v.coupling = GetChoice(b, "coupling", v.coupling, kCoupling);
+    // The real-time engine (dmc16_profile.h).
+    v.playback_tick_ms =
+        static_cast<uint32_t>(b.GetInt("playback_tick_ms", v.playback_tick_ms, 0, 100));
+    if (v.playback_tick_ms != 0 && v.playback_tick_ms < 5) {
+      b.Fail("playback_tick_ms", "is " + std::to_string(v.playback_tick_ms),
+             "use 0 (continuous playback) or a tick of 5..100 ms (dmc-lite: 20)");
+    }
+    v.upload_index_from_start_frame =
+        b.GetBool("upload_index_from_start_frame", v.upload_index_from_start_frame);
+    if (v.upload_index_from_start_frame && v.playback_tick_ms == 0) {
+      b.Fail("upload_index_from_start_frame", "is true without a playback tick",
+             "set \"playback_tick_ms\" (dmc-lite: 20), the engine that reads the upload so");
+    }
+    v.position_frame_clamped = b.GetBool("position_frame_clamped", v.position_frame_clamped);
+    v.rt_end_after_stop = b.GetBool("rt_end_after_stop", v.rt_end_after_stop);
+    v.trigger_frames_checked = b.GetBool("trigger_frames_checked", v.trigger_frames_checked);
+    v.camera_angles_checked = b.GetBool("camera_angles_checked", v.camera_angles_checked);
+    v.zero_preroll_nan = b.GetBool("zero_preroll_nan", v.zero_preroll_nan);
+    if (v.zero_preroll_nan && v.playback_tick_ms == 0) {
+      b.Fail("zero_preroll_nan", "is true without a playback tick",
+             "set \"playback_tick_ms\" (dmc-lite: 20), the engine whose ramp has it");
+    }
+    v.unsolicited_id_zero = b.GetBool("unsolicited_id_zero", v.unsolicited_id_zero);
     b.Finish();
   }
   const nlohmann::json& sets = r.GetRaw("limit_sets");
@@ -320,7 +343,15 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"position_confirm", ChoiceName(p.behaviour.position_confirm, kPositionConfirm)},
         {"jog_speed_scale", ChoiceName(p.behaviour.jog_speed_scale, kJogSpeedScale)},
         {"jog_horizon_ms", p.behaviour.jog_horizon_ms},
-        {"coupling", ChoiceName(p.behaviour.coupling, kCoupling)}}},
+        {"coupling", ChoiceName(p.behaviour.coupling, kCoupling)},
+        {"playback_tick_ms", p.behaviour.playback_tick_ms},
+        {"upload_index_from_start_frame", p.behaviour.upload_index_from_start_frame},
+        {"position_frame_clamped", p.behaviour.position_frame_clamped},
+        {"rt_end_after_stop", p.behaviour.rt_end_after_stop},
+        {"trigger_frames_checked", p.behaviour.trigger_frames_checked},
+        {"camera_angles_checked", p.behaviour.camera_angles_checked},
+        {"zero_preroll_nan", p.behaviour.zero_preroll_nan},
+        {"unsolicited_id_zero", p.behaviour.unsolicited_id_zero}}},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},
         {"capabilities", base::Hex(p.virtual_axes.capabilities, 4)},

@@ -108,10 +108,9 @@ struct Dmc16Behaviour {
   // that STOP_ALL and the motors still (dmc-lite: 100 velocity updates of
   // 20 ms counted from the STOP_ALL). 0: none.
   uint32_t stop_all_lockout_ms = 0;
-  // A position read right after an upload's POSITION_FRAME lands can be one
-  // step short of the uploaded one (dmc-lite truncates its float position):
-  // a motor that reached its frame position moving away from zero reads one
-  // step toward zero (199 for 200, -199 for -200) until its next motion.
+  // A moving motor's position between steps is reported truncated toward
+  // zero (dmc-lite truncates its float position); false: the nearest step.
+  // At rest a motor reads its step either way.
   bool positions_truncate = false;
 
   // --- real-time ---
@@ -164,6 +163,40 @@ struct Dmc16Behaviour {
   // (dmc-lite).
   enum class Coupling : uint8_t { kFollowsPrevious, kDrivesNext };
   Coupling coupling = Coupling::kFollowsPrevious;
+  // --- the real-time engine (docs/devices/dmc16.md "The 20 ms velocity tick") ---
+  // 0: live runs play the frame path in continuous time and reports go out as
+  // they fall due (spec reading). n: the device computes its motion every n ms
+  // (dmc-lite: 20) and a live run is that tick's state machine: pre-roll ramp,
+  // frame clock from START FRAME to END FRAME + 1 with MOVE TIME sampled on the
+  // tick, post-roll ramp, then a move back onto frame END FRAME + 1 (or the
+  // next loop pass); POSITION_FRAME moves take at least 2 x 0.5 s; position
+  // updates are decided on the tick (a new frame, a stop, or 50 ms since the last).
+  uint32_t playback_tick_ms = 0;
+  // With a tick: the clock's frame f reads upload frame START FRAME + f - 1
+  // (the upload stored from index 1 + (frame - START FRAME), read at the raw
+  // frame number; dmc-lite). false: frame f reads upload frame f.
+  bool upload_index_from_start_frame = false;
+  // POSITION_FRAME outside the upload goes to the nearest uploaded frame and
+  // answers OK (dmc-lite); false: ERR_RANGE.
+  bool position_frame_clamped = false;
+  // RT_END when a stop (STOP_ALL, MOTOR_STOP, a limit, the e-stop) ends a live
+  // run or a shot (spec reading); false: none (dmc-lite).
+  bool rt_end_after_stop = true;
+  // RT_UPLOAD_MOVE_TRIGGERS with a frame index past the upload refused with
+  // ERR_RANGE (spec reading); false: the point is dropped, ACK OK (dmc-lite).
+  bool trigger_frames_checked = true;
+  // RUN_MOVE stills angles past 360, or CLOSE not above OPEN, refused with
+  // ERR_RANGE (spec reading); false: taken (dmc-lite: CLOSE <= OPEN exposes
+  // 90 to 180 degrees, an angle past 360 holds the shutter to the frame's end).
+  bool camera_angles_checked = true;
+  // A 0 ms PRE-ROLL TIME makes the pre-roll position not a number: RUN_MOVE
+  // answers ERR_PREROLL when a motor with an enabled lower soft limit would
+  // move (dmc-lite natively; its ramp divides by the time). false: no ramp.
+  bool zero_preroll_nan = false;
+  // Unprompted messages (HI at power-on, position updates, RT_END, GIO_IN,
+  // MOTOR_HARD_STOP) carry ID 0 (dmc-lite); false: a device-side sequence ID
+  // (ERRATA 1.9).
+  bool unsolicited_id_zero = false;
 };
 
 struct Dmc16Profile {

@@ -116,6 +116,25 @@ TEST(Dmc16Profile, BehaviourErrorsNameTheField) {
             std::string::npos);
   EXPECT_NE(ErrorOf({{"behaviour", {{"jog_speed_scale", "log"}}}}).find("\"per_10000\""),
             std::string::npos);
+  // The real-time engine: a tick of 5..100 ms; the upload's indexing and the
+  // NaN pre-roll are the tick engine's, so they need one.
+  EXPECT_NE(ErrorOf({{"behaviour", {{"playback_tick_ms", 3}}}})
+                .find("\"behaviour.playback_tick_ms\" is 3"),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf({{"behaviour", {{"playback_tick_ms", 101}}}}).find("\"behaviour.playback_tick_ms\""),
+      std::string::npos);
+  EXPECT_NE(ErrorOf({{"behaviour", {{"upload_index_from_start_frame", true}}}})
+                .find("set \"playback_tick_ms\""),
+            std::string::npos);
+  EXPECT_NE(
+      ErrorOf({{"behaviour", {{"zero_preroll_nan", true}}}}).find("\"behaviour.zero_preroll_nan\""),
+      std::string::npos);
+  EXPECT_EQ(ErrorOf({{"behaviour",
+                      {{"playback_tick_ms", 20},
+                       {"upload_index_from_start_frame", true},
+                       {"zero_preroll_nan", true}}}}),
+            "");
 }
 
 TEST(Dmc16Profile, MissingFileNamesThePath) {

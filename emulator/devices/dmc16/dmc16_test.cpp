@@ -1352,11 +1352,10 @@ TEST(Dmc16Behaviour, StopAllLockout) {
   }
 }
 
-// FACTS "DMC v2": dmc-lite reads a position right after POSITION_FRAME one
-// step short (199 for 200). Model: reaching an uploaded frame position by
-// POSITION_FRAME while moving away from zero reads one step toward zero,
-// until the motor's next motion; moving toward zero reads exact. The spec
-// reading (and the step count itself) is always exact.
+// dmc-lite reports its position, a float between steps while a motor moves,
+// truncated toward zero (behaviour.positions_truncate); the spec reading
+// reports the step the motor is on (the nearest). At rest both read the step
+// exactly: an uploaded frame reads back exactly (DMC-RT-016).
 TEST(Dmc16Behaviour, PositionsTruncate) {
   for (const bool truncate : {false, true}) {
     SCOPED_TRACE(truncate ? "positions_truncate" : "spec");
@@ -1366,24 +1365,55 @@ TEST(Dmc16Behaviour, PositionsTruncate) {
     ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{0, 2}), kOk);
     ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, {200, -200, 300}}), kOk);
     ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kOk);
-    const int32_t off = truncate ? 1 : 0;
-    auto frame = [&](uint32_t f) {
+    for (const uint32_t f : {0u, 1u, 2u}) {
       EXPECT_EQ(h.Request(dmc::RtPositionFrame{f}), kOk);
       h.Settle();
-      return Positions(h).at(0);
-    };
-    EXPECT_EQ(frame(0), 200 - off);
-    EXPECT_EQ(h.All<dmc::MotorPositionReport>().back().second.positions_steps[0], 200 - off);
-    EXPECT_EQ(h.Pos(1), 200) << "the motor stands on the frame";
-    EXPECT_EQ(h.Request(dmc::RtJogAll{24000, 0}), kOk) << "and is on frame 0";
-    EXPECT_EQ(frame(1), -200 + off);
-    EXPECT_EQ(frame(2), 300 - off);
-    EXPECT_EQ(frame(0), 200) << "moved toward zero";
-    EXPECT_EQ(frame(2), 300 - off);
-    EXPECT_EQ(MoveTaken(h, 1, 301), 1);
+      EXPECT_EQ(Positions(h).at(0), f == 0 ? 200 : (f == 1 ? -200 : 300));
+    }
+    EXPECT_EQ(MoveTaken(h, 1, -3000), 1);
+    EXPECT_EQ(MoveTaken(h, 2, 3000), 1);
+    int differ = 0;
+    for (int i = 0; i < 40; ++i) {
+      h.RunFor(7 * kNsPerMs + 310'000);
+      const std::vector<int32_t> r = Positions(h);
+      for (int m = 1; m <= 2; ++m) {
+        const sim::StepperMotor& motor = h.device().rig_ref().motor(m);
+        if (!motor.IsMoving()) continue;
+        const double x = static_cast<double>(motor.CurrentPlan().origin_steps()) +
+                         motor.CurrentPlan().StateAt(h.now()).x_steps;
+        const int64_t want = truncate ? static_cast<int64_t>(std::trunc(x)) : motor.Position();
+        EXPECT_EQ(r.at(static_cast<size_t>(m - 1)), want) << "motor " << m << " at " << x;
+        differ += want != motor.Position() ? 1 : 0;
+      }
+    }
+    EXPECT_EQ(differ > 0, truncate) << "reads toward zero, not the nearest step";
     h.Settle();
-    EXPECT_EQ(Positions(h).at(0), 301) << "a plain move reads exact";
-    EXPECT_EQ(frame(2), 300) << "toward zero again";
+    EXPECT_EQ(Positions(h).at(0), -3000);
+    EXPECT_EQ(Positions(h).at(1), 3000);
+  }
+}
+
+// unsolicited_id_zero (dmc-lite): every message the device sends unprompted
+// carries ID 0; the spec reading numbers them (ERRATA 1.9).
+TEST(Dmc16Behaviour, UnsolicitedMessagesCarryASequenceIdOrZero) {
+  for (const bool zero : {false, true}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.unsolicited_id_zero = zero;
+    Host h(p);
+    EXPECT_EQ(MoveTaken(h, 1, 500), 1);
+    h.Settle();
+    std::set<uint32_t> ids;
+    for (const Out& o : h.out()) {
+      if (o.id < 0x10000) ids.insert(o.id);
+    }
+    EXPECT_EQ(std::get_if<dmc::HiResponse>(&h.out().front().msg) != nullptr, true);
+    if (zero) {
+      EXPECT_EQ(ids, std::set<uint32_t>{0});
+    } else {
+      EXPECT_GT(ids.size(), 3u);
+      EXPECT_EQ(ids.count(0), 0u);
+      EXPECT_EQ(*ids.begin(), 1u) << "HI at power-on";
+    }
   }
 }
 

@@ -46,8 +46,12 @@ struct PlaybackHooks {
   std::function<void()> send_rt_end;
   // The device's periodic position reports while anything moves ("about
   // every 0.10 seconds"): they run through every phase of playback, beside
-  // the per-frame reports.
+  // the per-frame reports. With a velocity tick (behaviour.playback_tick_ms)
+  // this also keeps the device's tick running (Dmc16 calls OnTick()).
   std::function<void()> ensure_position_reports;
+  // With a velocity tick: an update is due, sent at the next tick (a new
+  // frame, the end of a pass, a stop); without one playback sends at once.
+  std::function<void()> flag_position_update;
 };
 
 // A video camera trigger (MSG_RT_RUN_MOVE FLAGS 0x10) is a press of the
@@ -105,6 +109,9 @@ class Playback {
   void Reset();
   // Power-off: timers cancelled, back to idle (the last frame is kept).
   void Halt();
+  // With a velocity tick (behaviour.playback_tick_ms): one tick of a live
+  // run; the device calls it on every tick while Ticking().
+  void OnTick();
 
   // --- observation ---
   // A live pass, a shoot or a jog-all is under way (motion commands wait).
@@ -125,6 +132,18 @@ class Playback {
   std::optional<uint32_t> on_frame() const { return on_frame_; }
   // Passes completed since the run started (loop and ping-pong count each).
   uint32_t passes_done() const { return passes_done_; }
+  // A live run on the velocity tick needs OnTick(): one armed waiting for its
+  // pre-roll to begin, or one playing.
+  bool Ticking() const {
+    return tick_run_.has_value() && (mode_ == Mode::kPass || tick_run_->to_preroll);
+  }
+  // A run is armed or playing, a shot or a jog-all under way: the device is
+  // out of its plain jog state (the tick sends a due update at once).
+  bool InRealTimeState() const { return mode_ != Mode::kIdle; }
+  // While the tick drives `motor` through a run: the position the device
+  // reports (the engine's position, truncated toward zero with
+  // behaviour.positions_truncate, else the nearest step); nullopt otherwise.
+  std::optional<int64_t> ModelPosition(int motor) const;
 
  private:
   struct RunSetup {
@@ -163,6 +182,31 @@ class Playback {
   struct IoTimer {
     sim::Scheduler::TimerId id;
     sim::TimeNs at_ns;
+  };
+  // A live run on the velocity tick (docs/devices/dmc16.md "The 20 ms velocity
+  // tick"), in single precision as the reference firmware computes it.
+  struct TickAxis {
+    int motor = 0;
+    float x = 0;                // where the engine has sent the motor (its position)
+    float ramp_from = 0;        // pre-roll start, a whole step
+    float ramp_half_accel = 0;  // steps/s^2, halved
+    float post_from = 0;        // post-roll start: the path at the clock's end, a whole step
+    float post_v = 0;           // steps/s at the post-roll start
+    float post_half_accel = 0;
+  };
+  struct TickRun {
+    enum class Phase : uint8_t { kPreroll, kMove, kPostroll };
+    Phase phase = Phase::kPreroll;
+    float t = 0;  // seconds into the phase, counted in ticks
+    float preroll_s = 0;
+    float postroll_s = 0;
+    float clock_from = 0;  // the frame clock over the move phase
+    float clock_to = 0;
+    float move_s = 0;            // the move phase's length
+    float rate = 0;              // frames per second along the clock (signed)
+    sim::TimeNs move_t0_ns = 0;  // when the move phase began
+    bool to_preroll = false;     // armed: the motors leave for the pre-roll at the next tick
+    std::vector<TickAxis> axes;
   };
 
   bool MotorValid(int motor) const { return motor >= 1 && motor <= profile_.motor_count; }
@@ -209,6 +253,22 @@ class Playback {
   // `stopped`: ended early (Abort), the update goes out whatever was sent this instant.
   void FinishRun(bool send_end, bool stopped = false);
   void ApplyFrameOutputs(uint32_t frame);
+  // --- the velocity tick ---
+  bool TickMode() const { return profile_.behaviour.playback_tick_ms > 0; }
+  // A position update now (continuous playback) or at the next tick.
+  void Report();
+  // The frame path at frame clock `clock` (behaviour.upload_index_from_start_frame).
+  float PathAt(int motor, float clock) const;
+  dmc::AckCode RunMoveTicked(const dmc::RtRunMove& m);
+  dmc::AckCode GoTicked();
+  // Sends the motor to `x` over the next tick.
+  void Drive(TickAxis& a, float x, float tick_s);
+  void FrameReached(int64_t frame);
+  // `x`: where the motors are held if another pass follows.
+  void EndTickPass(const std::vector<float>& x, float tick_s);
+  // POSITION_FRAME's move with a tick: a point-to-point move of at least 2 x
+  // 0.5 s from rest (a plain move while the motor moves).
+  sim::MoveStatus MoveToFrame(int motor, int64_t target_steps);
   void CancelTimer(sim::Scheduler::TimerId& id);
   void AddIoTimer(sim::TimeNs at_ns, sim::Callback cb);
   void CancelTimers();
@@ -244,6 +304,8 @@ class Playback {
   sim::Scheduler::TimerId frame_timer_ = sim::Scheduler::kNoTimer;
   sim::Scheduler::TimerId phase_timer_ = sim::Scheduler::kNoTimer;
   std::vector<IoTimer> io_timers_;  // camera and bloop edges of the running pass
+  // The run on the velocity tick, from RUN_MOVE (armed) through its passes.
+  std::optional<TickRun> tick_run_;
 };
 
 }  // namespace moco::devices

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -67,6 +69,7 @@ class Bench final : public sim::RigObserver {
                          },
                      .send_rt_end = [this] { rt_ends.push_back(scheduler.Now()); },
                      .ensure_position_reports = [this] { ++cadence_starts; },
+                     .flag_position_update = [this] { ++flagged; },
                  }) {
     for (int m = 1; m <= rig.motor_count(); ++m) {
       auto planner = std::make_unique<ScriptPlanner>();
@@ -122,6 +125,7 @@ class Bench final : public sim::RigObserver {
   std::vector<Report> reports;
   std::vector<TimeNs> rt_ends;
   int cadence_starts = 0;
+  int flagged = 0;
 };
 
 dmc::RtRunMove RunMove(uint32_t start, uint32_t end, uint32_t fps_x1000, uint32_t pre_ms,
@@ -752,26 +756,6 @@ TEST(Dmc16PlaybackReports, TheProfilesIntervalSetsTheCadenceInEveryPhase) {
   }
 }
 
-TEST(Dmc16PlaybackReports, TheDmcLiteProfileUpdatesEvery50MsThroughARun) {
-  const char* dir = std::getenv("MOCO_SOURCE_DIR");
-  const std::string src = dir != nullptr ? dir : ".";
-  Host h(LoadDmc16Profile(src + "/fixtures/profiles/dmc-lite.json"));
-  ASSERT_EQ(h.device().profile().position_report_interval_ms, 50u);
-  for (uint8_t m = 1; m <= 2; ++m) {
-    ASSERT_EQ(h.Request(dmc::MotorConfigure{m, dmc::kMotorEnabled}), kAckOk);
-  }
-  UploadRamp(h, 10, 100, 10, /*dmx=*/false);  // dmc-lite has no DMX channels
-  ASSERT_EQ(h.Request(RunMove(20, 24, 2000, 1000, 1000)), kAckOk);
-  h.Settle();
-  h.RunMs(100);  // past its arming time
-  const TimeNs t_go = h.now();
-  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
-  h.Settle();
-  const auto ups = Updates(h, t_go);
-  EXPECT_LE(LongestGap(ups, t_go), 50 * kNsPerMs);
-  EXPECT_GE(ups.size(), 4000u / 50u);
-}
-
 // --- camera triggers and upload triggers -----------------------------------------------------
 
 TEST(Dmc16PlaybackCamera, VideoPressesTheShutterOnceAtTheStartFrameAndOnceAtTheEndFrame) {
@@ -1044,6 +1028,478 @@ TEST(Dmc16PlaybackSwitches, GoRightAfterTheRigRestsIsTakenOrNotInPositionWhileAr
     h.scheduler().RunUntil(shot_rest);
     EXPECT_EQ(h.Request(dmc::RtGo{}),
               arming_ms == 0 ? kAckOk : std::optional<AckCode>(AckCode::kErrNotInPosition));
+  }
+}
+
+// --- the velocity tick (behaviour.playback_tick_ms and its engine's switches) ---------------
+
+constexpr TimeNs kTick = 20 * kNsPerMs;
+
+Dmc16Profile DmcLite() {
+  const char* dir = std::getenv("MOCO_SOURCE_DIR");
+  return LoadDmc16Profile(std::string(dir != nullptr ? dir : ".") +
+                          "/fixtures/profiles/dmc-lite.json");
+}
+
+// A SmallProfile on a 20 ms tick with updates every 50 ms (dmc-lite's engine,
+// the other departures left at the spec's reading).
+Dmc16Profile Ticked() {
+  Dmc16Profile p = SmallProfile();
+  p.behaviour.playback_tick_ms = 20;
+  p.position_report_interval_ms = 50;
+  return p;
+}
+
+// Motors 1 and 2 enabled (dmc-lite's start disabled), at p1 and p2.
+void Ready(Host& h, int32_t p1, int32_t p2) {
+  for (uint8_t m = 1; m <= 2; ++m) {
+    ASSERT_EQ(h.Request(dmc::MotorConfigure{m, dmc::kMotorEnabled | dmc::kMotorBlurEnabled}),
+              kAckOk);
+  }
+  h.Send(dmc::MotorMove{1, p1});
+  h.Send(dmc::MotorMove{2, p2});
+  h.Settle();
+  ASSERT_EQ(h.Pos(1), p1);
+  ASSERT_EQ(h.Pos(2), p2);
+}
+
+// The upload of mococheck's live-run cases (conformance dmc_cases_rt.cpp):
+// frames start..start+20, motor 1 climbing 40 steps a frame from p1 and
+// motor 2 falling 25 from p2 over the first 10 frames, then both holding.
+void UploadClimb(Host& h, uint32_t start, int32_t p1, int32_t p2) {
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveBegin{start, start + 20}), kAckOk);
+  std::vector<int32_t> a;
+  std::vector<int32_t> b;
+  for (int32_t k = 0; k <= 10; ++k) {
+    a.push_back(p1 + 40 * k);
+    b.push_back(p2 - 25 * k);
+  }
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{1, 0, true, a}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveAxis{2, 0, true, b}), kAckOk);
+  ASSERT_EQ(h.Request(dmc::RtUploadMoveEnd{}), kAckOk);
+}
+
+// Motor 1 of UploadClimb at frame f (any real f): the upload between frames,
+// the first interval's line before START FRAME, frame start+10's beyond.
+double Climb(uint32_t start, int32_t p1, double f) { return p1 + 40 * std::min(f - start, 10.0); }
+
+// Runs in ticks until `done` holds (at most `max_ms`).
+template <typename Done>
+void RunUntil(Host& h, Done done, int64_t max_ms = 20'000) {
+  for (int64_t ms = 0; ms < max_ms && !done(); ms += 20) h.RunMs(20);
+  ASSERT_TRUE(done());
+}
+
+struct Seen {
+  TimeNs t_ns;
+  uint32_t move_time;
+  int32_t p1;
+  int32_t p2;
+};
+
+std::vector<Seen> Seens(Host& h, TimeNs from_ns) {
+  std::vector<Seen> v;
+  for (const auto& [t, r] : Updates(h, from_ns)) {
+    v.push_back({t, r.move_time_x1000, r.positions_steps[0], r.positions_steps[1]});
+  }
+  return v;
+}
+
+// The ping-pong run measured on dmc-lite (mococheck's stop-loop case against
+// the firmware natively, FACTS "DMC v2"): START FRAME 0 plays one frame behind
+// the upload, the frame reports carry the tick's fractional MOVE TIMEs 40 or
+// 60 ms apart, every pass ends with RT_END, and STOP_LOOP on the way back
+// ends the run on frame 0 with no post-roll. Every MOVE TIME and position of
+// the move phases below is the one the firmware sent.
+TEST(Dmc16PlaybackTick, DmcLiteReplaysTheMeasuredPingPongStoppedOnTheWayBack) {
+  Host h(DmcLite());
+  Ready(h, 3321, -478);
+  UploadClimb(h, 0, 3321, -478);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{0}), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(RunMove(0, 10, 24000, 500, 500, dmc::kPlayPingPong)), kAckOk);
+  h.Settle();
+  // The pre-roll starts 240 steps before slot 0 (frame -1 on the first interval's line).
+  EXPECT_EQ(h.Pos(1), 3041);
+  EXPECT_EQ(h.Pos(2), -303);
+  h.RunMs(100);
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  RunUntil(h, [&] { return !h.All<dmc::RtEnd>().empty(); });
+  RunUntil(h, [&] {
+    const auto ups = Updates(h, t_go);
+    return !ups.empty() && ups.back().second.move_time_x1000 == 8600;
+  });
+  ASSERT_EQ(h.Request(dmc::RtStopLoop{}), kAckOk);
+  h.Settle();
+  const std::vector<Seen> seen = Seens(h, t_go);
+  const std::vector<std::array<int32_t, 4>> measured = {
+      // {ms after the frame 1 report, MOVE TIME, motor 1, motor 2}
+      {-60, 0, 3281, -453},     {0, 1440, 3338, -489},    {40, 2400, 3377, -513},
+      {80, 3360, 3415, -537},   {120, 4320, 3453, -561},  {160, 5280, 3492, -585},
+      {200, 6240, 3530, -609},  {240, 7200, 3569, -633},  {280, 8160, 3607, -657},
+      {320, 9120, 3645, -681},  {360, 10080, 3684, -705}, {400, 11000, 3703, -717},
+      {400, 11000, 3703, -717}, {420, 10520, 3701, -716}, {460, 9559, 3663, -692},
+      {500, 8600, 3625, -668},  {540, 7640, 3586, -644},  {580, 6680, 3548, -620},
+      {620, 5720, 3509, -596},  {660, 4760, 3471, -572},  {700, 3799, 3433, -548},
+      {740, 2839, 3394, -524},  {780, 1879, 3356, -499},  {820, 919, 3317, -475},
+      {860, 0, 3298, -463}};
+  size_t first = 0;
+  while (first < seen.size() && seen[first].move_time != 1440) ++first;
+  ASSERT_GE(first, 1u);
+  ASSERT_LE(first - 1 + measured.size(), seen.size());
+  const TimeNs t1 = seen[first].t_ns;
+  for (size_t i = 0; i < measured.size(); ++i) {
+    const Seen& s = seen[first - 1 + i];
+    SCOPED_TRACE("update " + std::to_string(i));
+    EXPECT_EQ(s.t_ns - t1, measured[i][0] * kNsPerMs);
+    EXPECT_EQ(s.move_time, static_cast<uint32_t>(measured[i][1]));
+    EXPECT_EQ(s.p1, measured[i][2]);
+    EXPECT_EQ(s.p2, measured[i][3]);
+  }
+  // One RT_END at the end of each pass, as its last update goes out.
+  const auto ends = h.All<dmc::RtEnd>();
+  ASSERT_EQ(ends.size(), 2u);
+  EXPECT_EQ(ends[0].first, t1 + 400 * kNsPerMs);
+  EXPECT_EQ(ends[1].first, t1 + 860 * kNsPerMs);
+  // No post-roll: from there the rig moves back onto frame 0 (upload frame
+  // 0's positions) and rests.
+  for (const Seen& s : seen) {
+    if (s.t_ns > t1 + 860 * kNsPerMs) {
+      EXPECT_GE(s.p1, 3298);
+    }
+  }
+  EXPECT_EQ(h.Pos(1), 3321);
+  EXPECT_EQ(h.Pos(2), -478);
+  EXPECT_EQ(h.device().playback().on_frame(), 0u);
+  // Every update on the tick and with ID 0; 40 or 60 ms apart while moving.
+  for (const testing::Out& o : h.out()) {
+    if (o.t_ns >= t_go && std::get_if<dmc::MotorPositionReport>(&o.msg) != nullptr) {
+      EXPECT_EQ(o.t_ns % kTick, 0) << o.t_ns;
+      EXPECT_EQ(o.id, 0u);
+    }
+  }
+}
+
+// The same ping-pong from START FRAME 1, measured on dmc-lite: on the upload,
+// MOVE TIME from 1000 to 12000 and back; STOP_LOOP after the first RT_END
+// ends the run on frame 1 (MOVE TIME 1000, no post-roll) and the rig moves
+// onto frame 1's positions. (dmc-lite then read 1199 for 1200: its step
+// accumulator's rounding, which the model reads exact.)
+TEST(Dmc16PlaybackTick, DmcLiteReplaysTheMeasuredPingPongFromStartFrame1) {
+  Host h(DmcLite());
+  Ready(h, 1200, 0);
+  UploadClimb(h, 1, 1200, 0);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{1}), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(RunMove(1, 11, 24000, 500, 500, dmc::kPlayPingPong)), kAckOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 960);
+  EXPECT_EQ(h.Pos(2), 150);
+  h.RunMs(100);
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  RunUntil(h, [&] { return !h.All<dmc::RtEnd>().empty(); });
+  h.RunMs(80);
+  ASSERT_EQ(h.Request(dmc::RtStopLoop{}), kAckOk);
+  h.Settle();
+  std::map<uint32_t, std::pair<int32_t, int32_t>> at;  // the first update of each MOVE TIME
+  for (const Seen& s : Seens(h, t_go)) at.emplace(s.move_time, std::pair{s.p1, s.p2});
+  const std::vector<std::array<int32_t, 3>> measured = {
+      {2440, 1257, -36},   {3400, 1296, -60},   {11080, 1600, -250},
+      {12000, 1600, -250}, {11520, 1600, -250}, {10560, 1582, -238},
+      {9600, 1544, -215},  {4799, 1352, -94},   {1919, 1236, -22}};
+  for (const auto& [mt, p1, p2] : measured) {
+    SCOPED_TRACE("MOVE TIME " + std::to_string(mt));
+    ASSERT_EQ(at.count(static_cast<uint32_t>(mt)), 1u);
+    EXPECT_EQ(at[static_cast<uint32_t>(mt)].first, p1);
+    EXPECT_EQ(at[static_cast<uint32_t>(mt)].second, p2);
+  }
+  // The way back ends at MOVE TIME 1000 with the positions of the tick
+  // before, with its RT_END; then the rig rests on frame 1.
+  const auto ups = Updates(h, t_go);
+  const auto ends = h.All<dmc::RtEnd>();
+  ASSERT_EQ(ends.size(), 2u);
+  for (const auto& [t, r] : ups) {
+    if (t != ends[1].first) continue;
+    EXPECT_EQ(r.move_time_x1000, 1000u);
+    EXPECT_EQ(r.positions_steps[0], 1217);
+    EXPECT_EQ(r.positions_steps[1], -10);
+  }
+  EXPECT_EQ(ups.back().second.move_time_x1000, 1000u);
+  EXPECT_EQ(h.Pos(1), 1200);
+  EXPECT_EQ(h.Pos(2), 0);
+}
+
+// START FRAME 0 runs one frame behind the upload, 1 on it, 5 four frames
+// ahead, clamped at the last uploaded position (upload_index_from_start_frame);
+// without the switch the run is on the upload whatever START FRAME. Either
+// way the run plays frames START..END + 1 and rests on END + 1's position.
+TEST(Dmc16PlaybackTick, TheClockReadsTheUploadFromStartFrameOrOnIt) {
+  struct Case {
+    uint32_t start;
+    bool index;
+    double ahead;  // frames the run plays ahead of the upload
+  };
+  for (const Case c : {Case{0, true, -1}, Case{1, true, 0}, Case{5, true, 4}, Case{0, false, 0},
+                       Case{5, false, 0}}) {
+    SCOPED_TRACE("START FRAME " + std::to_string(c.start) + (c.index ? " indexed" : " on it"));
+    Dmc16Profile p = DmcLite();
+    p.behaviour.upload_index_from_start_frame = c.index;
+    Host h(p);
+    Ready(h, 1200, 0);
+    UploadClimb(h, c.start, 1200, 0);
+    ASSERT_EQ(h.Request(dmc::RtPositionFrame{c.start}), kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(RunMove(c.start, c.start + 10, 24000, 500, 500)), kAckOk);
+    h.Settle();
+    h.RunMs(100);
+    const TimeNs t_go = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    int checked = 0;
+    bool fractional = false;
+    for (const Seen& s : Seens(h, t_go)) {
+      if (s.move_time <= c.start * 1000 || s.move_time >= (c.start + 11) * 1000) continue;
+      const double clock = s.move_time / 1000.0;
+      EXPECT_NEAR(s.p1, Climb(c.start, 1200, clock + c.ahead), 1.0) << "MOVE TIME " << s.move_time;
+      fractional = fractional || s.move_time % 1000 != 0;
+      ++checked;
+    }
+    EXPECT_GE(checked, 10);
+    EXPECT_TRUE(fractional) << "MOVE TIME sampled on the tick";
+    EXPECT_EQ(h.All<dmc::RtEnd>().size(), 1u);
+    EXPECT_EQ(Updates(h, t_go).back().second.move_time_x1000, (c.start + 11) * 1000);
+    EXPECT_EQ(h.Pos(1), 1600) << "on END FRAME + 1";
+  }
+}
+
+// Without a tick the same run reports each frame at its time with MOVE TIME =
+// frame x 1000, on the upload (spec reading).
+TEST(Dmc16PlaybackTick, WithoutATickFramesAreReportedAtTheirTimesOnTheUpload) {
+  Dmc16Profile p = DmcLite();
+  p.behaviour.playback_tick_ms = 0;
+  p.behaviour.upload_index_from_start_frame = false;
+  p.behaviour.zero_preroll_nan = false;
+  Host h(p);
+  Ready(h, 1200, 0);
+  UploadClimb(h, 0, 1200, 0);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{0}), kAckOk);
+  h.Settle();
+  ASSERT_EQ(h.Request(RunMove(0, 10, 24000, 500, 500)), kAckOk);
+  h.Settle();
+  h.RunMs(100);
+  const TimeNs t_go = h.now();
+  ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  // (From frame 1: dmc-lite's profile gives the pre-roll's updates frame 0's MOVE TIME.)
+  for (uint32_t f = 1; f <= 10; ++f) {
+    bool seen = false;
+    for (const Seen& s : Seens(h, t_go)) {
+      if (s.move_time != f * 1000) continue;
+      seen = true;
+      // (positions_truncate reads the motor's position between steps toward zero)
+      EXPECT_NEAR(s.p1, 1200 + 40 * static_cast<int32_t>(f), 1) << f;
+      break;
+    }
+    EXPECT_TRUE(seen) << "frame " << f;
+  }
+}
+
+// Position updates on the tick: every 60 ms while a motor moves (the first
+// tick past 50 ms), the one for the stop at the first tick 100 ms past the
+// last update; with the switch all carry ID 0. Without a tick: every 50 ms,
+// the stop's at once, device-side sequence IDs (ERRATA 1.9).
+TEST(Dmc16PlaybackTick, UpdatesAreDecidedOnTheTick) {
+  for (const bool tick : {false, true}) {
+    SCOPED_TRACE(tick ? "tick" : "continuous");
+    Dmc16Profile p = SmallProfile();
+    p.position_report_interval_ms = 50;
+    p.behaviour.playback_tick_ms = tick ? 20 : 0;
+    p.behaviour.unsolicited_id_zero = tick;
+    Host h(p);
+    h.RunMs(7);
+    const TimeNs t0 = h.now();
+    ASSERT_TRUE(h.Request(dmc::MotorMove{1, 3000}) == std::nullopt);
+    const TimeNs rest = RestTime(h);
+    h.Settle();
+    const auto ups = Updates(h, t0);
+    ASSERT_GE(ups.size(), 5u);
+    for (size_t i = 1; i + 1 < ups.size(); ++i) {
+      EXPECT_EQ(ups[i].first - ups[i - 1].first, (tick ? 60 : 50) * kNsPerMs) << i;
+    }
+    if (tick) {
+      EXPECT_EQ(ups.back().first % kTick, 0);
+      EXPECT_GT(ups.back().first - ups[ups.size() - 2].first, 100 * kNsPerMs);
+      EXPECT_LE(ups.back().first - ups[ups.size() - 2].first, 120 * kNsPerMs);
+      for (const testing::Out& o : h.out()) {
+        if (std::get_if<dmc::MotorPositionReport>(&o.msg) != nullptr) {
+          EXPECT_EQ(o.id, 0u);
+        }
+      }
+    } else {
+      EXPECT_EQ(ups.back().first, rest);
+      EXPECT_GT(h.out().back().id, 1u);
+    }
+    EXPECT_EQ(ups.back().second.positions_steps[0], 3000);
+  }
+}
+
+// POSITION_FRAME on the tick: a move of at least 0.5 s up and 0.5 s down
+// (200 steps take 1 s), MOVE TIME left to the frame clock; without a tick
+// a move at the motor's acceleration with MOVE TIME the frame's.
+TEST(Dmc16PlaybackTick, PositionFrameMovesTakeAtLeastTwoHalfSeconds) {
+  for (const bool tick : {false, true}) {
+    SCOPED_TRACE(tick ? "tick" : "continuous");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.playback_tick_ms = tick ? 20 : 0;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(dmc::RtPositionFrame{30}), kAckOk);
+    const TimeNs took = RestTime(h) - h.now();
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 200);
+    if (tick) {
+      EXPECT_NEAR(static_cast<double>(took), 1e9 + kTick, 1e3) << "at rest a tick after";
+      EXPECT_EQ(h.device().playback().MoveTimeX1000(), 0u);
+    } else {
+      EXPECT_NEAR(static_cast<double>(took), 2 * std::sqrt(200.0 / 10000) * 1e9, 1e3);
+      EXPECT_EQ(h.device().playback().MoveTimeX1000(), 30000u);
+    }
+  }
+}
+
+// RUN_MOVE on the tick (dmc-lite): refused while the rig moves (a second
+// RUN_MOVE during the first one's pre-roll) and unless the rig is on a frame;
+// GO while not armed, or before the rig rests, is ERR_NOT_IN_POSITION.
+TEST(Dmc16PlaybackTick, RunMoveNeedsAFrameAndRestAndGoAnswersNotInPosition) {
+  Host h(Ticked());
+  UploadRamp(h, 10, 100, 10);
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), AckCode::kErrNotInPosition);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+  ASSERT_EQ(h.Request(dmc::RtPositionFrame{20}), kAckOk);
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), AckCode::kErrMoving);
+  h.Settle();
+  ASSERT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk);
+  // Its motors leave for the pre-roll at the next tick: until then RUN_MOVE
+  // re-arms, after it the rig moves.
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk);
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition);
+  h.RunMs(20);
+  ASSERT_TRUE(h.device().rig_ref().AnyMoving());
+  EXPECT_EQ(h.Request(dmc::RtGo{}), AckCode::kErrNotInPosition) << "still going to its pre-roll";
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), AckCode::kErrMoving);
+  h.Settle();
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk) << "armed at rest: re-armed";
+  h.Settle();
+  EXPECT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+  h.Settle();
+  EXPECT_EQ(h.Pos(1), 210) << "END FRAME + 1";
+  EXPECT_EQ(h.device().playback().on_frame(), 31u);
+  EXPECT_EQ(h.Request(RunMove(20, 30, 24000, 500, 500)), kAckOk) << "on the frame the run ended on";
+}
+
+// position_frame_clamped (dmc-lite): a frame outside the upload goes to the
+// nearest uploaded one, OK; the spec reading refuses it (ERR_RANGE).
+TEST(Dmc16PlaybackSwitches, PositionFrameOutsideTheUploadIsRefusedOrClamped) {
+  for (const bool clamped : {false, true}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.position_frame_clamped = clamped;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    EXPECT_EQ(h.Request(dmc::RtPositionFrame{110}),
+              clamped ? kAckOk : std::optional<AckCode>(AckCode::kErrRange));
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), clamped ? 990 : 0);
+    EXPECT_EQ(h.Request(dmc::RtPositionFrame{3}),
+              clamped ? kAckOk : std::optional<AckCode>(AckCode::kErrRange));
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 0);
+  }
+}
+
+// rt_end_after_stop false (dmc-lite): STOP_ALL ends a live run without RT_END.
+TEST(Dmc16PlaybackSwitches, StopAllEndsARunWithRtEndOrWithout) {
+  for (const bool tick : {false, true}) {
+    for (const bool end : {true, false}) {
+      SCOPED_TRACE(std::string(tick ? "tick" : "continuous") + (end ? " RT_END" : " none"));
+      Dmc16Profile p = tick ? Ticked() : SmallProfile();
+      p.behaviour.rt_end_after_stop = end;
+      Host h(p);
+      UploadRamp(h, 10, 100, 10);
+      ASSERT_EQ(h.Request(dmc::RtPositionFrame{20}), kAckOk);
+      h.Settle();
+      ASSERT_EQ(h.Request(RunMove(20, 60, 24000, 500, 500)), kAckOk);
+      h.Settle();
+      h.RunMs(100);
+      ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+      h.RunMs(1000);
+      ASSERT_EQ(h.device().ModeName(), "running");
+      ASSERT_EQ(h.Request(dmc::MotorStopAll{}), kAckOk);
+      h.Settle();
+      EXPECT_EQ(h.All<dmc::RtEnd>().size(), end ? 1u : 0u);
+      EXPECT_EQ(h.device().ModeName(), "idle");
+      EXPECT_FALSE(h.device().rig_ref().AnyMoving());
+    }
+  }
+}
+
+// camera_angles_checked false (dmc-lite): a stills angle past 360, or CLOSE
+// not above OPEN, is taken; the spec reading refuses them with ERR_RANGE.
+TEST(Dmc16PlaybackSwitches, StillsAnglesPast360AreRefusedOrTaken) {
+  for (const bool checked : {true, false}) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.camera_angles_checked = checked;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    for (const auto& [open, close] : {std::pair{0, 400}, std::pair{361, 360}}) {
+      dmc::RtRunMove r = RunMove(20, 24, 10000, 0, 0, dmc::kPlayCameraStills);
+      r.camera_open_angle_deg = static_cast<uint16_t>(open);
+      r.camera_close_angle_deg = static_cast<uint16_t>(close);
+      EXPECT_EQ(h.Request(r), checked ? std::optional<AckCode>(AckCode::kErrRange) : kAckOk);
+      h.Settle();
+    }
+    if (checked) continue;
+    // 361..360 exposes each frame from 90 to 180 degrees, as dmc-lite does.
+    const TimeNs t_go = h.now();
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    std::vector<TimeNs> opens;
+    for (const sim::CameraPort::Edge& e : h.device().camera().Trace()) {
+      if (e.line == sim::CameraPort::kShutter && e.level && e.time_ns >= t_go) {
+        opens.push_back(e.time_ns);
+      }
+    }
+    ASSERT_EQ(opens.size(), 5u);
+    EXPECT_EQ(opens[1] - opens[0], 100 * kNsPerMs);
+    EXPECT_EQ((opens[0] - t_go) % (100 * kNsPerMs), 25 * kNsPerMs) << "a quarter frame in";
+  }
+}
+
+// zero_preroll_nan (dmc-lite, on the tick): a 0 ms pre-roll has no pre-roll
+// position, so with motor 1's lower soft limit enabled RUN_MOVE answers
+// ERR_PREROLL though only its post-roll would cross the upper one. Without the
+// switch there is no ramp: the rig is already where the run starts, and the
+// roll limits are checked only for a motor that the pre-roll moves.
+TEST(Dmc16PlaybackSwitches, AZeroPrerollIsNotANumberOrNoRamp) {
+  for (const bool nan : {false, true}) {
+    SCOPED_TRACE(nan ? "NaN" : "no ramp");
+    Dmc16Profile p = Ticked();
+    p.behaviour.zero_preroll_nan = nan;
+    Host h(p);
+    UploadRamp(h, 10, 100, 10);
+    ASSERT_EQ(h.Request(dmc::RtPositionFrame{20}), kAckOk);
+    h.Settle();
+    ASSERT_EQ(h.Request(dmc::MotorSetLimits{1, 1, 0, 1, 300, 0}), kAckOk);
+    // 20 fps, 200 steps/s: a 1 s post-roll goes 100 past frame 31 (210).
+    EXPECT_EQ(h.Request(RunMove(20, 30, 20000, 0, 1000)),
+              nan ? std::optional<AckCode>(AckCode::kErrPreroll) : kAckOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 100) << "nothing moved";
+    if (nan) continue;
+    ASSERT_EQ(h.Request(dmc::RtGo{}), kAckOk);
+    h.Settle();
+    EXPECT_EQ(h.Pos(1), 210) << "from frame 20 at full speed, back onto frame 31";
   }
 }
 

@@ -82,14 +82,17 @@ UploadResult RtMove::Triggers(const dmc::RtUploadMoveTriggers& m) {
   if (!in_progress_)
     return {AckCode::kErrGeneral, "no upload in progress (send UPLOAD_MOVE_BEGIN)"};
   for (const dmc::TriggerPoint& p : m.points) {
-    if (p.frame_index >= frames_) {
+    if (p.frame_index >= frames_ && trigger_frames_checked_) {
       return {AckCode::kErrRange,
               "trigger frame index " + std::to_string(p.frame_index) + " outside the upload"};
     }
   }
   // "Should be the same every time": a differing mask is merged, not refused.
   trigger_mask_ |= m.mask;
-  for (const dmc::TriggerPoint& p : m.points) triggers_[p.frame_index] = p.values & m.mask;
+  for (const dmc::TriggerPoint& p : m.points) {
+    // Unchecked (dmc-lite), a point past the range names no frame: dropped.
+    if (p.frame_index < frames_) triggers_[p.frame_index] = p.values & m.mask;
+  }
   return {};
 }
 

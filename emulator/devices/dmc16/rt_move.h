@@ -36,6 +36,10 @@ class RtMove {
   UploadResult Axis(const dmc::RtUploadMoveAxis& m);
   UploadResult Dmx(const dmc::RtUploadMoveDmx& m);
   UploadResult Triggers(const dmc::RtUploadMoveTriggers& m);
+  // Whether Triggers refuses a frame index past the range (ERR_RANGE, the
+  // default); unchecked, such a point is dropped and the section taken
+  // (profile behaviour.trigger_frames_checked, dmc-lite).
+  void SetTriggerFramesChecked(bool checked) { trigger_frames_checked_ = checked; }
   // END: ERR_GENERAL without BEGIN, or when a channel that was sent has
   // frames neither uploaded nor covered by its last set (a gap would leave
   // the device without a position for that frame).
@@ -91,6 +95,7 @@ class RtMove {
   std::map<int, Track<int32_t>> axes_;
   std::map<int, Track<uint8_t>> dmx_;
   uint32_t trigger_mask_ = 0;
+  bool trigger_frames_checked_ = true;
   std::map<uint32_t, uint32_t> triggers_;  // frame index -> values
 };
 

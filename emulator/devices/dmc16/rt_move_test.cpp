@@ -44,6 +44,23 @@ TEST(RtMove, TriggersAreMaskedAndZeroWhereAbsent) {
   EXPECT_EQ(m.trigger_mask(), 0x5u);
 }
 
+// A trigger frame index past the upload: ERR_RANGE (the spec's reading of
+// "Frame index (frame - start)"), or, unchecked (dmc-lite), the point is
+// dropped and the section taken.
+TEST(RtMove, TriggerFramesPastTheUploadAreRefusedOrDropped) {
+  for (const bool checked : {true, false}) {
+    RtMove m(100, 4, 8);
+    m.SetTriggerFramesChecked(checked);
+    ASSERT_TRUE(m.Begin(10, 19).ok());
+    EXPECT_EQ(m.Triggers({0x3, {{2, 0x1}, {10, 0x2}}}).code,
+              checked ? AckCode::kErrRange : AckCode::kOk);
+    ASSERT_TRUE(m.End().ok());
+    EXPECT_EQ(m.TriggersAt(12), checked ? 0u : 0x1u) << "a refused section sets nothing";
+    EXPECT_EQ(m.TriggersAt(19), 0u);
+    EXPECT_EQ(m.trigger_mask(), checked ? 0u : 0x3u);
+  }
+}
+
 TEST(RtMove, FrameCountBoundIsInclusive) {
   RtMove m(10, 1, 0);
   EXPECT_TRUE(m.Begin(0, 9).ok());
