@@ -703,8 +703,7 @@ void Dmc16::OnMotorMove(uint32_t id, const dmc::MotorMove& m) {
     code = AckCode::kErrMoving;
   } else {
     const sim::StepperMotor& motor = rig_.motor(m.motor);
-    standing = !motor.IsMoving() && ReportedPosition(m.motor) == m.position_steps &&
-               !truncated_[static_cast<size_t>(m.motor - 1)];
+    standing = !motor.IsMoving() && ReportedPosition(m.motor) == m.position_steps;
     code = MoveMotor(m.motor, m.position_steps);
   }
   if (code != AckCode::kOk) {
