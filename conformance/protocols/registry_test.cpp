@@ -66,7 +66,9 @@ TEST(Registry, EveryWireProtocolHasExactlyOneSetOfFuzzHooks) {
     EXPECT_NE(hooks->mutate, nullptr);
     EXPECT_NE(hooks->matcher, nullptr);
     EXPECT_GT(hooks->gap_ns, 0);
-    if (FindRunner(info.id) != nullptr) EXPECT_NE(hooks->run, nullptr);
+    if (FindRunner(info.id) != nullptr) {
+      EXPECT_NE(hooks->run, nullptr);
+    }
   }
 }
 
