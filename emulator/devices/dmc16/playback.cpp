@@ -481,11 +481,10 @@ AckCode Playback::CheckPass(const Pass& p) const {
   return AckCode::kOk;
 }
 
-AckCode Playback::RunMove(const dmc::RtRunMove& m) {
-  if (TickMode()) return RunMoveTicked(m);
-  if (Playing()) {
-    return AckCode::kErrMoving;
-  }
+// The checks RT_RUN_MOVE makes of its request in either engine, after the
+// engine's own state: the upload, the frames, the FLAGS against the
+// capabilities (0x0200, 0x0400), the stills angles, the bloop and the e-stop.
+AckCode Playback::CheckRunMove(const dmc::RtRunMove& m) const {
   if (!upload_.complete()) return AckCode::kErrGeneral;
   if (m.fps_x1000 == 0 || !upload_.Contains(m.start_frame) || !upload_.Contains(m.end_frame) ||
       m.start_frame == m.end_frame) {
@@ -510,6 +509,16 @@ AckCode Playback::RunMove(const dmc::RtRunMove& m) {
     return AckCode::kErrRange;
   }
   if (rig_.estop_engaged()) return AckCode::kErrGeneral;
+  return AckCode::kOk;
+}
+
+AckCode Playback::RunMove(const dmc::RtRunMove& m) {
+  if (TickMode()) return RunMoveTicked(m);
+  if (Playing()) {
+    return AckCode::kErrMoving;
+  }
+  if (const AckCode refused = CheckRunMove(m); refused != AckCode::kOk) return refused;
+  const uint16_t flags = m.flags.value_or(0);
   const double fps = m.fps_x1000 / static_cast<double>(dmc::kFpsScale);
   const double pre_s = m.preroll_ms / 1000.0;
   const double post_s = m.postroll_ms / 1000.0;
@@ -1133,28 +1142,9 @@ float Playback::PathAt(int motor, float clock) const {
 AckCode Playback::RunMoveTicked(const dmc::RtRunMove& m) {
   if (Playing() || rig_.AnyMoving()) return AckCode::kErrMoving;
   if (!on_frame_) return AckCode::kErrNotInPosition;
-  if (!upload_.complete()) return AckCode::kErrGeneral;
-  if (m.fps_x1000 == 0 || !upload_.Contains(m.start_frame) || !upload_.Contains(m.end_frame) ||
-      m.start_frame == m.end_frame) {
-    return AckCode::kErrRange;
-  }
+  if (const AckCode refused = CheckRunMove(m); refused != AckCode::kOk) return refused;
   const uint16_t flags = m.flags.value_or(0);
   const bool loops = (flags & (dmc::kPlayPingPong | dmc::kPlayLoop)) != 0;
-  const bool camera = (flags & (dmc::kPlayCameraVideo | dmc::kPlayCameraStills)) != 0;
-  if ((loops && !profile_.Has(dmc::kCapRtLooping)) ||
-      (camera && !profile_.Has(dmc::kCapRtCameraTrigger))) {
-    return AckCode::kErrRange;
-  }
-  if ((flags & dmc::kPlayCameraStills) != 0 && profile_.behaviour.camera_angles_checked) {
-    const uint16_t open = m.camera_open_angle_deg.value_or(0);
-    const uint16_t close = m.camera_close_angle_deg.value_or(360);
-    if (open > 360 || close > 360 || close <= open) return AckCode::kErrRange;
-  }
-  if (m.bloop_dmx_channel > profile_.dmx_channels ||
-      (m.bloop_outputs & ~GioMask(profile_.gio_outputs)) != 0) {
-    return AckCode::kErrRange;
-  }
-  if (rig_.estop_engaged()) return AckCode::kErrGeneral;
   const float fps = static_cast<float>(m.fps_x1000) * 0.001f;
   const float pre = static_cast<float>(m.preroll_ms) * 0.001f;
   const float post = loops ? 0.0f : static_cast<float>(m.postroll_ms) * 0.001f;

@@ -260,6 +260,8 @@ class Playback {
   // The frame path at frame clock `clock` (behaviour.upload_index_from_start_frame).
   float PathAt(int motor, float clock) const;
   dmc::AckCode RunMoveTicked(const dmc::RtRunMove& m);
+  // RT_RUN_MOVE's checks of the request itself (kOk, or the refusal).
+  dmc::AckCode CheckRunMove(const dmc::RtRunMove& m) const;
   dmc::AckCode GoTicked();
   // Sends the motor to `x` over the next tick.
   void Drive(TickAxis& a, float x, float tick_s);
