@@ -32,8 +32,12 @@ uint32_t Rig::MovingMask() const {
   return mask;
 }
 
-void Rig::StopAll() {
-  for (auto& m : motors_) m->Stop();
+void Rig::StopAll(double stop_within_s) {
+  for (auto& m : motors_) m->Stop(stop_within_s);
+}
+
+void Rig::StopAllAt(TimeNs at_ns, double stop_within_s) {
+  for (auto& m : motors_) m->StopAt(at_ns, stop_within_s);
 }
 
 void Rig::HardStopAll() {

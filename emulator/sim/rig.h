@@ -56,7 +56,11 @@ class Rig final : private MotorObserver {
   // Bit (n-1) set when motor n moves (MSG_MOTOR_STATUS, ERRATA dmc 5).
   uint32_t MovingMask() const;
   bool AnyMoving() const { return MovingMask() != 0; }
-  void StopAll();
+  // Every motor's Stop(stop_within_s).
+  void StopAll(double stop_within_s = 0);
+  // Every motor's StopAt(at_ns, stop_within_s): a stop on the controller's
+  // next tick (StepperMotor::StopAt).
+  void StopAllAt(TimeNs at_ns, double stop_within_s = 0);
   void HardStopAll();
 
   // --- limit sets ---

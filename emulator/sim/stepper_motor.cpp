@@ -67,7 +67,10 @@ StepperMotor::StepperMotor(Scheduler& scheduler, int motor_id, std::unique_ptr<P
       plan_(Plan::Build(scheduler.Now(), 0, 0, {})),
       committed_ns_(scheduler.Now()) {}
 
-StepperMotor::~StepperMotor() { CancelTimers(); }
+StepperMotor::~StepperMotor() {
+  CancelTimers();
+  CancelPending();
+}
 
 void StepperMotor::SetPlanner(std::unique_ptr<Planner> planner) {
   if (planner) planner_ = std::move(planner);
@@ -147,14 +150,67 @@ MoveStatus StepperMotor::JogAt(int64_t destination_steps, double velocity_steps_
   return MoveStatus::kOk;
 }
 
-void StepperMotor::Stop() {
+void StepperMotor::Stop(double stop_within_s) {
   if (!moving_ || following_) return;
-  StopWith(profile_.max_accel_steps_per_s2);
+  StopWith(StopDecel(stop_within_s));
+}
+
+double StepperMotor::StopDecel(double stop_within_s) const {
+  const double decel = profile_.max_accel_steps_per_s2;
+  if (!(stop_within_s > 0)) return decel;
+  return std::max(decel, std::fabs(plan_.StateAt(scheduler_.Now()).v_steps_per_s) / stop_within_s);
 }
 
 void StepperMotor::HardStop() {
   if (!moving_ || following_) return;
   StopWith(profile_.max_accel_steps_per_s2 * profile_.hard_stop_multiple);
+}
+
+MoveStatus StepperMotor::MoveToAt(TimeNs at_ns, int64_t target_steps) {
+  const MoveStatus status = CheckCanMove(target_steps);
+  if (status != MoveStatus::kOk) return status;
+  pending_ = Pending{.stop = false, .target_steps = target_steps, .stop_within_s = 0};
+  ArmPending(at_ns);
+  return MoveStatus::kOk;
+}
+
+void StepperMotor::StopAt(TimeNs at_ns, double stop_within_s) {
+  if (!moving_ || following_) return;
+  pending_ = Pending{.stop = true, .target_steps = 0, .stop_within_s = stop_within_s};
+  ArmPending(at_ns);
+}
+
+void StepperMotor::ArmPending(TimeNs at_ns) {
+  if (pending_timer_ != Scheduler::kNoTimer) scheduler_.Cancel(pending_timer_);
+  moving_ = true;
+  pending_timer_ = scheduler_.At(at_ns, [this] { ApplyPending(); });
+}
+
+void StepperMotor::CancelPending() {
+  if (pending_timer_ != Scheduler::kNoTimer) scheduler_.Cancel(pending_timer_);
+  pending_timer_ = Scheduler::kNoTimer;
+}
+
+void StepperMotor::ApplyPending() {
+  pending_timer_ = Scheduler::kNoTimer;
+  const TimeNs now = scheduler_.Now();
+  if (!pending_.stop) {
+    PlanRequest req;
+    req.kind = PlanRequest::Kind::kMoveTo;
+    req.target_steps = pending_.target_steps;
+    req.max_velocity_steps_per_s = profile_.max_velocity_steps_per_s;
+    req.max_accel_steps_per_s2 = profile_.max_accel_steps_per_s2;
+    Replan(req);
+    return;
+  }
+  if (plan_.empty() || now >= plan_.EndNs()) {
+    // A stop for a move that had not started, or that ended meanwhile.
+    const int64_t steps = Position();
+    Halt();
+    if (observer_ != nullptr) observer_->OnMotionFinished(id_, now, steps);
+    return;
+  }
+  StopWith(StopDecel(pending_.stop_within_s));
 }
 
 void StepperMotor::StopWith(double decel_steps_per_s2) {
@@ -306,6 +362,7 @@ void StepperMotor::Replan(PlanRequest req) {
 
 void StepperMotor::InstallPlan(Plan plan) {
   CancelTimers();
+  CancelPending();
   const bool was_moving = moving_;
   plan_ = std::move(plan);
   if (plan_.empty()) {
@@ -370,6 +427,8 @@ void StepperMotor::OnPlanEnd() {
   const int64_t steps = plan_.EndSteps();
   CancelTimers();
   plan_ = Plan::Build(now, steps, 0, {});
+  // Still moving for its owner: a command starts at the next tick.
+  if (CommandPending()) return;
   moving_ = false;
   if (observer_ != nullptr) observer_->OnMotionFinished(id_, now, steps);
 }
@@ -389,6 +448,7 @@ void StepperMotor::Halt() {
   CommitEdges(now);
   const int64_t steps = plan_.StepsAt(now);
   CancelTimers();
+  CancelPending();
   plan_ = Plan::Build(now, steps, 0, {});
   moving_ = false;
 }

@@ -136,11 +136,13 @@ class StepperMotor {
   // of the acceleration and the profile's max acceleration.
   MoveStatus JogAt(int64_t destination_steps, double velocity_steps_per_s,
                    double accel_steps_per_s2);
-  // Decelerates to rest at max acceleration. No-op at rest, and for a
-  // following motor (its leader's stop carries it). Soft limits bound the
-  // stop: a motor inside an enabled soft limit whose ramp would carry it past
-  // the limit brakes harder, to rest on the limit.
-  void Stop();
+  // Decelerates to rest at max acceleration, or at |velocity| / stop_within_s
+  // where that is larger (so the stop lasts at most stop_within_s; 0: the
+  // max acceleration alone). No-op at rest, and for a following motor (its
+  // leader's stop carries it). Soft limits bound the stop: a motor inside an
+  // enabled soft limit whose ramp would carry it past the limit brakes
+  // harder, to rest on the limit.
+  void Stop(double stop_within_s = 0);
   // Decelerates at hard_stop_multiple x max acceleration, bounded by the
   // soft limits as Stop(). No-op at rest and for a following motor.
   void HardStop();
@@ -148,6 +150,19 @@ class StepperMotor {
   void EmergencyHalt();
   // Sets the position without moving. Refused (kMoving) while moving.
   MoveStatus ResetPosition(int64_t steps);
+
+  // --- commands on a controller's tick ---
+  // A controller that samples its motion plans on a fixed tick (dmc-lite's
+  // 20 ms velocity update) starts a move or a stop at its next tick, not on
+  // arrival. These take effect at `at_ns` (REQUIRES: at_ns > Now()): the
+  // motor counts as moving from now, the plan in force runs on until then,
+  // and a later command (these or the ones above) replaces one still
+  // waiting. MoveToAt() checks the move now, as MoveTo() does.
+  MoveStatus MoveToAt(TimeNs at_ns, int64_t target_steps);
+  // Stop(stop_within_s) at `at_ns`, from the motion then.
+  void StopAt(TimeNs at_ns, double stop_within_s = 0);
+  // A command is waiting for its tick.
+  bool CommandPending() const { return pending_timer_ != Scheduler::kNoTimer; }
 
   // --- configuration ---
   // REQUIRES nothing; non-positive or non-finite values are refused with
@@ -205,11 +220,17 @@ class StepperMotor {
   MoveStatus CheckCanMove(int64_t target_steps) const;
   // Stop() and HardStop() at `decel_steps_per_s2`, bounded by the soft limits.
   void StopWith(double decel_steps_per_s2);
+  // Stop()'s deceleration now.
+  double StopDecel(double stop_within_s) const;
   // Replaces the plan with the planner's answer to `req` from Now().
   void Replan(PlanRequest req);
   void InstallPlan(Plan plan);
   void CommitEdges(TimeNs up_to_ns);
   void CancelTimers();
+  // Drops a command waiting for its tick (a new command replaces it).
+  void CancelPending();
+  void ArmPending(TimeNs at_ns);
+  void ApplyPending();
   void ScheduleSwitchCheck();
   void OnPlanEnd();
   void OnSwitchTrip(LimitEnd end);
@@ -235,6 +256,14 @@ class StepperMotor {
   bool moving_ = false;
   Scheduler::TimerId end_timer_ = Scheduler::kNoTimer;
   Scheduler::TimerId switch_timer_ = Scheduler::kNoTimer;
+  // The command waiting for its tick (MoveToAt, StopAt).
+  struct Pending {
+    bool stop = false;
+    int64_t target_steps = 0;
+    double stop_within_s = 0;
+  };
+  Pending pending_;
+  Scheduler::TimerId pending_timer_ = Scheduler::kNoTimer;
   std::vector<StepSink*> sinks_;
   TimeNs committed_ns_ = 0;  // edges with time <= this were delivered
   std::vector<StepEdge> batch_;

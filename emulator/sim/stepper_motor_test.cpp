@@ -393,6 +393,119 @@ TEST_F(MotorTest, StopIsBoundedByTheSoftLimitItWouldPass) {
 
 // Capability 0x0100 "Couple motors": a follower makes its leader's step
 // edges at the very same times, mirrored when reversed.
+// A controller that samples its plans on a tick (dmc-lite's 20 ms) starts a
+// move at its next tick: the motor counts as moving from the command, stands
+// until the tick, then moves exactly as MoveTo() would have from there.
+TEST_F(MotorTest, MoveToAtStartsTheMoveAtItsTickAndCountsAsMovingBefore) {
+  ASSERT_EQ(motor_.SetProfile(Profile(1000, 500)), MoveStatus::kOk);
+  sched_.RunUntil(7'000'000);
+  ASSERT_EQ(motor_.MoveToAt(20'000'000, 5000), MoveStatus::kOk);
+  EXPECT_TRUE(motor_.IsMoving());
+  EXPECT_TRUE(motor_.CommandPending());
+  EXPECT_TRUE(rec_.started.empty());
+  sched_.RunUntil(19'999'999);
+  EXPECT_EQ(motor_.Position(), 0);
+  EXPECT_EQ(motor_.Velocity(), 0);
+  sched_.RunUntilIdle();
+  ASSERT_EQ(rec_.started.size(), 1u);
+  EXPECT_EQ(rec_.started[0], 20'000'000);
+  ASSERT_EQ(rec_.finished.size(), 1u);
+  // The 7 s trapezoid of TrapezoidMoveEndsExactlyOnTargetAtTheAnalyticTime, from 20 ms.
+  EXPECT_NEAR(static_cast<double>(rec_.finished[0].time), 7.02e9, 1.0);
+  EXPECT_EQ(motor_.Position(), 5000);
+  EXPECT_FALSE(motor_.CommandPending());
+  EXPECT_EQ(CheckTraceLaws(trace_.Edges(), 0, 1000, 500), "");
+}
+
+// The move is checked on arrival, as MoveTo() checks it.
+TEST_F(MotorTest, MoveToAtIsRefusedOnArrivalAsMoveToIs) {
+  motor_.SetInhibited(true);
+  EXPECT_EQ(motor_.MoveToAt(20'000'000, 100), MoveStatus::kEStop);
+  EXPECT_FALSE(motor_.IsMoving());
+  EXPECT_FALSE(motor_.CommandPending());
+}
+
+// A stop on the tick brakes from the motion at the tick; a moving motor runs
+// its plan until then.
+TEST_F(MotorTest, StopAtBrakesFromTheMotionAtItsTick) {
+  ASSERT_EQ(motor_.SetProfile(Profile(2000, 4000)), MoveStatus::kOk);
+  ASSERT_EQ(motor_.MoveTo(100'000), MoveStatus::kOk);
+  sched_.RunUntil(605'000'000);  // at 2000 steps/s since 0.5 s: 500 + 210 steps
+  motor_.StopAt(620'000'000);
+  sched_.RunUntil(619'000'000);
+  EXPECT_NEAR(motor_.Velocity(), 2000, 1e-6);  // still cruising
+  sched_.RunUntilIdle();
+  // From 740 steps at 620 ms: 2000^2 / (2 * 4000) = 500 steps more.
+  EXPECT_EQ(motor_.Position(), 1240);
+  ASSERT_EQ(rec_.finished.size(), 1u);
+  EXPECT_NEAR(static_cast<double>(rec_.finished[0].time), 1.12e9, 1e3);
+}
+
+// stop_within_s: the deceleration rises to |v| / stop_within_s where that is
+// harder than the max acceleration (dmc-lite's STOP_ALL stops within 1 s).
+TEST_F(MotorTest, AStopWithinABoundBrakesAtSpeedPerThatBound) {
+  ASSERT_EQ(motor_.SetProfile(Profile(2000, 1000)), MoveStatus::kOk);
+  ASSERT_EQ(motor_.MoveTo(100'000), MoveStatus::kOk);
+  sched_.RunUntil(3'000'000'000);  // 2000 steps up to speed in 2 s, then 2000 cruising
+  ASSERT_EQ(motor_.Position(), 4000);
+  motor_.Stop(1.0);
+  sched_.RunUntilIdle();
+  // At 2000 steps/s^2 (not 1000): 1000 steps in 1 s, not 2000 in 2 s.
+  EXPECT_EQ(motor_.Position(), 5000);
+  EXPECT_NEAR(static_cast<double>(sched_.Now()), 4e9, 1e3);
+  // A bound looser than the max acceleration changes nothing: 2000 steps in 2 s.
+  ASSERT_EQ(motor_.MoveTo(20'000), MoveStatus::kOk);
+  sched_.RunUntil(sched_.Now() + 4'000'000'000);
+  ASSERT_EQ(motor_.Position(), 5000 + 2000 + 4000);
+  motor_.Stop(10.0);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 13'000);
+  EXPECT_NEAR(static_cast<double>(sched_.Now()), 10e9, 1e3);
+}
+
+// A stop on the tick for a move that has not started yet leaves the motor
+// where it stood; a later command replaces a waiting one; an immediate
+// command drops it.
+TEST_F(MotorTest, TickCommandsReplaceEachOtherAndImmediateOnesDropThem) {
+  ASSERT_EQ(motor_.SetProfile(Profile(1000, 500)), MoveStatus::kOk);
+  ASSERT_EQ(motor_.MoveToAt(20'000'000, 5000), MoveStatus::kOk);
+  motor_.StopAt(20'000'000);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 0);
+  EXPECT_FALSE(motor_.IsMoving());
+  ASSERT_EQ(rec_.finished.size(), 1u);
+  EXPECT_EQ(rec_.finished[0].time, 20'000'000);
+  EXPECT_TRUE(rec_.started.empty());
+
+  ASSERT_EQ(motor_.MoveToAt(40'000'000, 5000), MoveStatus::kOk);
+  ASSERT_EQ(motor_.MoveToAt(40'000'000, 300), MoveStatus::kOk);
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 300);
+
+  ASSERT_EQ(motor_.MoveToAt(sched_.Now() + 20'000'000, 5000), MoveStatus::kOk);
+  motor_.EmergencyHalt();
+  EXPECT_FALSE(motor_.IsMoving());
+  EXPECT_FALSE(motor_.CommandPending());
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 300);
+}
+
+// A plan that ends before the tick of a waiting command leaves the motor
+// moving (for its owner) until the command starts.
+TEST_F(MotorTest, APlanEndingBeforeAWaitingCommandsTickKeepsTheMotorMoving) {
+  ASSERT_EQ(motor_.SetProfile(Profile(1000, 500)), MoveStatus::kOk);
+  ASSERT_EQ(motor_.MoveTo(1), MoveStatus::kOk);
+  const TimeNs end = motor_.CurrentPlan().EndNs();
+  ASSERT_EQ(motor_.MoveToAt(end + 10'000'000, 0), MoveStatus::kOk);
+  sched_.RunUntil(end + 5'000'000);
+  EXPECT_EQ(motor_.Position(), 1);
+  EXPECT_TRUE(motor_.IsMoving());
+  EXPECT_TRUE(rec_.finished.empty());
+  sched_.RunUntilIdle();
+  EXPECT_EQ(motor_.Position(), 0);
+  ASSERT_EQ(rec_.finished.size(), 1u);
+}
+
 TEST(MotorFollow, AFollowerMakesTheLeadersEdgesAtTheSameTimesMirroredWhenReversed) {
   for (const int sign : {1, -1}) {
     Scheduler s;

@@ -756,13 +756,19 @@ AckCode Dmc16::OnStopAll(const dmc::MotorStopAll& m) {
   last_stop_all_ns_ = now;
   virtual_.CancelJog();
   silent_stop_ = m.flags.has_value() && (*m.flags & dmc::kStopAllSilent) != 0;
+  const bool playing = playback_.Playing();
   playback_.Abort(true);
   playback_.Disarm();
+  const double within_s = profile_.behaviour.stop_all_within_ms / 1000.0;
   // "If the device gets a second STOP_ALL soon after a first, it should HARD STOP."
   if (second) {
     rig_.HardStopAll();
+  } else if (Tick() > 0 && !playing) {
+    // With a velocity tick the stop starts at the next tick, from the
+    // motion then (a run's end is the run's own).
+    rig_.StopAllAt(NextTickNs(), within_s);
   } else {
-    rig_.StopAll();
+    rig_.StopAll(within_s);
   }
   return AckCode::kOk;
 }
@@ -1005,24 +1011,34 @@ AckCode Dmc16::MoveMotor(int motor, int64_t target_steps) {
   if (IgnoresMotion(motor)) return AckCode::kOk;
   // The target is in reported steps (behaviour.coupling: steps made while
   // driven are not counted in them).
-  return AckForMoveStatus(rig_.motor(motor).MoveTo(target_steps + UncountedSteps(motor)));
+  sim::StepperMotor& m = rig_.motor(motor);
+  const int64_t target = target_steps + UncountedSteps(motor);
+  // With a velocity tick the move starts at the next tick (one to the step
+  // a resting motor stands on is none).
+  const bool none = !m.IsMoving() && m.Position() == target;
+  return AckForMoveStatus(Tick() > 0 && !none ? m.MoveToAt(NextTickNs(), target)
+                                              : m.MoveTo(target));
 }
 
 AckCode Dmc16::OnPositionFrame(uint32_t frame) { return playback_.PositionFrame(frame); }
 
 // behaviour.positions_truncate: dmc-lite reports its position (a float
 // between steps while moving) truncated toward zero, not the nearest step.
-// A live run on the tick reports the position the engine sent the motor to.
+// With a velocity tick a moving motor reads where the device sent it for the
+// tick under way, the plan at the next tick (dmc-lite reports its motion
+// core's position, the end of the segment its stepping core is running). A
+// live run on the tick reports the position the engine sent the motor to.
 int64_t Dmc16::ReportedPosition(int motor) const {
   if (const std::optional<int64_t> p = playback_.ModelPosition(motor)) return *p;
   const sim::StepperMotor& m = rig_.motor(motor);
   // Steps made while driven are not counted (behaviour.coupling).
   const int64_t uncounted = UncountedSteps(motor);
-  if (!profile_.behaviour.positions_truncate || m.Velocity() == 0) {
-    return m.Position() - uncounted;
+  const TimeNs at = Tick() > 0 && m.IsMoving() ? NextTickNs() : scheduler_.Now();
+  if (!profile_.behaviour.positions_truncate || !m.IsMoving()) {
+    return m.PositionAt(at) - uncounted;
   }
-  const double x = static_cast<double>(m.CurrentPlan().origin_steps()) +
-                   m.CurrentPlan().StateAt(scheduler_.Now()).x_steps;
+  const double x =
+      static_cast<double>(m.CurrentPlan().origin_steps()) + m.CurrentPlan().StateAt(at).x_steps;
   return static_cast<int64_t>(std::trunc(x)) - uncounted;
 }
 

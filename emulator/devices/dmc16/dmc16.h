@@ -154,6 +154,10 @@ class Dmc16 final : public Device, private sim::RigObserver {
   sim::TimeNs Tick() const {
     return sim::TimeNs{profile_.behaviour.playback_tick_ms} * sim::kNsPerMs;
   }
+  // The first tick after now: where a direct move or stop starts with a
+  // velocity tick (the firmware plans it on arrival and samples it from its
+  // next tick on).
+  sim::TimeNs NextTickNs() const { return (scheduler_.Now() / Tick() + 1) * Tick(); }
   void EnsureTick();
   void OnTick();
   void CancelTimer(sim::Scheduler::TimerId& id);

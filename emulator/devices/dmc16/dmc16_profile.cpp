@@ -218,6 +218,8 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
     v.arming_ms = static_cast<uint32_t>(b.GetInt("arming_ms", v.arming_ms, 0, 10'000));
     v.stop_all_lockout_ms =
         static_cast<uint32_t>(b.GetInt("stop_all_lockout_ms", v.stop_all_lockout_ms, 0, 60'000));
+    v.stop_all_within_ms =
+        static_cast<uint32_t>(b.GetInt("stop_all_within_ms", v.stop_all_within_ms, 0, 60'000));
     v.positions_truncate = b.GetBool("positions_truncate", v.positions_truncate);
     v.preroll_move_time_is_start_frame =
         b.GetBool("preroll_move_time_is_start_frame", v.preroll_move_time_is_start_frame);
@@ -334,6 +336,7 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"soft_limits_bound_moves", p.behaviour.soft_limits_bound_moves},
         {"arming_ms", p.behaviour.arming_ms},
         {"stop_all_lockout_ms", p.behaviour.stop_all_lockout_ms},
+        {"stop_all_within_ms", p.behaviour.stop_all_within_ms},
         {"positions_truncate", p.behaviour.positions_truncate},
         {"preroll_move_time_is_start_frame", p.behaviour.preroll_move_time_is_start_frame},
         {"rt_end_at_last_frame", p.behaviour.rt_end_at_last_frame},

@@ -108,6 +108,11 @@ struct Dmc16Behaviour {
   // that STOP_ALL and the motors still (dmc-lite: 100 velocity updates of
   // 20 ms counted from the STOP_ALL). 0: none.
   uint32_t stop_all_lockout_ms = 0;
+  // STOP_ALL brakes each motor at the larger of its max acceleration and its
+  // speed per this many ms, so no stop lasts longer (dmc-lite: 1000, "let's
+  // hard stop here": its deceleration raised to |velocity| per second).
+  // 0: the max acceleration alone.
+  uint32_t stop_all_within_ms = 0;
   // A moving motor's position between steps is reported truncated toward
   // zero (dmc-lite truncates its float position); false: the nearest step.
   // At rest a motor reads its step either way.

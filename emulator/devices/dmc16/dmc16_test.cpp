@@ -1352,6 +1352,86 @@ TEST(Dmc16Behaviour, StopAllLockout) {
   }
 }
 
+// dmc-lite plans a MOTOR_MOVE or a STOP_ALL on arrival and samples the plan
+// from its next 20 ms velocity tick on (behaviour.playback_tick_ms;
+// docs/devices/dmc16.md "The 20 ms velocity tick"), so where a motor stops
+// depends on the ticks between the two, not on the millisecond each came:
+// measured on the real firmware, a move at 2000 steps/s and 4000 steps/s^2
+// stopped 600 ms after its answer came to rest 1200 steps on every time
+// (docs/calibration.md). Its STOP_ALL brakes at |velocity| per second where
+// that is harder than the max acceleration (behaviour.stop_all_within_ms).
+TEST(Dmc16Behaviour, DirectMovesAndStopsStartOnTheVelocityTick) {
+  // Where motor 2 rests: MOVE at `move_ms`, STOP_ALL at `stop_ms` (device clock).
+  auto rest = [](uint32_t tick_ms, int64_t move_ms, int64_t stop_ms, uint32_t v, uint32_t a) {
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.playback_tick_ms = tick_ms;
+    p.behaviour.stop_all_within_ms = 1000;
+    Host h(p);
+    EXPECT_EQ(h.Request(dmc::MotorSetSpeed{2, v, a}), kOk);
+    h.RunFor(move_ms * kNsPerMs - h.now());
+    // MOVE's answer (MOTOR STATUS) and the status after it say moving,
+    // though the first step waits for the tick.
+    const uint32_t mv = h.Send(dmc::MotorMove{2, 100000});
+    const auto* moved = std::get_if<dmc::MotorMoveResponse>(&h.Reply(mv).msg);
+    EXPECT_TRUE(moved != nullptr && moved->moving == 1);
+    const uint32_t st = h.Send(dmc::MotorStatusRequest{});
+    const auto* status = std::get_if<dmc::MotorStatusResponse>(&h.Reply(st).msg);
+    EXPECT_TRUE(status != nullptr && (status->moving_bits & 2u) != 0);
+    h.RunFor(stop_ms * kNsPerMs - h.now());
+    EXPECT_EQ(h.Request(dmc::MotorStopAll{}), kOk);
+    h.Settle();
+    return h.Pos(2);
+  };
+  // On the tick: MOVE at 5 ms starts at 20 ms; a STOP_ALL anywhere in
+  // (600, 620) ms starts at 620: 30 ticks of motion, 500 + 200 steps, then
+  // 500 steps of braking, whatever the millisecond.
+  for (const int64_t stop_ms : {601, 607, 613, 619}) {
+    SCOPED_TRACE("STOP_ALL at " + std::to_string(stop_ms) + " ms");
+    EXPECT_EQ(rest(20, 5, stop_ms, 2000, 4000), 1200);
+  }
+  // One tick later, 40 steps more.
+  EXPECT_EQ(rest(20, 5, 621, 2000, 4000), 1240);
+  // On arrival (no tick), every millisecond counts: 2 steps each.
+  EXPECT_EQ(rest(0, 5, 601, 2000, 4000), 1192);
+  EXPECT_EQ(rest(0, 5, 607, 2000, 4000), 1204);
+  // At 1000 steps/s^2 the max acceleration would brake 2000 steps; within a
+  // second it brakes at 2000 steps/s^2: 1000 steps. The move: 2 s up to speed
+  // (2000 steps), 1 s at it.
+  EXPECT_EQ(rest(20, 5, 3010, 2000, 1000), 2000 + 2000 + 1000);
+}
+
+// With the tick a moving motor reads where the device sent it for the tick
+// under way: dmc-lite reports its motion core's plan, which its stepping
+// core reaches at the next tick. Measured on the real firmware, a move at
+// 4000 steps/s^2 reports 7, 28, 64, 115 steps every third tick (the plan at
+// 60, 120, 180, 240 ms), truncated toward zero.
+TEST(Dmc16Behaviour, AMovingMotorOnTheTickReadsThePlanAtTheNextTick) {
+  Dmc16Profile p = SmallProfile();
+  p.behaviour.playback_tick_ms = 20;
+  p.behaviour.positions_truncate = true;
+  Host h(p);
+  ASSERT_EQ(h.Request(dmc::MotorSetSpeed{2, 2000, 4000}), kOk);
+  h.RunFor(5 * kNsPerMs - h.now());
+  h.Send(dmc::MotorMove{2, 100000});  // starts at 20 ms
+  h.RunFor(10 * kNsPerMs);            // 15 ms: waiting for its tick
+  EXPECT_EQ(Positions(h).at(1), 0);
+  for (const int64_t plan_ms : {60, 120, 180, 240}) {
+    // 10 ms before the tick that ends at plan_ms after the start.
+    h.RunFor((20 + plan_ms - 10) * kNsPerMs - h.now());
+    const double plan_s = static_cast<double>(plan_ms) / 1000.0;
+    SCOPED_TRACE("plan at " + std::to_string(plan_ms) + " ms");
+    EXPECT_EQ(Positions(h).at(1), static_cast<int32_t>(2000 * plan_s * plan_s));
+    EXPECT_LT(h.Pos(2), Positions(h).at(1)) << "the steps themselves come a tick later";
+  }
+  // Without the tick: the motor's own step.
+  p.behaviour.playback_tick_ms = 0;
+  Host c(p);
+  ASSERT_EQ(c.Request(dmc::MotorSetSpeed{2, 2000, 4000}), kOk);
+  c.Send(dmc::MotorMove{2, 100000});
+  c.RunMs(110);
+  EXPECT_EQ(Positions(c).at(1), c.Pos(2));
+}
+
 // dmc-lite reports its position, a float between steps while a motor moves,
 // truncated toward zero (behaviour.positions_truncate); the spec reading
 // reports the step the motor is on (the nearest). At rest both read the step
