@@ -110,14 +110,49 @@ struct Watched {
   std::map<uint32_t, TimeNs> first_report_ns;
   std::map<uint32_t, std::vector<int>> dmx;
   std::map<uint32_t, uint32_t> gio;
-  // Every sample of the GIO outputs and of one DMX channel, in time order.
+  // Every sample of the GIO outputs and of one DMX channel (and of every
+  // track's channel), in time order.
   struct Sample {
     TimeNs t_ns;
     uint32_t gio;
     int dmx;
+    std::vector<int> levels;
   };
   std::vector<Sample> samples;
+  // When the frame clock stood on START FRAME, read from the reports whose
+  // MOVE TIME lies strictly inside the run (a device on a velocity tick
+  // reports the clock at its tick, fractional: 10080 is 8% into frame 10;
+  // FACTS "DMC v2"), the median of their readings; unset without any.
+  std::optional<TimeNs> clock_origin_ns;
 };
+
+// The frame clock's origin from the reports (Watched::clock_origin_ns) and,
+// for every frame, the outputs sampled last inside the frame's interval by
+// that clock (a device reporting each whole frame gives the same frames as
+// its reports; one on a tick names only some).
+void ReadFrameClock(Watched& w, const std::vector<std::pair<TimeNs, uint32_t>>& clock,
+                    uint32_t start, uint32_t end) {
+  std::vector<TimeNs> origins;
+  for (const auto& [t, m] : clock) {
+    const double frames = static_cast<double>(m) / 1000.0 - static_cast<double>(start);
+    origins.push_back(t - static_cast<TimeNs>(frames * static_cast<double>(kFrameNs)));
+  }
+  if (origins.empty()) return;
+  std::nth_element(origins.begin(),
+                   origins.begin() + static_cast<std::ptrdiff_t>(origins.size() / 2),
+                   origins.end());
+  w.clock_origin_ns = origins[origins.size() / 2];
+  for (uint32_t k = 0; k <= end - start; ++k) {
+    const TimeNs from = *w.clock_origin_ns + static_cast<TimeNs>(k) * kFrameNs;
+    const Watched::Sample* last = nullptr;
+    for (const Watched::Sample& s : w.samples) {
+      if (s.t_ns >= from && s.t_ns < from + kFrameNs) last = &s;
+    }
+    if (last == nullptr) continue;
+    w.gio[k] = last->gio;
+    w.dmx[k] = last->levels;
+  }
+}
 
 // GO (DMC-RT-015's retries included), then reads until RT_END or kRunTimeout.
 // Where the outputs are observable it samples them every 2 ms, and each time
@@ -134,7 +169,8 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
   const DeviceOutputs out = c.target.Outputs();
   const bool observe = out.gio != nullptr || out.dmx != nullptr;
   size_t next = mark;
-  std::optional<uint32_t> reported;  // the frame index the last frame report named
+  std::optional<uint32_t> reported;                // the frame index the last frame report named
+  std::vector<std::pair<TimeNs, uint32_t>> clock;  // (time, MOVE TIME) inside the run
   const TimeNs until = h.Now() + kRunTimeout;
   while (w.end < 0 && h.Now() < until && !h.link_lost()) {
     if (observe) {
@@ -147,7 +183,11 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
       const DeviceRecord& r = h.records()[next];
       if (IsUnsolicited(r, MsgType::kRtEnd) && w.end < 0) w.end = static_cast<int>(next);
       const auto* p = As<dmc::MotorPositionReport>(&r);
-      if (r.request >= 0 || p == nullptr || p->move_time_x1000 % 1000 != 0) continue;
+      if (r.request >= 0 || p == nullptr) continue;
+      if (p->move_time_x1000 > start * 1000 && p->move_time_x1000 < end * 1000) {
+        clock.emplace_back(r.t_ns, p->move_time_x1000);
+      }
+      if (p->move_time_x1000 % 1000 != 0) continue;
       const uint32_t f = p->move_time_x1000 / 1000;
       if (f < start || f > end) continue;
       w.first_report_ns.emplace(f - start, r.t_ns);
@@ -156,12 +196,13 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
     if (!observe) continue;
     const uint32_t g = out.gio != nullptr ? out.gio->outputs() : 0;
     const int d = out.dmx != nullptr && sampled_channel > 0 ? out.dmx->Value(sampled_channel) : -1;
-    w.samples.push_back({h.Now(), g, d});
+    w.samples.push_back({h.Now(), g, d, ReadDmx(c.target, tracks)});
     if (reported) {
-      w.dmx[*reported] = ReadDmx(c.target, tracks);
+      w.dmx[*reported] = w.samples.back().levels;
       w.gio[*reported] = g;
     }
   }
+  ReadFrameClock(w, clock, start, end);
   return w;
 }
 
@@ -398,7 +439,8 @@ std::vector<std::pair<TimeNs, TimeNs>> Presses(const sim::CameraPort& cam, TimeN
 }
 
 // Frame index k's time: its first frame report, or one frame interval from
-// the next one's (frame 0's MOVE TIME may also be carried by pre-roll reports).
+// the next one's (frame 0's MOVE TIME may also be carried by pre-roll
+// reports), or where the frame clock the reports read puts it.
 std::optional<TimeNs> FrameTime(const Watched& w, uint32_t k) {
   if (k > 0) {
     auto it = w.first_report_ns.find(k);
@@ -406,6 +448,7 @@ std::optional<TimeNs> FrameTime(const Watched& w, uint32_t k) {
   }
   auto next = w.first_report_ns.find(k + 1);
   if (next != w.first_report_ns.end()) return next->second - kFrameNs;
+  if (w.clock_origin_ns) return *w.clock_origin_ns + static_cast<TimeNs>(k) * kFrameNs;
   return std::nullopt;
 }
 

@@ -8,6 +8,7 @@
 // outputs cannot be read leaves the output rules not exercised.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <memory>
@@ -54,7 +55,8 @@ struct MisreadState {
 // frame through `answer` (as dmc_proofs_motion_test.cpp does). A refused
 // request reaches the device as a MOTOR_STATUS under the same ID and its
 // answer goes out as the refusal; answers to made-up requests are dropped.
-RunReport RunMisreading(Misreading misread, AnswerBreakage answer, const std::string& cases) {
+RunReport RunMisreading(Misreading misread, AnswerBreakage answer, const std::string& cases,
+                        const std::string& profile = "") {
   auto st = std::make_shared<MisreadState>();
   const InputBreakage in = [st, misread](wire::ByteView bytes) {
     wire::Bytes out(bytes.begin(), bytes.end());
@@ -102,7 +104,7 @@ RunReport RunMisreading(Misreading misread, AnswerBreakage answer, const std::st
   };
   RunOptions o;
   o.cases = cases;
-  return RunBroken(outb, o, "", in);
+  return RunBroken(outb, o, profile, in);
 }
 
 template <typename T>
@@ -310,6 +312,30 @@ TEST(RtIoProof, TriggersPlayedAFrameLateAreCaughtByRt019) {
       {}, "rt/triggers");
   ExpectCaught(r, "DMC-RT-019");
   EXPECT_EQ(FailedMusts(r), std::set<std::string>{}) << ConsoleReport(r, false);
+}
+
+// On a velocity tick (the dmc-lite profile) the frame reports carry
+// fractional MOVE TIMEs and name only some frames: the outputs are read by
+// the frame clock those reports give, so the late triggers are still caught,
+// and the same device playing them on time passes.
+TEST(RtIoProof, TriggersPlayedAFrameLateOnAVelocityTickAreCaughtByRt019) {
+  const char* root = std::getenv("MOCO_SOURCE_DIR");
+  const std::string lite =
+      std::string(root != nullptr ? root : ".") + "/fixtures/profiles/dmc-lite.json";
+  const Misreading late = [](const dmc::HostMessage& m) {
+    Reading d;
+    if (const auto* t = Is<dmc::RtUploadMoveTriggers>(m)) {
+      dmc::RtUploadMoveTriggers moved = *t;
+      for (dmc::TriggerPoint& p : moved.points) ++p.frame_index;
+      d.instead = moved;
+    }
+    return d;
+  };
+  const RunReport on_time = RunMisreading({}, {}, "rt/triggers", lite);
+  ASSERT_TRUE(on_time.rules.count("DMC-RT-019"));
+  EXPECT_EQ(on_time.rules.at("DMC-RT-019").status, Status::kPass) << ConsoleReport(on_time, false);
+  const RunReport r = RunMisreading(late, {}, "rt/triggers", lite);
+  ExpectCaught(r, "DMC-RT-019");
 }
 
 TEST(RtIoProof, ARunWithoutItsBloopIsCaughtByRt020) {

@@ -95,11 +95,11 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       {"DMC-RT-012", Status::kNoted},
       // Observed in-process only (over a PTY none of the firmware's outputs
       // can be read). Its frame reports carry the tick's fractional MOVE
-      // TIMEs, which the I/O cases do not take for a frame's report, so
-      // SHOULD: the trigger outputs are not tied to a frame, no stills
-      // exposure is timed against its frame, and the video presses (the
-      // first at GO, before the pre-roll) are not placed.
-      {"DMC-RT-019", Status::kFail},
+      // TIMEs, from which the I/O cases read the frame clock: the trigger
+      // outputs hold each frame's values (DMC-RT-019 passes), but SHOULD:
+      // a stills exposure opens on the tick, up to 20 ms from its frame's
+      // angle, and the video presses come at GO (before the pre-roll) and
+      // at the end of the pass, not at the start and end frames.
       {"DMC-RT-023", Status::kFail},
       {"DMC-RT-025", Status::kFail},
       // Not exercised: no soft-limit refusal, so nothing to leave in place.
