@@ -298,18 +298,19 @@ TEST(RtIoProof, TriggersPastTheUploadAckedOkAreCaughtByRt018) {
   EXPECT_EQ(FailedMusts(r), std::set<std::string>{}) << ConsoleReport(r, false);
 }
 
+// Every trigger point of RT_UPLOAD_MOVE_TRIGGERS read one frame later.
+Reading LateTriggers(const dmc::HostMessage& m) {
+  Reading d;
+  if (const auto* t = Is<dmc::RtUploadMoveTriggers>(m)) {
+    dmc::RtUploadMoveTriggers late = *t;
+    for (dmc::TriggerPoint& p : late.points) ++p.frame_index;
+    d.instead = late;
+  }
+  return d;
+}
+
 TEST(RtIoProof, TriggersPlayedAFrameLateAreCaughtByRt019) {
-  const RunReport r = RunMisreading(
-      [](const dmc::HostMessage& m) {
-        Reading d;
-        if (const auto* t = Is<dmc::RtUploadMoveTriggers>(m)) {
-          dmc::RtUploadMoveTriggers late = *t;
-          for (dmc::TriggerPoint& p : late.points) ++p.frame_index;
-          d.instead = late;
-        }
-        return d;
-      },
-      {}, "rt/triggers");
+  const RunReport r = RunMisreading(LateTriggers, {}, "rt/triggers");
   ExpectCaught(r, "DMC-RT-019");
   EXPECT_EQ(FailedMusts(r), std::set<std::string>{}) << ConsoleReport(r, false);
 }
@@ -322,19 +323,10 @@ TEST(RtIoProof, TriggersPlayedAFrameLateOnAVelocityTickAreCaughtByRt019) {
   const char* root = std::getenv("MOCO_SOURCE_DIR");
   const std::string lite =
       std::string(root != nullptr ? root : ".") + "/fixtures/profiles/dmc-lite.json";
-  const Misreading late = [](const dmc::HostMessage& m) {
-    Reading d;
-    if (const auto* t = Is<dmc::RtUploadMoveTriggers>(m)) {
-      dmc::RtUploadMoveTriggers moved = *t;
-      for (dmc::TriggerPoint& p : moved.points) ++p.frame_index;
-      d.instead = moved;
-    }
-    return d;
-  };
   const RunReport on_time = RunMisreading({}, {}, "rt/triggers", lite);
   ASSERT_TRUE(on_time.rules.count("DMC-RT-019"));
   EXPECT_EQ(on_time.rules.at("DMC-RT-019").status, Status::kPass) << ConsoleReport(on_time, false);
-  const RunReport r = RunMisreading(late, {}, "rt/triggers", lite);
+  const RunReport r = RunMisreading(LateTriggers, {}, "rt/triggers", lite);
   ExpectCaught(r, "DMC-RT-019");
 }
 

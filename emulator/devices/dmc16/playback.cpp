@@ -15,20 +15,6 @@
 
 namespace moco::devices {
 
-using dmc::AckCode;
-using playback_internal::CeilNs;
-using playback_internal::ClampMoveTime;
-using playback_internal::ClockX1000;
-using playback_internal::FirmwareInt;
-using playback_internal::Intervals;
-using playback_internal::kNsPerSecondF;
-using playback_internal::kWindowFrames;
-using playback_internal::Seg;
-using playback_internal::Sign;
-using playback_internal::StillsExposure;
-using sim::kNsPerMs;
-using sim::TimeNs;
-
 AckCode AckForMoveStatus(sim::MoveStatus s) {
   switch (s) {
     case sim::MoveStatus::kOk:
@@ -148,6 +134,22 @@ bool Playback::OnRigAtRest() {
 }
 
 // --- playback ---------------------------------------------------------------------------------
+
+// Bloop: a sync mark on the GIO outputs and/or a DMX channel at the start of
+// the move, for about BLOOP TIME (MSG_RT_RUN_MOVE BLOOP LOCATION, BLOOP DMX,
+// BLOOP TIME).
+void Playback::Bloop(const dmc::RtRunMove& req) {
+  const uint32_t outputs = req.bloop_outputs;
+  const int channel = req.bloop_dmx_channel;
+  const uint8_t before = channel != 0 ? dmx_.Value(channel) : 0;
+  gio_.SetOutputs(gio_.outputs() | outputs);
+  if (channel != 0) dmx_.Set(channel, 255);
+  AddIoTimer(scheduler_.Now() + TimeNs{req.bloop_time_ms} * kNsPerMs,
+             [this, outputs, channel, before] {
+               gio_.SetOutputs(gio_.outputs() & ~outputs);
+               if (channel != 0) dmx_.Set(channel, before);
+             });
+}
 
 void Playback::Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps) {
   ScriptPlanner* planner = planners_[static_cast<size_t>(motor - 1)];
@@ -292,18 +294,7 @@ void Playback::OnFrameTick() {
     const dmc::RtRunMove& req = run_->request;
     if (req.sync_dmx == 1) ApplyFrameOutputs(frame);
     if (k == 0 && passes_done_ == 0 && (req.bloop_outputs != 0 || req.bloop_dmx_channel != 0)) {
-      // Bloop: a sync mark on the GIO outputs and/or a DMX channel at the
-      // start of the move, for about BLOOP TIME.
-      const uint32_t outputs = req.bloop_outputs;
-      const int channel = req.bloop_dmx_channel;
-      const uint8_t before = channel != 0 ? dmx_.Value(channel) : 0;
-      gio_.SetOutputs(gio_.outputs() | outputs);
-      if (channel != 0) dmx_.Set(channel, 255);
-      AddIoTimer(scheduler_.Now() + TimeNs{req.bloop_time_ms} * kNsPerMs,
-                 [this, outputs, channel, before] {
-                   gio_.SetOutputs(gio_.outputs() & ~outputs);
-                   if (channel != 0) dmx_.Set(channel, before);
-                 });
+      Bloop(req);
     }
     // FLAGS 0x10 "camera trigger at start/stop of move (video)": one press
     // of the shutter line when the pass reaches its start frame (recording

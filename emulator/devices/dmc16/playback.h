@@ -218,6 +218,8 @@ class Playback {
   // reached if it still does, else the one nearest `toward`), or nullopt.
   std::optional<uint32_t> FrameTheRigIsOn(uint32_t toward) const;
   // Starts motor `motor` on `segments` (from rest), ending at rest on `target`.
+  // The bloop of `req` at the start of the move, for about BLOOP TIME.
+  void Bloop(const dmc::RtRunMove& req);
   void Script(int motor, std::vector<sim::Segment> segments, int64_t target_steps);
   // Frame-path segments of `motor` for frame intervals [k0, k1) of the pass.
   void AppendPath(int motor, const Pass& p, uint32_t k0, uint32_t k1,

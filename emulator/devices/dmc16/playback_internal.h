@@ -1,6 +1,6 @@
 // Helpers the DMC-16's playback engine shares across its files
-// (playback.cpp, playback_requests.cpp, playback_tick.cpp); internal to
-// emulator/devices/dmc16.
+// (playback.cpp, playback_requests.cpp, playback_tick.cpp), and the names
+// those files use; internal to emulator/devices/dmc16, included by them only.
 #ifndef MOCO_DEVICES_DMC16_PLAYBACK_INTERNAL_H_
 #define MOCO_DEVICES_DMC16_PLAYBACK_INTERNAL_H_
 
@@ -76,5 +76,24 @@ inline std::pair<double, double> StillsExposure(const dmc::RtRunMove& m) {
 }
 
 }  // namespace moco::devices::playback_internal
+
+namespace moco::devices {
+
+// The names the playback files use, declared once for the three of them.
+using dmc::AckCode;
+using playback_internal::CeilNs;
+using playback_internal::ClampMoveTime;
+using playback_internal::ClockX1000;
+using playback_internal::FirmwareInt;
+using playback_internal::Intervals;
+using playback_internal::kNsPerSecondF;
+using playback_internal::kWindowFrames;
+using playback_internal::Seg;
+using playback_internal::Sign;
+using playback_internal::StillsExposure;
+using sim::kNsPerMs;
+using sim::TimeNs;
+
+}  // namespace moco::devices
 
 #endif  // MOCO_DEVICES_DMC16_PLAYBACK_INTERNAL_H_

@@ -13,20 +13,6 @@
 
 namespace moco::devices {
 
-using dmc::AckCode;
-using playback_internal::CeilNs;
-using playback_internal::ClampMoveTime;
-using playback_internal::ClockX1000;
-using playback_internal::FirmwareInt;
-using playback_internal::Intervals;
-using playback_internal::kNsPerSecondF;
-using playback_internal::kWindowFrames;
-using playback_internal::Seg;
-using playback_internal::Sign;
-using playback_internal::StillsExposure;
-using sim::kNsPerMs;
-using sim::TimeNs;
-
 // --- real-time requests ---------------------------------------------------------------------
 
 std::vector<int> Playback::PlaybackMotors() const {

@@ -13,20 +13,6 @@
 
 namespace moco::devices {
 
-using dmc::AckCode;
-using playback_internal::CeilNs;
-using playback_internal::ClampMoveTime;
-using playback_internal::ClockX1000;
-using playback_internal::FirmwareInt;
-using playback_internal::Intervals;
-using playback_internal::kNsPerSecondF;
-using playback_internal::kWindowFrames;
-using playback_internal::Seg;
-using playback_internal::Sign;
-using playback_internal::StillsExposure;
-using sim::kNsPerMs;
-using sim::TimeNs;
-
 // --- the velocity tick ------------------------------------------------------------------------
 //
 // With behaviour.playback_tick_ms the device runs as dmc-lite does
@@ -215,16 +201,7 @@ void Playback::FrameReached(int64_t frame) {
   const TickRun& r = *tick_run_;
   if (passes_done_ == 0 && static_cast<float>(frame) == r.clock_from &&
       (req.bloop_outputs != 0 || req.bloop_dmx_channel != 0)) {
-    const uint32_t outputs = req.bloop_outputs;
-    const int channel = req.bloop_dmx_channel;
-    const uint8_t before = channel != 0 ? dmx_.Value(channel) : 0;
-    gio_.SetOutputs(gio_.outputs() | outputs);
-    if (channel != 0) dmx_.Set(channel, 255);
-    AddIoTimer(scheduler_.Now() + TimeNs{req.bloop_time_ms} * kNsPerMs,
-               [this, outputs, channel, before] {
-                 gio_.SetOutputs(gio_.outputs() & ~outputs);
-                 if (channel != 0) dmx_.Set(channel, before);
-               });
+    Bloop(req);
   }
   if (pass_.stills) {
     // Open while the clock is within the frame's angles, whichever way it
