@@ -543,7 +543,9 @@ void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
             }
           },
           [&](const dmc::Unknown& m) {
-            if (m.type == dmc::ToWire(MsgType::kMotorHardStop)) {
+            // behaviour.host_hard_stop false: dmc-lite only sends it.
+            if (m.type == dmc::ToWire(MsgType::kMotorHardStop) &&
+                profile_.behaviour.host_hard_stop) {
               // Listed among the motor commands a device must handle, with no
               // request data: read as "hard stop everything now".
               virtual_.CancelJog();

@@ -132,6 +132,10 @@ AckCode Dmc16::OnResetPosition(const dmc::MotorResetPosition& m) {
   // ERR_MOVING "while the rig is moving": a live run, a shot or a jog-all
   // plays the rig as a whole, so no position is renamed under it.
   if (playback_.Playing()) return AckCode::kErrMoving;
+  // behaviour.reset_refused_while_any_moves: dmc-lite checks one moving flag.
+  if (profile_.behaviour.reset_refused_while_any_moves && rig_.AnyMoving()) {
+    return AckCode::kErrMoving;
+  }
   const AckCode code = AckForMoveStatus(rig_.motor(m.motor).ResetPosition(m.position_steps));
   if (code == AckCode::kOk) {
     const size_t i = static_cast<size_t>(m.motor - 1);

@@ -255,6 +255,9 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
              "set \"playback_tick_ms\" (dmc-lite: 20), the engine whose ramp has it");
     }
     v.unsolicited_id_zero = b.GetBool("unsolicited_id_zero", v.unsolicited_id_zero);
+    v.reset_refused_while_any_moves =
+        b.GetBool("reset_refused_while_any_moves", v.reset_refused_while_any_moves);
+    v.host_hard_stop = b.GetBool("host_hard_stop", v.host_hard_stop);
     b.Finish();
   }
   const nlohmann::json& sets = r.GetRaw("limit_sets");
@@ -354,7 +357,9 @@ nlohmann::json Dmc16ProfileToJson(const Dmc16Profile& p) {
         {"trigger_frames_checked", p.behaviour.trigger_frames_checked},
         {"camera_angles_checked", p.behaviour.camera_angles_checked},
         {"zero_preroll_nan", p.behaviour.zero_preroll_nan},
-        {"unsolicited_id_zero", p.behaviour.unsolicited_id_zero}}},
+        {"unsolicited_id_zero", p.behaviour.unsolicited_id_zero},
+        {"reset_refused_while_any_moves", p.behaviour.reset_refused_while_any_moves},
+        {"host_hard_stop", p.behaviour.host_hard_stop}}},
       {"virtual_axes",
        {{"enabled", p.virtual_axes.enabled},
         {"capabilities", base::Hex(p.virtual_axes.capabilities, 4)},

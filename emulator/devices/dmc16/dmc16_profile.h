@@ -202,6 +202,13 @@ struct Dmc16Behaviour {
   // MOTOR_HARD_STOP) carry ID 0 (dmc-lite); false: a device-side sequence ID
   // (ERRATA 1.9).
   bool unsolicited_id_zero = false;
+  // RESET_POSITION refused with ERR_MOVING while any motor moves (dmc-lite
+  // checks its one moving flag); false: only while the motor named moves.
+  bool reset_refused_while_any_moves = false;
+  // MSG_MOTOR_HARD_STOP from the host hard-stops every motor (ACK OK; the
+  // spec lists it among the motor commands); false: answered ERR_UNSUPPORTED
+  // (dmc-lite only sends it).
+  bool host_hard_stop = true;
 };
 
 struct Dmc16Profile {

@@ -1352,6 +1352,33 @@ TEST(Dmc16Behaviour, StopAllLockout) {
   }
 }
 
+// MSG_MOTOR_RESET_POSITION: ERR_MOVING "while the rig is moving". The spec
+// reading refuses it for the motor that moves; dmc-lite checks its one moving
+// flag, so any motor in motion refuses it (behaviour.
+// reset_refused_while_any_moves). MSG_MOTOR_HARD_STOP from the host: taken
+// as "hard stop everything" by the spec reading, ERR_UNSUPPORTED on dmc-lite,
+// which only sends it (behaviour.host_hard_stop).
+TEST(Dmc16Behaviour, ResetWhileAnotherMotorMovesAndTheHostsHardStop) {
+  for (const bool lite : {false, true}) {
+    SCOPED_TRACE(lite ? "dmc-lite" : "spec");
+    Dmc16Profile p = SmallProfile();
+    p.behaviour.reset_refused_while_any_moves = lite;
+    p.behaviour.host_hard_stop = !lite;
+    Host h(p);
+    h.Send(dmc::MotorMove{2, 100000});
+    h.RunMs(200);
+    ASSERT_TRUE(h.device().rig_ref().motor(2).IsMoving());
+    EXPECT_EQ(h.Request(dmc::MotorResetPosition{3, 50}),
+              lite ? std::optional<AckCode>(AckCode::kErrMoving) : kOk);
+    EXPECT_EQ(h.Request(dmc::MotorResetPosition{2, 50}), AckCode::kErrMoving);
+    EXPECT_EQ(h.Request(dmc::Unknown{dmc::ToWire(dmc::MsgType::kMotorHardStop), {}}),
+              lite ? std::optional<AckCode>(AckCode::kErrUnsupported) : kOk);
+    // A hard stop (4 x the max acceleration) rests the motor within 100 ms.
+    h.RunMs(100);
+    EXPECT_EQ(h.device().rig_ref().motor(2).IsMoving(), lite);
+  }
+}
+
 // dmc-lite plans a MOTOR_MOVE or a STOP_ALL on arrival and samples the plan
 // from its next 20 ms velocity tick on (behaviour.playback_tick_ms;
 // docs/devices/dmc16.md "The 20 ms velocity tick"), so where a motor stops
