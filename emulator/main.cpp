@@ -331,6 +331,340 @@ int Serve(moco::serve::EmulatorConfig config) {
   }
 }
 
+// `mocosim decode`: its options, then printing the session.
+struct DecodeCli {
+  CLI::App* cmd = nullptr;
+  std::string session_path;
+  bool no_time = false;
+  bool strict = false;
+
+  void Add(CLI::App& app) {
+    cmd = app.add_subcommand(
+        "decode",
+        "Print a session file (docs/sessions.md) as a human-readable transcript: every frame "
+        "checked and decoded, problems marked with !!");
+    cmd->add_option("session", session_path, "Session file (.jsonl)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_flag("--no-time", no_time, "Omit the timestamp column");
+    cmd->add_flag("--strict", strict,
+                  "Exit with status 1 when the traffic has problems (bad checksums, "
+                  "unparsable lines, skipped bytes)");
+  }
+  int Run() const { return Decode(session_path, !no_time, strict); }
+};
+
+// `mocosim export`: its options, then writing the capture.
+struct ExportCli {
+  CLI::App* cmd = nullptr;
+  std::string session, out;
+  bool pcapng = false;
+
+  void Add(CLI::App& app) {
+    cmd = app.add_subcommand(
+        "export",
+        "Convert a session file to a capture other tools open. --pcapng: one packet per "
+        "recorded chunk with its time (ns) and direction (LINKTYPE_USER0, interface 0 host to "
+        "device, 1 device to host); open it in Wireshark with tools/wireshark/mocosim.lua "
+        "(docs/wireshark.md). Example: mocosim export --pcapng "
+        "fixtures/sessions/dmc16-workflow.jsonl -o workflow.pcapng");
+    cmd->add_flag("--pcapng", pcapng, "Write pcapng (the one format so far)")->required();
+    cmd->add_option("session", session, "Session file (.jsonl)")->required();
+    cmd->add_option("-o,--output", out,
+                    "File to write, atomically (default: the session's path with .pcapng)")
+        ->check(moco::cli::NonEmptyPath());
+  }
+  int Run() const { return ExportPcapng(session, out); }
+};
+
+// `mocosim plot`: its options, then drawing the plot.
+struct PlotCli {
+  CLI::App* cmd = nullptr;
+  PlotArgs args;
+  double from_s = 0, to_s = 0;
+  CLI::Option* from_opt = nullptr;
+  CLI::Option* to_opt = nullptr;
+
+  void Add(CLI::App& app) {
+    using moco::cli::AddNumber;
+    cmd = app.add_subcommand(
+        "plot",
+        "Draw the camera head's path during a DMC v2 session as SVG. The session's host bytes "
+        "are replayed at their recorded times (virtual time, from power-on) into a DMC-16 "
+        "built from PROFILE, which must drive a Bullet-modelled boom rig (\"physical_rig\", "
+        "docs/profiles.md); recorded e-stop and limit control events are applied again. The "
+        "plot shows the nodal point in a top view (x, y) and a side view (y, z), in metres: "
+        "dashed where the commanded motor positions put it (ideal kinematics), solid where "
+        "the simulated rig has it (sag, lag, lost steps, collisions), and the distance "
+        "between the two in mm over time; a summary goes to stdout. Example: mocosim plot "
+        "fixtures/sessions/dmc16-boom-move.jsonl --profile "
+        "fixtures/profiles/dmc16-boom.json -o boom.svg");
+    cmd->add_option("session", args.session_path, "Session file (.jsonl, protocol dmc)")
+        ->required();
+    cmd->add_option("--profile", args.profile_path,
+                    "DMC-16 profile with a physical_rig, e.g. fixtures/profiles/dmc16-boom.json")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("-o,--output", args.out_path,
+                    "SVG file to write, atomically (default: the session's path with .svg)")
+        ->check(moco::cli::NonEmptyPath());
+    AddNumber(cmd, "--every-ms", args.every_ms, 0.001, 3.6e6, "Sample period in ms");
+    from_opt =
+        AddNumber(cmd, "--from-s", from_s, 0.0, 1e6, "Plot from this time, s since power-on");
+    to_opt = AddNumber(cmd, "--to-s", to_s, 0.0, 1e6,
+                       "Plot up to this time, s (default: the end of the session)");
+    to_opt->default_str("the end");
+    AddNumber(cmd, "--tail-s", args.tail_s, 0.0, 3600.0,
+              "Keep sampling this long after the last entry while the rig settles; "
+              "ends earlier once it is at rest");
+    cmd->add_option("--title", args.title,
+                    "Title of the plot (default: the rig's name and the session file's name)");
+  }
+  int Run() {
+    if (from_opt->count() > 0) args.from_s = from_s;
+    if (to_opt->count() > 0) args.to_s = to_s;
+    return Plot(args);
+  }
+};
+
+// `mocosim <model> --pty PATH | --tcp [HOST:]PORT`: one device of a model,
+// its options, then serving it.
+struct DeviceCli {
+  CLI::App* cmd = nullptr;
+  CLI::Option* wifi_opt = nullptr;  // models that have a Wi-Fi link
+  moco::serve::DeviceConfig config;
+  std::string pty_path, tcp_spec, wifi_spec, log_level = "info", control_path, scenario_path;
+
+  // The options of where the device is served: --pty, --tcp and, for a
+  // model with a Wi-Fi link, --wifi.
+  void AddEndpoint(const moco::devices::DeviceModel& model) {
+    auto* pty_opt = cmd->add_option("--pty", pty_path,
+                                    "Create a PTY with a stable symlink at this path (mode 0600)");
+    auto* tcp_opt = cmd->add_option(
+        "--tcp", tcp_spec,
+        "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
+    pty_opt->excludes(tcp_opt);
+    if (model.protocol == moco::wire::Protocol::kStackshot) {
+      wifi_opt = cmd->add_option(
+          "--wifi", wifi_spec,
+          "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
+          "connect to its TCP port. ADDRESS[:UDP_PORT[:HOST_TCP_PORT]], default "
+          "127.0.0.1:24869:24870, loopback like --tcp (give \"\" for the defaults, 0.0.0.0 to "
+          "hear FINDSTACK from every network)");
+      wifi_opt->excludes(pty_opt)->excludes(tcp_opt);
+    }
+  }
+
+  void Add(CLI::App& app, const moco::devices::DeviceModel& model) {
+    const std::string name(model.name);
+    config.model = name;
+    cmd = app.add_subcommand(name, "Emulate a " + std::string(model.description) +
+                                       " on a PTY or a TCP port until Ctrl-C. Example: mocosim " +
+                                       name + " --pty /tmp/" + name +
+                                       "  (then point the host at /tmp/" + name + ")");
+    AddEndpoint(model);
+    cmd->add_option("--profile", config.profile_path,
+                    "Device profile (JSON; default: built-in, as " +
+                        std::string(model.default_profile) + "; fields in docs/profiles.md)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--record", config.record_path,
+                    "Record every byte in and out with its time and decoded message to this "
+                    "session file (.jsonl, docs/sessions.md; completed on exit)")
+        ->check(moco::cli::NonEmptyPath());
+    cmd->add_option("--vcd", config.vcd_path,
+                    "Write each motor's STEP and DIR from the step model's exact edge times to "
+                    "this Value Change Dump on exit (GTKWave, PulseView; docs/pins.md)")
+        ->check(moco::cli::NonEmptyPath());
+    cmd->add_option("--control", control_path,
+                    "Serve the JSON-lines control socket at this path (e-stop, limits, "
+                    "inputs, power, faults, state; docs/control.md)")
+        ->check(moco::cli::NonEmptyPath());
+    if (model.keeps_state) {
+      cmd->add_option("--state", config.state_path,
+                      "File keeping the device's NVM (settings, slots, serial number, log) "
+                      "across runs, written atomically (default: "
+                      "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)")
+          ->check(moco::cli::NonEmptyPath());
+    }
+    cmd->add_option("--scenario", scenario_path,
+                    "Play this scenario file of timed control events (docs/control.md)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--faults", config.faults,
+                    "Inject link faults, e.g. seed=42,dir=to-host,drop=0.01 (dir= applies "
+                    "to the rates after it)");
+    cmd->add_flag("--no-pacing", config.no_pacing,
+                  "Deliver bytes at once instead of at the profile's baud rate and in the "
+                  "packets of its USB serial bridge (profile field usb_bridge, "
+                  "docs/profiles.md)");
+    cmd->add_option("--name", config.name,
+                    "Name in log lines and on the control socket (default: " + name + ")");
+    cmd->add_option("--log-level", log_level,
+                    "error, warn, info (default) or debug (every message decoded)")
+        ->check(CLI::IsMember({"error", "warn", "info", "debug"}));
+  }
+
+  int Run() {
+    const std::string name = config.model;
+    const bool wifi = wifi_opt != nullptr && wifi_opt->count() > 0;
+    if (pty_path.empty() && tcp_spec.empty() && !wifi) {
+      std::fprintf(stderr,
+                   "mocosim %s: say where to serve the device: --pty /tmp/%s or "
+                   "--tcp 127.0.0.1:5000\n",
+                   name.c_str(), name.c_str());
+      return 2;
+    }
+    config.endpoint = wifi               ? "wifi:" + wifi_spec
+                      : pty_path.empty() ? "tcp:" + tcp_spec
+                                         : "pty:" + pty_path;
+    moco::serve::EmulatorConfig emulator_config;
+    emulator_config.devices.push_back(config);
+    emulator_config.control_path = control_path;
+    emulator_config.scenario_path = scenario_path;
+    emulator_config.log_level = moco::serve::ParseLogLevel(log_level);
+    return Serve(std::move(emulator_config));
+  }
+};
+
+// `mocosim run FILE`: several devices from a run file.
+struct RunFileCli {
+  CLI::App* cmd = nullptr;
+  std::string path;
+
+  void Add(CLI::App& app) {
+    cmd = app.add_subcommand(
+        "run", "Serve every device of a run file (JSON, see docs/run-files.md) until Ctrl-C");
+    cmd->add_option("file", path, "Run file, e.g. fixtures/runs/two-dmc16.json")
+        ->required()
+        ->check(CLI::ExistingFile);
+  }
+  int Run() const {
+    try {
+      return Serve(moco::serve::LoadRunConfig(path));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mocosim run: %s\n", e.what());
+      return 2;
+    }
+  }
+};
+
+// `mocosim models`: lists the device models.
+int ListModels() {
+  for (const auto& m : moco::devices::DeviceModels()) {
+    std::printf("%-12s %s (profile %s)\n", std::string(m.name).c_str(),
+                std::string(m.description).c_str(), std::string(m.default_profile).c_str());
+  }
+  return 0;
+}
+
+// `mocosim tap`: a recording proxy between a host and a real device; its
+// options, then running it.
+struct TapCli {
+  CLI::App* cmd = nullptr;
+  moco::serve::TapConfig config;
+  std::string protocol, pty, tcp, flow = "none";
+
+  // --protocol, checked against the protocols a device starts in.
+  void AddProtocol() {
+    cmd->add_option("--protocol", protocol,
+                    "What the device speaks: dmc, dfmoco or stackshot. Sets the header's "
+                    "protocol, the decoding and the default baud. Example: --protocol stackshot")
+        ->required()
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+              // A device is tapped from its power-on protocol: one with rules
+              // of its own (wire/protocol.h), by name or alias.
+              std::vector<moco::wire::Protocol> tappable;
+              for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
+                if (!info.rule_prefix.empty()) tappable.push_back(info.id);
+              }
+              const auto p = moco::wire::ParseProtocolOrAlias(text);
+              if (p && std::find(tappable.begin(), tappable.end(), *p) != tappable.end()) {
+                return "";
+              }
+              return "'" + text + "' is no protocol a device starts in: give " +
+                     moco::wire::NameList(tappable);
+            },
+            "PROTOCOL"));
+  }
+
+  // The header's fields a replay reads: --device-model, --profile, --note
+  // and --time-tolerance-ms.
+  void AddHeader() {
+    cmd->add_option("--device-model", config.device_model,
+                    "The header's device: the emulated model a replay builds (default: dmc16, "
+                    "dfmoco or stackshot3x by --protocol). Example: --device-model dfmoco");
+    cmd->add_option("--profile", config.profile,
+                    "Recorded in the header as \"profile\": the device profile a replay of this "
+                    "session should use. Example: --profile fixtures/profiles/dmc16.json");
+    cmd->add_option("--note", config.note,
+                    "The header's note (default: where the tap ran). Example: --note \"rig A, "
+                    "first take\"");
+    moco::cli::AddNumber(
+        cmd, "--time-tolerance-ms", config.time_tolerance_ms, int64_t{0}, int64_t{600000},
+        "The header's tolerances.time_ms: how far a replayed reply may be from its "
+        "recorded (wall-clock) time. Example: --time-tolerance-ms 100");
+  }
+
+  void Add(CLI::App& app) {
+    cmd = app.add_subcommand(
+        "tap",
+        "Record what a host and a real device say to each other (docs/tap.md). The tap sits "
+        "between them: the host opens the tap's PTY (or connects to its TCP port) instead of "
+        "the device, and the tap opens the device's serial port (or TCP address). Bytes pass "
+        "unchanged both ways, and each chunk is recorded with its arrival time and decoded "
+        "messages into a session file that mococheck replay/fuzz and mocosim decode/plot read "
+        "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (57600 "
+        "baud) and a host setting another speed on the PTY; a host closing and reopening the "
+        "PTY does not end it; a device going away is reported and looked for again; Ctrl-C "
+        "(SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
+        "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "
+        "--record dragonframe.jsonl  (then point Dragonframe at /tmp/dmc16)\n"
+        "Example: mocosim tap --protocol stackshot --device tcp:192.168.1.20:5000 --tcp 5001 "
+        "--record stack.jsonl");
+    AddProtocol();
+    cmd->add_option("--device", config.device,
+                    "The real device's side: serial:PATH (a serial port, raw 8N1 at --baud; a "
+                    "bare path works too) or tcp:HOST:PORT. Example: --device serial:/dev/ttyUSB0")
+        ->required();
+    auto* pty_opt = cmd->add_option(
+        "--pty", pty,
+        "The host's side: a PTY with a stable symlink at this path (mode 0600), as `mocosim "
+        "dmc16 --pty` makes. Example: --pty /tmp/dmc16");
+    auto* tcp_opt = cmd->add_option(
+        "--tcp", tcp,
+        "The host's side: listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = "
+        "any free port, logged). Example: --tcp 127.0.0.1:5001");
+    pty_opt->excludes(tcp_opt);
+    moco::cli::AddNumber(
+        cmd, "--baud", config.baud, uint32_t{0}, uint32_t{4000000},
+        "Line speed of a serial device (default 0: the protocol's: DMC v2 115200, DFMoco "
+        "57600, StackShot 38400). Example: --baud 57600");
+    cmd->add_option("--flow", flow,
+                    "Flow control on the serial port: none (default) or rtscts (hardware "
+                    "RTS/CTS). Example: --flow rtscts")
+        ->check(CLI::IsMember({"none", "rtscts"}));
+    cmd->add_option("--record", config.record_path,
+                    "Session file to write (.jsonl, docs/sessions.md): lines written through as "
+                    "they come, the file completed atomically on exit. Without it the tap only "
+                    "passes bytes. Example: --record session.jsonl")
+        ->check(moco::cli::NonEmptyPath());
+    AddHeader();
+  }
+
+  int Run() {
+    config.protocol = *moco::wire::ParseProtocolOrAlias(protocol);
+    config.rtscts = flow == "rtscts";
+    if (pty.empty() && tcp.empty()) {
+      std::fprintf(stderr,
+                   "mocosim tap: say where the host connects: --pty /tmp/dmc16 or --tcp "
+                   "127.0.0.1:5001\n");
+      return 2;
+    }
+    config.host = pty.empty() ? "tcp:" + tcp : "pty:" + pty;
+    return moco::serve::RunTap(std::move(config));
+  }
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -338,7 +672,6 @@ int main(int argc, char** argv) {
   // write, ignored, not a SIGPIPE that kills the emulator before its
   // recording is completed and its PTY symlink removed.
   std::signal(SIGPIPE, SIG_IGN);
-  using moco::cli::AddNumber;
   CLI::App app{
       "mocosim: emulated DMC-16, DFMoco Arduino and StackShot 3X devices\n"
       "Exit status (docs/exit-codes.md): 0 done, 1 a recording or plot could not be "
@@ -346,293 +679,35 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "mocosim 0.1.0");
   app.require_subcommand(1);
 
-  std::string session_path;
-  bool no_time = false;
-  bool strict = false;
-  auto* decode = app.add_subcommand(
-      "decode",
-      "Print a session file (docs/sessions.md) as a human-readable transcript: every frame "
-      "checked and decoded, problems marked with !!");
-  decode->add_option("session", session_path, "Session file (.jsonl)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  decode->add_flag("--no-time", no_time, "Omit the timestamp column");
-  decode->add_flag("--strict", strict,
-                   "Exit with status 1 when the traffic has problems (bad checksums, "
-                   "unparsable lines, skipped bytes)");
-
-  std::string export_session, export_out;
-  bool export_pcapng = false;
-  auto* export_cmd = app.add_subcommand(
-      "export",
-      "Convert a session file to a capture other tools open. --pcapng: one packet per "
-      "recorded chunk with its time (ns) and direction (LINKTYPE_USER0, interface 0 host to "
-      "device, 1 device to host); open it in Wireshark with tools/wireshark/mocosim.lua "
-      "(docs/wireshark.md). Example: mocosim export --pcapng "
-      "fixtures/sessions/dmc16-workflow.jsonl -o workflow.pcapng");
-  export_cmd->add_flag("--pcapng", export_pcapng, "Write pcapng (the one format so far)")
-      ->required();
-  export_cmd->add_option("session", export_session, "Session file (.jsonl)")->required();
-  export_cmd
-      ->add_option("-o,--output", export_out,
-                   "File to write, atomically (default: the session's path with .pcapng)")
-      ->check(moco::cli::NonEmptyPath());
-
-  PlotArgs plot_args;
-  auto* plot = app.add_subcommand(
-      "plot",
-      "Draw the camera head's path during a DMC v2 session as SVG. The session's host bytes "
-      "are replayed at their recorded times (virtual time, from power-on) into a DMC-16 "
-      "built from PROFILE, which must drive a Bullet-modelled boom rig (\"physical_rig\", "
-      "docs/profiles.md); recorded e-stop and limit control events are applied again. The "
-      "plot shows the nodal point in a top view (x, y) and a side view (y, z), in metres: "
-      "dashed where the commanded motor positions put it (ideal kinematics), solid where "
-      "the simulated rig has it (sag, lag, lost steps, collisions), and the distance "
-      "between the two in mm over time; a summary goes to stdout. Example: mocosim plot "
-      "fixtures/sessions/dmc16-boom-move.jsonl --profile "
-      "fixtures/profiles/dmc16-boom.json -o boom.svg");
-  plot->add_option("session", plot_args.session_path, "Session file (.jsonl, protocol dmc)")
-      ->required();
-  plot->add_option("--profile", plot_args.profile_path,
-                   "DMC-16 profile with a physical_rig, e.g. fixtures/profiles/dmc16-boom.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-  plot->add_option("-o,--output", plot_args.out_path,
-                   "SVG file to write, atomically (default: the session's path with .svg)")
-      ->check(moco::cli::NonEmptyPath());
-  AddNumber(plot, "--every-ms", plot_args.every_ms, 0.001, 3.6e6, "Sample period in ms");
-  double from_s = 0, to_s = 0;
-  auto* from_opt =
-      AddNumber(plot, "--from-s", from_s, 0.0, 1e6, "Plot from this time, s since power-on");
-  auto* to_opt = AddNumber(plot, "--to-s", to_s, 0.0, 1e6,
-                           "Plot up to this time, s (default: the end of the session)");
-  to_opt->default_str("the end");
-  AddNumber(plot, "--tail-s", plot_args.tail_s, 0.0, 3600.0,
-            "Keep sampling this long after the last entry while the rig settles; "
-            "ends earlier once it is at rest");
-  plot->add_option("--title", plot_args.title,
-                   "Title of the plot (default: the rig's name and the session file's name)");
-
-  // --- one device: mocosim <model> --pty PATH | --tcp [HOST:]PORT ---
-  struct OneDevice {
-    CLI::App* cmd = nullptr;
-    CLI::Option* wifi_opt = nullptr;  // models that have a Wi-Fi link
-    moco::serve::DeviceConfig config;
-    std::string pty_path, tcp_spec, wifi_spec, log_level = "info", control_path, scenario_path;
-  };
-  std::vector<std::unique_ptr<OneDevice>> one_device;
+  // The subcommands, in the order --help lists them.
+  DecodeCli decode;
+  decode.Add(app);
+  ExportCli export_cli;
+  export_cli.Add(app);
+  PlotCli plot;
+  plot.Add(app);
+  std::vector<std::unique_ptr<DeviceCli>> one_device;
   for (const auto& model : moco::devices::DeviceModels()) {
-    auto o = std::make_unique<OneDevice>();
-    const std::string name(model.name);
-    o->config.model = name;
-    o->cmd = app.add_subcommand(
-        name, "Emulate a " + std::string(model.description) +
-                  " on a PTY or a TCP port until Ctrl-C. Example: mocosim " + name +
-                  " --pty /tmp/" + name + "  (then point the host at /tmp/" + name + ")");
-    auto* pty_opt = o->cmd->add_option(
-        "--pty", o->pty_path, "Create a PTY with a stable symlink at this path (mode 0600)");
-    auto* tcp_opt = o->cmd->add_option(
-        "--tcp", o->tcp_spec,
-        "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
-    pty_opt->excludes(tcp_opt);
-    if (model.protocol == moco::wire::Protocol::kStackshot) {
-      auto* wifi_opt = o->wifi_opt = o->cmd->add_option(
-          "--wifi", o->wifi_spec,
-          "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
-          "connect to its TCP port. ADDRESS[:UDP_PORT[:HOST_TCP_PORT]], default "
-          "127.0.0.1:24869:24870, loopback like --tcp (give \"\" for the defaults, 0.0.0.0 to "
-          "hear FINDSTACK from every network)");
-      wifi_opt->excludes(pty_opt)->excludes(tcp_opt);
-    }
-    o->cmd
-        ->add_option("--profile", o->config.profile_path,
-                     "Device profile (JSON; default: built-in, as " +
-                         std::string(model.default_profile) + "; fields in docs/profiles.md)")
-        ->check(CLI::ExistingFile);
-    o->cmd
-        ->add_option("--record", o->config.record_path,
-                     "Record every byte in and out with its time and decoded message to this "
-                     "session file (.jsonl, docs/sessions.md; completed on exit)")
-        ->check(moco::cli::NonEmptyPath());
-    o->cmd
-        ->add_option("--vcd", o->config.vcd_path,
-                     "Write each motor's STEP and DIR from the step model's exact edge times to "
-                     "this Value Change Dump on exit (GTKWave, PulseView; docs/pins.md)")
-        ->check(moco::cli::NonEmptyPath());
-    o->cmd
-        ->add_option("--control", o->control_path,
-                     "Serve the JSON-lines control socket at this path (e-stop, limits, "
-                     "inputs, power, faults, state; docs/control.md)")
-        ->check(moco::cli::NonEmptyPath());
-    if (model.keeps_state) {
-      o->cmd
-          ->add_option("--state", o->config.state_path,
-                       "File keeping the device's NVM (settings, slots, serial number, log) "
-                       "across runs, written atomically (default: "
-                       "$XDG_STATE_HOME/mocosim/<name>.json or ~/.local/state/mocosim/<name>.json)")
-          ->check(moco::cli::NonEmptyPath());
-    }
-    o->cmd
-        ->add_option("--scenario", o->scenario_path,
-                     "Play this scenario file of timed control events (docs/control.md)")
-        ->check(CLI::ExistingFile);
-    o->cmd->add_option("--faults", o->config.faults,
-                       "Inject link faults, e.g. seed=42,dir=to-host,drop=0.01 (dir= applies "
-                       "to the rates after it)");
-    o->cmd->add_flag("--no-pacing", o->config.no_pacing,
-                     "Deliver bytes at once instead of at the profile's baud rate and in the "
-                     "packets of its USB serial bridge (profile field usb_bridge, "
-                     "docs/profiles.md)");
-    o->cmd->add_option("--name", o->config.name,
-                       "Name in log lines and on the control socket (default: " + name + ")");
-    o->cmd
-        ->add_option("--log-level", o->log_level,
-                     "error, warn, info (default) or debug (every message decoded)")
-        ->check(CLI::IsMember({"error", "warn", "info", "debug"}));
-    one_device.push_back(std::move(o));
+    one_device.push_back(std::make_unique<DeviceCli>());
+    one_device.back()->Add(app, model);
   }
-
-  // --- several devices from a run file ---
-  std::string run_path;
-  auto* run = app.add_subcommand(
-      "run", "Serve every device of a run file (JSON, see docs/run-files.md) until Ctrl-C");
-  run->add_option("file", run_path, "Run file, e.g. fixtures/runs/two-dmc16.json")
-      ->required()
-      ->check(CLI::ExistingFile);
-
+  RunFileCli run;
+  run.Add(app);
   auto* models = app.add_subcommand("models", "List the device models that can be emulated");
-
-  // --- mocosim tap: a recording proxy between a host and a real device ---
-  moco::serve::TapConfig tap_config;
-  std::string tap_protocol, tap_pty, tap_tcp, tap_flow = "none";
-  auto* tap = app.add_subcommand(
-      "tap",
-      "Record what a host and a real device say to each other (docs/tap.md). The tap sits "
-      "between them: the host opens the tap's PTY (or connects to its TCP port) instead of the "
-      "device, and the tap opens the device's serial port (or TCP address). Bytes pass "
-      "unchanged both ways, and each chunk is recorded with its arrival time and decoded "
-      "messages into a session file that mococheck replay/fuzz and mocosim decode/plot read "
-      "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (57600 "
-      "baud) and a host setting another speed on the PTY; a host closing and reopening the "
-      "PTY does not end it; a device going away is reported and looked for again; Ctrl-C "
-      "(SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
-      "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "
-      "--record dragonframe.jsonl  (then point Dragonframe at /tmp/dmc16)\n"
-      "Example: mocosim tap --protocol stackshot --device tcp:192.168.1.20:5000 --tcp 5001 "
-      "--record stack.jsonl");
-  tap->add_option("--protocol", tap_protocol,
-                  "What the device speaks: dmc, dfmoco or stackshot. Sets the header's "
-                  "protocol, the decoding and the default baud. Example: --protocol stackshot")
-      ->required()
-      ->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            // A device is tapped from its power-on protocol: one with rules
-            // of its own (wire/protocol.h), by name or alias.
-            std::vector<moco::wire::Protocol> tappable;
-            for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
-              if (!info.rule_prefix.empty()) tappable.push_back(info.id);
-            }
-            const auto p = moco::wire::ParseProtocolOrAlias(text);
-            if (p && std::find(tappable.begin(), tappable.end(), *p) != tappable.end()) return "";
-            return "'" + text + "' is no protocol a device starts in: give " +
-                   moco::wire::NameList(tappable);
-          },
-          "PROTOCOL"));
-  tap->add_option("--device", tap_config.device,
-                  "The real device's side: serial:PATH (a serial port, raw 8N1 at --baud; a "
-                  "bare path works too) or tcp:HOST:PORT. Example: --device serial:/dev/ttyUSB0")
-      ->required();
-  auto* tap_pty_opt = tap->add_option(
-      "--pty", tap_pty,
-      "The host's side: a PTY with a stable symlink at this path (mode 0600), as `mocosim "
-      "dmc16 --pty` makes. Example: --pty /tmp/dmc16");
-  auto* tap_tcp_opt = tap->add_option(
-      "--tcp", tap_tcp,
-      "The host's side: listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = "
-      "any free port, logged). Example: --tcp 127.0.0.1:5001");
-  tap_pty_opt->excludes(tap_tcp_opt);
-  AddNumber(tap, "--baud", tap_config.baud, uint32_t{0}, uint32_t{4000000},
-            "Line speed of a serial device (default 0: the protocol's: DMC v2 115200, DFMoco "
-            "57600, StackShot 38400). Example: --baud 57600");
-  tap->add_option("--flow", tap_flow,
-                  "Flow control on the serial port: none (default) or rtscts (hardware "
-                  "RTS/CTS). Example: --flow rtscts")
-      ->check(CLI::IsMember({"none", "rtscts"}));
-  tap->add_option("--record", tap_config.record_path,
-                  "Session file to write (.jsonl, docs/sessions.md): lines written through as "
-                  "they come, the file completed atomically on exit. Without it the tap only "
-                  "passes bytes. Example: --record session.jsonl")
-      ->check(moco::cli::NonEmptyPath());
-  tap->add_option("--device-model", tap_config.device_model,
-                  "The header's device: the emulated model a replay builds (default: dmc16, "
-                  "dfmoco or stackshot3x by --protocol). Example: --device-model dfmoco");
-  tap->add_option("--profile", tap_config.profile,
-                  "Recorded in the header as \"profile\": the device profile a replay of this "
-                  "session should use. Example: --profile fixtures/profiles/dmc16.json");
-  tap->add_option("--note", tap_config.note,
-                  "The header's note (default: where the tap ran). Example: --note \"rig A, "
-                  "first take\"");
-  AddNumber(tap, "--time-tolerance-ms", tap_config.time_tolerance_ms, int64_t{0}, int64_t{600000},
-            "The header's tolerances.time_ms: how far a replayed reply may be from its "
-            "recorded (wall-clock) time. Example: --time-tolerance-ms 100");
+  TapCli tap;
+  tap.Add(app);
 
   // A parse error is a usage error, exit 2; --help and --version exit 0.
   if (const auto exit_code = moco::cli::ParseCommandLine(app, argc, argv)) return *exit_code;
 
-  if (decode->parsed()) return Decode(session_path, !no_time, strict);
-  if (export_cmd->parsed()) return ExportPcapng(export_session, export_out);
-  if (plot->parsed()) {
-    if (from_opt->count() > 0) plot_args.from_s = from_s;
-    if (to_opt->count() > 0) plot_args.to_s = to_s;
-    return Plot(plot_args);
-  }
-  if (tap->parsed()) {
-    tap_config.protocol = *moco::wire::ParseProtocolOrAlias(tap_protocol);
-    tap_config.rtscts = tap_flow == "rtscts";
-    if (tap_pty.empty() && tap_tcp.empty()) {
-      std::fprintf(stderr,
-                   "mocosim tap: say where the host connects: --pty /tmp/dmc16 or --tcp "
-                   "127.0.0.1:5001\n");
-      return 2;
-    }
-    tap_config.host = tap_pty.empty() ? "tcp:" + tap_tcp : "pty:" + tap_pty;
-    return moco::serve::RunTap(std::move(tap_config));
-  }
-  if (models->parsed()) {
-    for (const auto& m : moco::devices::DeviceModels()) {
-      std::printf("%-12s %s (profile %s)\n", std::string(m.name).c_str(),
-                  std::string(m.description).c_str(), std::string(m.default_profile).c_str());
-    }
-    return 0;
-  }
+  if (decode.cmd->parsed()) return decode.Run();
+  if (export_cli.cmd->parsed()) return export_cli.Run();
+  if (plot.cmd->parsed()) return plot.Run();
+  if (tap.cmd->parsed()) return tap.Run();
+  if (models->parsed()) return ListModels();
   for (auto& o : one_device) {
-    if (!o->cmd->parsed()) continue;
-    const std::string cmd = o->config.model;
-    const bool wifi = o->wifi_opt != nullptr && o->wifi_opt->count() > 0;
-    if (o->pty_path.empty() && o->tcp_spec.empty() && !wifi) {
-      std::fprintf(stderr,
-                   "mocosim %s: say where to serve the device: --pty /tmp/%s or "
-                   "--tcp 127.0.0.1:5000\n",
-                   cmd.c_str(), cmd.c_str());
-      return 2;
-    }
-    o->config.endpoint = wifi                  ? "wifi:" + o->wifi_spec
-                         : o->pty_path.empty() ? "tcp:" + o->tcp_spec
-                                               : "pty:" + o->pty_path;
-    moco::serve::EmulatorConfig config;
-    config.devices.push_back(o->config);
-    config.control_path = o->control_path;
-    config.scenario_path = o->scenario_path;
-    config.log_level = moco::serve::ParseLogLevel(o->log_level);
-    return Serve(std::move(config));
+    if (o->cmd->parsed()) return o->Run();
   }
-  if (run->parsed()) {
-    try {
-      return Serve(moco::serve::LoadRunConfig(run_path));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "mocosim run: %s\n", e.what());
-      return 2;
-    }
-  }
+  if (run.cmd->parsed()) return run.Run();
   return 0;
 }

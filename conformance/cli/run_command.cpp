@@ -108,6 +108,238 @@ std::string PinsVcd(const RunReport& report) {
   return base::VcdText("board", comment, wires);
 }
 
+// The cases the run selects: --shard, --rules and --cases checked against
+// the protocol's rules and cases (each glob must select something: a misspelt
+// one would otherwise shrink the run without a word) and set in `options`.
+// An error message, or nullopt.
+std::optional<std::string> SelectCases(const RunArgs& a, const ProtocolRunner& runner,
+                                       Protocol proto, RunOptions& options) {
+  const std::string title(wire::Info(proto).title);
+  if (!ParseShard(a.shard, options.shard_index, options.shard_count)) {
+    return "--shard " + a.shard + ": give i/n with 1 <= i <= n, e.g. --shard 1/4";
+  }
+  for (const std::string& glob : SplitGlobs(a.rules_glob)) {
+    bool any = false;
+    for (const Rule& r : runner.rules()) any = any || GlobMatch(glob, r.id);
+    if (!any) {
+      return "--rules " + a.rules_glob + ": '" + glob + "' matches no " + title +
+             " rule; see the rule ids with 'mococheck rules'";
+    }
+  }
+  for (const std::string& glob : SplitGlobs(a.cases_glob)) {
+    bool any = false;
+    for (const CaseInfo& k : runner.cases()) any = any || GlobMatch(glob, k.suite + "/" + k.name);
+    if (!any) {
+      return "--cases " + a.cases_glob + ": '" + glob + "' selects no " + title +
+             " case; see the case names with 'mococheck cases --protocol " +
+             std::string(ProtocolName(proto)) + "'";
+    }
+  }
+  if ((!a.rules_glob.empty() && SplitGlobs(a.rules_glob).empty()) ||
+      (!a.cases_glob.empty() && SplitGlobs(a.cases_glob).empty())) {
+    return std::string(SplitGlobs(a.rules_glob).empty() && !a.rules_glob.empty() ? "--rules"
+                                                                                 : "--cases") +
+           " holds no glob: give globs separated by commas, e.g. 'motor/*,rt/*'";
+  }
+  options.rules = a.rules_glob;
+  options.cases = a.cases_glob;
+  size_t selected = 0;
+  const std::vector<CaseInfo>& all = runner.cases();
+  for (size_t i = 0; i < all.size(); ++i) {
+    selected += CaseSelected(options, i, all[i].suite + "/" + all[i].name);
+  }
+  if (selected == 0) {
+    return "--shard " + a.shard + (a.cases_glob.empty() ? "" : " with --cases " + a.cases_glob) +
+           " selects no " + title + " case (" + std::to_string(all.size()) +
+           " in all); use fewer shards or a wider --cases";
+  }
+  return std::nullopt;
+}
+
+// The host's deadlines and timeouts and the random suite's settings, set in
+// `options`. An error message (a bad --deadline), or nullopt.
+std::optional<std::string> SetHostOptions(const RunArgs& a, RunOptions& options) {
+  options.host.deadline_ns = a.deadline_ms * sim::kNsPerMs;
+  for (const std::string& d : a.deadlines) {
+    const size_t eq = d.find('=');
+    const std::string kind = d.substr(0, eq);
+    bool known = false;
+    for (const char* k : kDeadlineKinds) known = known || kind == k;
+    int64_t ms = 0;
+    const std::string problem = eq == std::string::npos
+                                    ? "no '='"
+                                    : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1),
+                                                             int64_t{1}, int64_t{600000}, ms);
+    if (!known || !problem.empty()) {
+      return "--deadline " + d +
+             ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS a whole "
+             "number in 1..600000, e.g. --deadline rt=500";
+    }
+    options.host.deadline_by_kind_ns[kind] = ms * sim::kNsPerMs;
+  }
+  options.host.dfmoco_dialect = a.dialect;
+  options.host.answer_timeout_ns = a.answer_timeout_ms * sim::kNsPerMs;
+  if (a.wait_every_answer) options.host.give_up_after_unanswered = 0;
+  options.host.position_gap_ns = a.position_gap_ms * sim::kNsPerMs;
+  options.random.seed = a.seed;
+  options.random.steps = a.steps;
+  options.random.session_path = a.session_path;
+  return std::nullopt;
+}
+
+// --board and --driver loaded into `board` and the pin judge of `options`.
+// An error message, or nullopt.
+std::optional<std::string> LoadPins(const RunArgs& a, RunOptions& options,
+                                    std::optional<Board>& board) {
+  if (a.board_path.empty() && (!a.driver.empty() || !a.vcd_path.empty())) {
+    return std::string(a.driver.empty() ? "--vcd" : "--driver") +
+           " needs --board: give the board profile naming the watched pins, e.g. --board "
+           "fixtures/boards/own-dfmoco.json";
+  }
+  if (a.board_path.empty()) return std::nullopt;
+  auto loaded = LoadBoard(a.board_path);
+  if (const auto* err = std::get_if<std::string>(&loaded)) return *err;
+  auto driver = LoadDriver(a.driver.empty() ? "a4988" : a.driver);
+  if (const auto* err = std::get_if<std::string>(&driver)) return *err;
+  board = std::get<Board>(loaded);
+  PinJudgeOptions pins;
+  pins.board = *board;
+  pins.driver = std::get<DriverProfile>(driver);
+  options.pins = pins;
+  return std::nullopt;
+}
+
+// Every output checked before the run, not after it (docs/files.md): each
+// writable, none the --profile, no two the same file. An error message, or
+// nullopt.
+std::optional<std::string> CheckOutputs(const RunArgs& a) {
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {"--junit", a.junit},
+      {"--html", a.html_path},
+      {"--json", a.json_path},
+      {"--save-session", a.session_path},
+      {"--vcd", a.vcd_path}};
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const auto& [option, path] = outputs[i];
+    if (path.empty()) continue;
+    if (auto err = base::CheckOutputPath(path, option)) return *err;
+    if (!a.profile.empty() && base::SameFile(path, a.profile)) {
+      return option + " " + path + " is the --profile; writing it would destroy the " +
+             "profile: choose another path for " + option;
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (!outputs[j].second.empty() && base::SameFile(path, outputs[j].second)) {
+        return option + " " + path + " is also " + outputs[j].first +
+               "; one report would overwrite the other: give each its own file";
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// The console as the run goes: the device once it answered, each case's
+// verdict as it ends (flushed, whatever stdout is) on stdout, and progress on
+// stderr as each case starts, so a slow or silent device shows where the run
+// is. Attached to `options`; it must outlive the run.
+struct ConsoleStream {
+  const RunArgs& a;
+  const Target& target;
+  std::string title;
+  bool device_printed = false;
+  size_t printed = 0;
+  std::chrono::steady_clock::time_point wall0 = std::chrono::steady_clock::now();
+
+  void PrintDevice(const RunReport& so_far) {
+    if (device_printed) return;
+    device_printed = true;
+    if (so_far.device.empty() && !target.VirtualClock()) {
+      std::cerr << "mococheck: " << target.Name() << " did not introduce itself; is a " << title
+                << " device there, at this baud rate?" << std::endl;
+    }
+    if (!a.quiet) std::cout << ConsoleDevice(so_far) << std::flush;
+  }
+
+  void CaseStarts(const RunReport& so_far, const std::string& name, size_t index, size_t total) {
+    PrintDevice(so_far);
+    if (a.quiet) return;
+    std::set<std::string> judged, failing;
+    for (const CaseResult& c : so_far.cases) {
+      for (const auto& [id, o] : c.outcomes) {
+        judged.insert(id);
+        if (o.status == Status::kFail) failing.insert(id);
+      }
+    }
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    char elapsed[32];
+    std::snprintf(elapsed, sizeof elapsed, "%.1f s", s);
+    std::cerr << "mococheck: [" << index << "/" << total << "] " << name << " (" << elapsed
+              << " elapsed; " << judged.size() << " rules judged so far, " << failing.size()
+              << " failing)" << std::endl;
+  }
+
+  void Attach(RunOptions& options) {
+    options.on_progress = [this](const RunReport& so_far) {
+      PrintDevice(so_far);
+      for (; printed < so_far.cases.size(); ++printed) {
+        if (!a.quiet) std::cout << ConsoleCase(so_far.cases[printed], a.verbose) << std::flush;
+      }
+    };
+    options.on_case_start = [this](const RunReport& so_far, const std::string& name, size_t index,
+                                   size_t total) { CaseStarts(so_far, name, index, total); };
+  }
+};
+
+// The end of the run on the console: a target error on stderr, then the
+// summary (with -q the result line and the target's caveats).
+void PrintSummary(const RunArgs& a, const Target& target, const RunReport& report) {
+  if (!report.target_error.empty()) {
+    std::cerr << "mococheck: target error: " << target.Name() << ": " << report.target_error
+              << "; the outcomes prove nothing about the device" << std::endl;
+  }
+  if (a.quiet) {
+    // The result line, and what the target could not reproduce faithfully:
+    // a clock or peripheral run wrong is never silent, even here.
+    const std::string text = ConsoleSummary(report, false);
+    for (const std::string& caveat : report.target_caveats) {
+      std::cout << "target caveat: " << caveat << "\n";
+    }
+    std::cout << text.substr(text.rfind("result:")) << std::flush;
+  } else {
+    std::cout << ConsoleSummary(report, a.verbose) << std::flush;
+  }
+}
+
+// Every report that can be written is written: one that fails (a full disk,
+// a folder gone) is named with its option, and the others still land. The
+// exit status: the run's, or kExitUsage when a report is missing.
+int WriteReports(const RunArgs& a, const RunReport& report) {
+  std::vector<std::string> written, failed;
+  auto write = [&](const char* option, const std::string& path, const auto& render) {
+    if (path.empty()) return;
+    if (auto err = WriteAtomically(path, render()); !err.empty()) {
+      failed.push_back(std::string(option) + " " + path + ": " + err);
+    } else {
+      written.push_back(std::string(option) + " " + path);
+    }
+  };
+  write("--junit", a.junit, [&] { return JunitReport(report); });
+  write("--html", a.html_path, [&] { return HtmlReport(report); });
+  write("--vcd", a.vcd_path, [&] { return PinsVcd(report); });
+  write("--json", a.json_path, [&] { return JsonReport(report).dump(2) + "\n"; });
+  if (!failed.empty()) {
+    for (const std::string& f : failed) std::cerr << "mococheck: could not write " << f << "\n";
+    std::string others;
+    for (const std::string& w : written) others += (others.empty() ? "" : ", ") + w;
+    std::cerr << "mococheck: " << (others.empty() ? "no report was written" : "written: " + others)
+              << "; the verdict above stands, but a report is missing: free space or choose "
+                 "another path and run again"
+              << std::endl;
+    return kExitUsage;
+  }
+  return ExitCode(report);
+}
+
 int Run(const RunArgs& a) {
   TargetRequest request;
   request.text = a.target_text;
@@ -134,116 +366,11 @@ int Run(const RunArgs& a) {
     return Fail(title + " has no conformance suites in this build; use a DMC v2 target");
   }
   RunOptions options;
-  if (!ParseShard(a.shard, options.shard_index, options.shard_count)) {
-    return Fail("--shard " + a.shard + ": give i/n with 1 <= i <= n, e.g. --shard 1/4");
-  }
-  // Every glob of --rules and --cases must select something: a misspelt one
-  // would otherwise shrink the run without a word.
-  for (const std::string& glob : SplitGlobs(a.rules_glob)) {
-    bool any = false;
-    for (const Rule& r : runner->rules()) any = any || GlobMatch(glob, r.id);
-    if (!any) {
-      return Fail("--rules " + a.rules_glob + ": '" + glob + "' matches no " + title +
-                  " rule; see the rule ids with 'mococheck rules'");
-    }
-  }
-  for (const std::string& glob : SplitGlobs(a.cases_glob)) {
-    bool any = false;
-    for (const CaseInfo& k : runner->cases()) any = any || GlobMatch(glob, k.suite + "/" + k.name);
-    if (!any) {
-      return Fail("--cases " + a.cases_glob + ": '" + glob + "' selects no " + title +
-                  " case; see the case names with 'mococheck cases --protocol " +
-                  std::string(ProtocolName(proto)) + "'");
-    }
-  }
-  if ((!a.rules_glob.empty() && SplitGlobs(a.rules_glob).empty()) ||
-      (!a.cases_glob.empty() && SplitGlobs(a.cases_glob).empty())) {
-    return Fail(std::string(SplitGlobs(a.rules_glob).empty() && !a.rules_glob.empty() ? "--rules"
-                                                                                      : "--cases") +
-                " holds no glob: give globs separated by commas, e.g. 'motor/*,rt/*'");
-  }
-  options.rules = a.rules_glob;
-  options.cases = a.cases_glob;
-  {
-    size_t selected = 0;
-    const std::vector<CaseInfo>& all = runner->cases();
-    for (size_t i = 0; i < all.size(); ++i) {
-      selected += CaseSelected(options, i, all[i].suite + "/" + all[i].name);
-    }
-    if (selected == 0) {
-      return Fail("--shard " + a.shard +
-                  (a.cases_glob.empty() ? "" : " with --cases " + a.cases_glob) + " selects no " +
-                  title + " case (" + std::to_string(all.size()) +
-                  " in all); use fewer shards or a wider --cases");
-    }
-  }
-  options.host.deadline_ns = a.deadline_ms * sim::kNsPerMs;
-  for (const std::string& d : a.deadlines) {
-    const size_t eq = d.find('=');
-    const std::string kind = d.substr(0, eq);
-    bool known = false;
-    for (const char* k : kDeadlineKinds) known = known || kind == k;
-    int64_t ms = 0;
-    const std::string problem = eq == std::string::npos
-                                    ? "no '='"
-                                    : moco::cli::CheckNumber(std::string_view(d).substr(eq + 1),
-                                                             int64_t{1}, int64_t{600000}, ms);
-    if (!known || !problem.empty()) {
-      return Fail("--deadline " + d +
-                  ": give KIND=MS with KIND one of hi, query, command, upload, rt and MS a whole "
-                  "number in 1..600000, e.g. --deadline rt=500");
-    }
-    options.host.deadline_by_kind_ns[kind] = ms * sim::kNsPerMs;
-  }
-  options.host.dfmoco_dialect = a.dialect;
-  options.host.answer_timeout_ns = a.answer_timeout_ms * sim::kNsPerMs;
-  if (a.wait_every_answer) options.host.give_up_after_unanswered = 0;
-  options.host.position_gap_ns = a.position_gap_ms * sim::kNsPerMs;
-  options.random.seed = a.seed;
-  options.random.steps = a.steps;
-  options.random.session_path = a.session_path;
   std::optional<Board> board;
-  if (a.board_path.empty() && (!a.driver.empty() || !a.vcd_path.empty())) {
-    return Fail(std::string(a.driver.empty() ? "--vcd" : "--driver") +
-                " needs --board: give the board profile naming the watched pins, e.g. --board "
-                "fixtures/boards/own-dfmoco.json");
-  }
-  if (!a.board_path.empty()) {
-    auto loaded = LoadBoard(a.board_path);
-    if (const auto* err = std::get_if<std::string>(&loaded)) return Fail(*err);
-    auto driver = LoadDriver(a.driver.empty() ? "a4988" : a.driver);
-    if (const auto* err = std::get_if<std::string>(&driver)) return Fail(*err);
-    board = std::get<Board>(loaded);
-    PinJudgeOptions pins;
-    pins.board = *board;
-    pins.driver = std::get<DriverProfile>(driver);
-    options.pins = pins;
-  }
-
-  // Every output is checked before the run, not after it (docs/files.md).
-  {
-    const std::vector<std::pair<std::string, std::string>> outputs = {
-        {"--junit", a.junit},
-        {"--html", a.html_path},
-        {"--json", a.json_path},
-        {"--save-session", a.session_path},
-        {"--vcd", a.vcd_path}};
-    for (size_t i = 0; i < outputs.size(); ++i) {
-      const auto& [option, path] = outputs[i];
-      if (path.empty()) continue;
-      if (auto err = base::CheckOutputPath(path, option)) return Fail(*err);
-      if (!a.profile.empty() && base::SameFile(path, a.profile)) {
-        return Fail(option + " " + path + " is the --profile; writing it would destroy the " +
-                    "profile: choose another path for " + option);
-      }
-      for (size_t j = 0; j < i; ++j) {
-        if (!outputs[j].second.empty() && base::SameFile(path, outputs[j].second)) {
-          return Fail(option + " " + path + " is also " + outputs[j].first +
-                      "; one report would overwrite the other: give each its own file");
-        }
-      }
-    }
-  }
+  if (auto err = SelectCases(a, *runner, proto, options)) return Fail(*err);
+  if (auto err = SetHostOptions(a, options)) return Fail(*err);
+  if (auto err = LoadPins(a, options, board)) return Fail(*err);
+  if (auto err = CheckOutputs(a)) return Fail(*err);
   // From here a signal stops the run and the reports of what ran are written.
   InstallStopHandlers();
   std::unique_ptr<Target> target = std::move(rt.target);
@@ -253,94 +380,18 @@ int Run(const RunArgs& a) {
   if (auto err = target->Open()) return Fail(*err);
 
   // The console streams: the title now, the device once it answered, each
-  // case's verdict as it ends (flushed, whatever stdout is), the summary last.
+  // case's verdict as it ends, the summary last.
   if (!a.quiet) {
     std::cout << ConsoleTitle(target->Name(), std::string(ProtocolName(proto))) << std::flush;
   }
-  bool device_printed = false;
-  size_t printed = 0;
-  auto print_device = [&](const RunReport& so_far) {
-    if (device_printed) return;
-    device_printed = true;
-    if (so_far.device.empty() && !target->VirtualClock()) {
-      std::cerr << "mococheck: " << target->Name() << " did not introduce itself; is a " << title
-                << " device there, at this baud rate?" << std::endl;
-    }
-    if (!a.quiet) std::cout << ConsoleDevice(so_far) << std::flush;
-  };
-  options.on_progress = [&](const RunReport& so_far) {
-    print_device(so_far);
-    for (; printed < so_far.cases.size(); ++printed) {
-      if (!a.quiet) std::cout << ConsoleCase(so_far.cases[printed], a.verbose) << std::flush;
-    }
-  };
-  // Progress on stderr as each case starts (the verdicts stream on stdout),
-  // so a slow or silent device shows where the run is.
-  const auto wall0 = std::chrono::steady_clock::now();
-  options.on_case_start = [&](const RunReport& so_far, const std::string& name, size_t index,
-                              size_t total) {
-    print_device(so_far);
-    if (a.quiet) return;
-    std::set<std::string> judged, failing;
-    for (const CaseResult& c : so_far.cases) {
-      for (const auto& [id, o] : c.outcomes) {
-        judged.insert(id);
-        if (o.status == Status::kFail) failing.insert(id);
-      }
-    }
-    const double s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    char elapsed[32];
-    std::snprintf(elapsed, sizeof elapsed, "%.1f s", s);
-    std::cerr << "mococheck: [" << index << "/" << total << "] " << name << " (" << elapsed
-              << " elapsed; " << judged.size() << " rules judged so far, " << failing.size()
-              << " failing)" << std::endl;
-  };
+  ConsoleStream console{a, *target, title};
+  console.Attach(options);
   RunReport report = runner->run(*target, options);
   options.on_progress(report);  // whatever the runner did not announce
   if (const auto lost = target->LinkLost()) report.target_error = *lost;
   report.target_caveats = target->Caveats();
-  if (!report.target_error.empty()) {
-    std::cerr << "mococheck: target error: " << target->Name() << ": " << report.target_error
-              << "; the outcomes prove nothing about the device" << std::endl;
-  }
-  if (a.quiet) {
-    // The result line, and what the target could not reproduce faithfully:
-    // a clock or peripheral run wrong is never silent, even here.
-    const std::string text = ConsoleSummary(report, false);
-    for (const std::string& caveat : report.target_caveats) {
-      std::cout << "target caveat: " << caveat << "\n";
-    }
-    std::cout << text.substr(text.rfind("result:")) << std::flush;
-  } else {
-    std::cout << ConsoleSummary(report, a.verbose) << std::flush;
-  }
-  // Every report that can be written is written: one that fails (a full
-  // disk, a folder gone) is named with its option, and the others still land.
-  std::vector<std::string> written, failed;
-  auto write = [&](const char* option, const std::string& path, const auto& render) {
-    if (path.empty()) return;
-    if (auto err = WriteAtomically(path, render()); !err.empty()) {
-      failed.push_back(std::string(option) + " " + path + ": " + err);
-    } else {
-      written.push_back(std::string(option) + " " + path);
-    }
-  };
-  write("--junit", a.junit, [&] { return JunitReport(report); });
-  write("--html", a.html_path, [&] { return HtmlReport(report); });
-  write("--vcd", a.vcd_path, [&] { return PinsVcd(report); });
-  write("--json", a.json_path, [&] { return JsonReport(report).dump(2) + "\n"; });
-  if (!failed.empty()) {
-    for (const std::string& f : failed) std::cerr << "mococheck: could not write " << f << "\n";
-    std::string others;
-    for (const std::string& w : written) others += (others.empty() ? "" : ", ") + w;
-    std::cerr << "mococheck: " << (others.empty() ? "no report was written" : "written: " + others)
-              << "; the verdict above stands, but a report is missing: free space or choose "
-                 "another path and run again"
-              << std::endl;
-    return kExitUsage;
-  }
-  return ExitCode(report);
+  PrintSummary(a, *target, report);
+  return WriteReports(a, report);
 }
 
 }  // namespace

@@ -126,9 +126,99 @@ std::string RuleNotApplicable(const Rule& rule,
   return "";
 }
 
+// What the probe before the cases found: the device's introduction, whether
+// the device sent anything at all, and whether the link was lost meanwhile.
+template <typename Traits>
+struct ProbeResult {
+  std::optional<typename Traits::Device> device;
+  bool device_spoke = false, lost = false;
+};
+
+// The probe before the cases: a host introduces itself to the device.
+template <typename Traits>
+ProbeResult<Traits> Probe(Target& target, const RunOptions& options,
+                          const HostOptions& host_options, RunReport& report) {
+  using Host = typename Traits::Host;
+  ProbeResult<Traits> out;
+  Verdicts probe(options.rules);
+  Host host(target, probe, host_options);
+  const TimeNs t0 = host.Now();
+  const auto c0 = std::chrono::steady_clock::now();
+  host.set_greeting(true);
+  out.device = Traits::Discover(host);
+  host.Close();
+  out.device_spoke = DeviceSpoke(host.traffic());
+  out.lost = host.link_lost();
+  // The introduction's own rule (the first HI answered) is judged here,
+  // where the host's first request is; the rest of what the probe saw is
+  // judged again by every case's greeting.
+  if constexpr (requires { Traits::kIntroductionRule; }) {
+    const auto it = probe.outcomes().find(Traits::kIntroductionRule);
+    if (out.device && it != probe.outcomes().end() && it->second.status == Status::kFail) {
+      CaseResult intro;
+      intro.suite = "connect";
+      intro.name = "introduction";
+      intro.summary = "How the device answered the host's first introduction";
+      intro.outcomes.emplace(it->first, it->second);
+      intro.log.push_back(
+          "the first introduction went unanswered; the second, sent after the "
+          "answer timeout, was answered and the run goes on");
+      intro.target_ns = std::max<TimeNs>(0, host.Now() - t0);
+      intro.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+      intro.KeepTraffic(host.traffic());
+      report.cases.push_back(std::move(intro));
+    }
+  }
+  return out;
+}
+
+// Runs case `k` on a host of its own (on the target restarted when it can),
+// with its pins judged when they are watched, into `result`. Whether the
+// device sent anything during the case.
+template <typename Traits>
+bool RunCase(Target& target, const typename Traits::Case& k, const RunOptions& options,
+             const HostOptions& host_options, const std::optional<typename Traits::Device>& device,
+             CaseResult& result) {
+  using Host = typename Traits::Host;
+  using Device = typename Traits::Device;
+  using Case = typename Traits::Case;
+  const auto c0 = std::chrono::steady_clock::now();
+  if (target.CanRestart()) target.Restart();
+  Verdicts verdicts(options.rules);
+  Host host(target, verdicts, host_options);
+  const TimeNs t0 = host.Now();
+  host.set_greeting(true);
+  const std::optional<Device> seen = Traits::Greet(host, target, device.value_or(Device{}));
+  host.set_greeting(false);
+  if (seen && !host.link_lost()) {
+    typename Case::Context ctx{host,         verdicts,       *seen,     target,
+                               host_options, options.random, result.log};
+    k.run(ctx);
+  }
+  host.Close();
+  if (const PinTrace* pins = target.Pins(); pins != nullptr && options.pins) {
+    // What a step driver saw during the case (conformance/rules/pin_rules.cpp).
+    JudgePinsFor(Traits::kProtocol, *pins, host.traffic(), *options.pins, host.Now(), verdicts);
+    result.pins = std::make_shared<const PinTrace>(*pins);
+  }
+  if (host.link_lost()) result.log.push_back("the link to the device was lost");
+  result.not_waited_for = host.NotWaitedForSummary();
+  // The random suite saves a shrunk session of its own instead.
+  if (verdicts.MustFailed() && k.suite != "random") {
+    result.log.push_back("transcript:\n" + Transcript(Traits::kProtocol, host.traffic()));
+  }
+  result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
+  const bool spoke = DeviceSpoke(host.traffic());
+  result.outcomes = verdicts.outcomes();
+  result.not_exercised = verdicts.not_exercised();
+  result.KeepTraffic(host.traffic());
+  result.positions = Traits::Positions(result.traffic);
+  return spoke;
+}
+
 template <typename Traits>
 RunReport Run(Target& target, const RunOptions& options) {
-  using Host = typename Traits::Host;
   using Device = typename Traits::Device;
   using Case = typename Traits::Case;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -142,39 +232,9 @@ RunReport Run(Target& target, const RunOptions& options) {
   HostOptions host_options = options.host;
   host_options.unanswered = std::make_shared<UnansweredRequests>();
 
-  std::optional<Device> device;
-  bool device_spoke = false, probe_lost = false;
-  {
-    Verdicts probe(options.rules);
-    Host host(target, probe, host_options);
-    const TimeNs t0 = host.Now();
-    const auto c0 = std::chrono::steady_clock::now();
-    host.set_greeting(true);
-    device = Traits::Discover(host);
-    host.Close();
-    device_spoke = DeviceSpoke(host.traffic());
-    probe_lost = host.link_lost();
-    // The introduction's own rule (the first HI answered) is judged here,
-    // where the host's first request is; the rest of what the probe saw is
-    // judged again by every case's greeting.
-    if constexpr (requires { Traits::kIntroductionRule; }) {
-      const auto it = probe.outcomes().find(Traits::kIntroductionRule);
-      if (device && it != probe.outcomes().end() && it->second.status == Status::kFail) {
-        CaseResult intro;
-        intro.suite = "connect";
-        intro.name = "introduction";
-        intro.summary = "How the device answered the host's first introduction";
-        intro.outcomes.emplace(it->first, it->second);
-        intro.log.push_back(
-            "the first introduction went unanswered; the second, sent after the "
-            "answer timeout, was answered and the run goes on");
-        intro.target_ns = std::max<TimeNs>(0, host.Now() - t0);
-        intro.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-        intro.KeepTraffic(host.traffic());
-        report.cases.push_back(std::move(intro));
-      }
-    }
-  }
+  ProbeResult<Traits> probed = Probe<Traits>(target, options, host_options, report);
+  std::optional<Device> device = std::move(probed.device);
+  const bool device_spoke = probed.device_spoke, probe_lost = probed.lost;
   if (device) Traits::Describe(*device, report);
   // A device that sent nothing at all to two introductions gives the run
   // nothing to judge: that is a target error in every subset and shard, never
@@ -230,38 +290,8 @@ RunReport Run(Target& target, const RunOptions& options) {
       if (options.on_progress) options.on_progress(report);
       continue;
     }
-    const auto c0 = std::chrono::steady_clock::now();
-    if (target.CanRestart()) target.Restart();
-    Verdicts verdicts(options.rules);
-    Host host(target, verdicts, host_options);
-    const TimeNs t0 = host.Now();
-    host.set_greeting(true);
-    const std::optional<Device> seen = Traits::Greet(host, target, device.value_or(Device{}));
-    host.set_greeting(false);
-    if (seen && !host.link_lost()) {
-      typename Case::Context ctx{host,         verdicts,       *seen,     target,
-                                 host_options, options.random, result.log};
-      k.run(ctx);
-    }
-    host.Close();
-    if (const PinTrace* pins = target.Pins(); pins != nullptr && options.pins) {
-      // What a step driver saw during the case (conformance/rules/pin_rules.cpp).
-      JudgePinsFor(Traits::kProtocol, *pins, host.traffic(), *options.pins, host.Now(), verdicts);
-      result.pins = std::make_shared<const PinTrace>(*pins);
-    }
-    if (host.link_lost()) result.log.push_back("the link to the device was lost");
-    result.not_waited_for = host.NotWaitedForSummary();
-    // The random suite saves a shrunk session of its own instead.
-    if (verdicts.MustFailed() && k.suite != "random") {
-      result.log.push_back("transcript:\n" + Transcript(Traits::kProtocol, host.traffic()));
-    }
-    result.target_ns = std::max<TimeNs>(0, host.Now() - t0);
-    result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
-    silent_cases = DeviceSpoke(host.traffic()) ? 0 : silent_cases + 1;
-    result.outcomes = verdicts.outcomes();
-    result.not_exercised = verdicts.not_exercised();
-    result.KeepTraffic(host.traffic());
-    result.positions = Traits::Positions(result.traffic);
+    const bool spoke = RunCase<Traits>(target, k, options, host_options, device, result);
+    silent_cases = spoke ? 0 : silent_cases + 1;
     report.cases.push_back(std::move(result));
     // A case cut short by a stop request is not a verdict on the device.
     if (const int sig = StopRequested(); sig != 0) {

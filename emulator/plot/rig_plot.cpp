@@ -119,6 +119,45 @@ std::optional<RigPlotError> CheckOptions(const RigPlotOptions& o) {
   return std::nullopt;
 }
 
+// Replays one session entry into `device`: host bytes are fed to it, a
+// recorded control event (e-stop, limits) is applied again through `channel`,
+// the device's own recorded events are counted; what could not be applied is
+// a warning in `sum`.
+void ApplyEntry(const session::SessionEntry& e, devices::Dmc16& device,
+                control::ControlChannel& channel, RigPlotSummary& sum) {
+  if (!e.is_event) {
+    if (e.from != session::Origin::kHost) return;
+    ++sum.host_chunks;
+    device.OnHostBytes(e.bytes);
+    return;
+  }
+  if (e.event.value("source", std::string()) == "device") {
+    ++sum.recorded_device_events[e.event.value("event", std::string("?"))];
+    return;
+  }
+  if (!IsReplayedEvent(e.event)) return;
+  const std::string at = "event at " + Seconds(static_cast<double>(e.t_ns) / kNsPerS);
+  auto parsed = EventCommand(e.event);
+  if (const auto* why = std::get_if<std::string>(&parsed)) {
+    sum.warnings.push_back(at + " not applied: " + *why);
+    return;
+  }
+  const control::Command& command = std::get<control::Command>(parsed);
+  if (!control::IsAction(command.body)) return;
+  if (auto why = channel.Check(command)) {
+    sum.warnings.push_back(at + " (" + std::string(control::CommandName(command.body)) +
+                           ") not applied: " + *why);
+    return;
+  }
+  const json reply = channel.Execute(command, "replay");
+  if (reply.value("ok", false)) {
+    ++sum.control_events_applied;
+  } else {
+    sum.warnings.push_back(at + " (" + std::string(control::CommandName(command.body)) +
+                           ") failed: " + reply.value("error", std::string("no reason given")));
+  }
+}
+
 }  // namespace
 
 RigPlotResult PlotSession(const session::Session& session, const std::string& profile_path,
@@ -180,46 +219,12 @@ RigPlotResult PlotSession(const session::Session& session, const std::string& pr
   uint64_t collisions_at_start = 0;
   size_t next = 0;
 
-  auto apply = [&](const session::SessionEntry& e) {
-    if (!e.is_event) {
-      if (e.from != session::Origin::kHost) return;
-      ++sum.host_chunks;
-      device.OnHostBytes(e.bytes);
-      return;
-    }
-    if (e.event.value("source", std::string()) == "device") {
-      ++sum.recorded_device_events[e.event.value("event", std::string("?"))];
-      return;
-    }
-    if (!IsReplayedEvent(e.event)) return;
-    const std::string at = "event at " + Seconds(static_cast<double>(e.t_ns) / kNsPerS);
-    auto parsed = EventCommand(e.event);
-    if (const auto* why = std::get_if<std::string>(&parsed)) {
-      sum.warnings.push_back(at + " not applied: " + *why);
-      return;
-    }
-    const control::Command& command = std::get<control::Command>(parsed);
-    if (!control::IsAction(command.body)) return;
-    if (auto why = channel.Check(command)) {
-      sum.warnings.push_back(at + " (" + std::string(control::CommandName(command.body)) +
-                             ") not applied: " + *why);
-      return;
-    }
-    const json reply = channel.Execute(command, "replay");
-    if (reply.value("ok", false)) {
-      ++sum.control_events_applied;
-    } else {
-      sum.warnings.push_back(at + " (" + std::string(control::CommandName(command.body)) +
-                             ") failed: " + reply.value("error", std::string("no reason given")));
-    }
-  };
-
   for (int64_t k = 0;; ++k) {
     const sim::TimeNs t_ns = k * options.period_ns;
     if (t_ns > end_ns) break;
     while (next < entries.size() && entries[next].t_ns <= t_ns) {
       scheduler.RunUntil(entries[next].t_ns);
-      apply(entries[next]);
+      ApplyEntry(entries[next], device, channel, sum);
       ++next;
     }
     scheduler.RunUntil(t_ns);

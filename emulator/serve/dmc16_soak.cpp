@@ -222,21 +222,26 @@ std::optional<long> Whole(const char* text, long lo, long hi) {
   return v;
 }
 
-int main(int argc, char** argv) {
+// The command line.
+struct SoakArgs {
   double seconds = 60;
   long devices = 8;
   long rate = 2000;
   long ahead = 2000;
   bool pacing = false;
   bool record = false;
+};
+
+// Reads the command line into `args`; the exit status when it is wrong.
+std::optional<int> ParseArgs(int argc, char** argv, SoakArgs& args) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--pacing") {
-      pacing = true;
+      args.pacing = true;
       continue;
     }
     if (a == "--record") {
-      record = true;
+      args.record = true;
       continue;
     }
     if (i + 1 >= argc) return Usage();
@@ -244,8 +249,8 @@ int main(int argc, char** argv) {
     std::optional<long> n;
     if (a == "--seconds") {
       char* end = nullptr;
-      seconds = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !(seconds > 0 && seconds <= 86400)) {
+      args.seconds = std::strtod(v, &end);
+      if (end == v || *end != '\0' || !(args.seconds > 0 && args.seconds <= 86400)) {
         std::fprintf(stderr, "dmc16_soak: --seconds takes a number in (0, 86400]\n");
         return 2;
       }
@@ -253,13 +258,13 @@ int main(int argc, char** argv) {
     }
     if (a == "--devices") {
       n = Whole(v, 1, 64);
-      if (n) devices = *n;
+      if (n) args.devices = *n;
     } else if (a == "--rate") {
       n = Whole(v, 1, 1'000'000);
-      if (n) rate = *n;
+      if (n) args.rate = *n;
     } else if (a == "--ahead") {
       n = Whole(v, 1, 1'000'000);
-      if (n) ahead = *n;
+      if (n) args.ahead = *n;
     } else {
       return Usage();
     }
@@ -271,82 +276,85 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("moco_soak_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
+  return std::nullopt;
+}
+
+// The emulator's devices: `args.devices` DMC-16s, recorded in `dir` with
+// --record.
+moco::serve::EmulatorConfig SoakConfig(const SoakArgs& args, const std::filesystem::path& dir) {
   moco::serve::EmulatorConfig config;
   config.log_level = moco::serve::LogLevel::kError;
-  for (long d = 0; d < devices; ++d) {
+  for (long d = 0; d < args.devices; ++d) {
     moco::serve::DeviceConfig c;
     c.model = "dmc16";
     c.name = "dmc16-" + std::to_string(d + 1);
     // Even devices on PTYs, odd on TCP. Unpaced at a fixed rate: 2k
     // requests/s need more than a 115200-baud line carries.
     c.endpoint = d % 2 == 0 ? "pty:" + (dir / c.name).string() : "tcp:127.0.0.1:0";
-    c.no_pacing = !pacing;
-    if (record) c.record_path = (dir / (c.name + ".jsonl")).string();
+    c.no_pacing = !args.pacing;
+    if (args.record) c.record_path = (dir / (c.name + ".jsonl")).string();
     config.devices.push_back(c);
   }
-  auto emulator = std::make_unique<moco::serve::Emulator>(config, [](std::string_view l) {
-    std::fprintf(stderr, "%.*s\n", static_cast<int>(l.size()), l.data());
-  });
-  emulator->Start();
-  std::thread io([&] { emulator->Run(); });
-  std::vector<int> fds;
-  for (long d = 0; d < devices; ++d) {
-    moco::transport::DeviceServer& s = emulator->server(static_cast<size_t>(d));
-    const int fd = s.pty() != nullptr ? moco::transport::testing::OpenPtyHost(s.pty_path())
-                                      : moco::transport::testing::ConnectTcp(s.tcp_port());
-    if (fd < 0) {
-      std::fprintf(stderr, "dmc16_soak: cannot open device %ld: %s\n", d, std::strerror(errno));
-      return 1;
-    }
-    fds.push_back(fd);
-  }
-  std::vector<HostResult> results(static_cast<size_t>(devices));
+  return config;
+}
+
+// The time the hosts took and the memory in use after the first second (warm)
+// and at the end.
+struct Measured {
+  double elapsed = 0;
+  long rss_start = 0, rss_end = 0, heap_start = 0, heap_end = 0;
+};
+
+// Drives each device (`fds`) from a host thread of its own until every host
+// is done, each result in `results`.
+Measured DriveHosts(const SoakArgs& args, const std::vector<int>& fds,
+                    std::vector<HostResult>& results) {
+  Measured m;
   std::vector<std::thread> hosts;
-  long rss_start = 0;
   const auto t0 = Clock::now();
-  for (long d = 0; d < devices; ++d) {
+  for (long d = 0; d < args.devices; ++d) {
     HostResult& r = results[static_cast<size_t>(d)];
     const int fd = fds[static_cast<size_t>(d)];
-    if (pacing) {
-      hosts.emplace_back(DriveHostAhead, fd, seconds, static_cast<uint64_t>(ahead), std::ref(r));
+    if (args.pacing) {
+      hosts.emplace_back(DriveHostAhead, fd, args.seconds, static_cast<uint64_t>(args.ahead),
+                         std::ref(r));
     } else {
-      hosts.emplace_back(DriveHostAtRate, fd, seconds, static_cast<int>(rate), std::ref(r));
+      hosts.emplace_back(DriveHostAtRate, fd, args.seconds, static_cast<int>(args.rate),
+                         std::ref(r));
     }
   }
-  // Memory after the first second (warm), and at the end.
   std::this_thread::sleep_for(
-      std::chrono::milliseconds(std::min<int>(1000, static_cast<int>(seconds * 500))));
-  rss_start = RssKiB();
-  const long heap_start = HeapInUseKiB();
+      std::chrono::milliseconds(std::min<int>(1000, static_cast<int>(args.seconds * 500))));
+  m.rss_start = RssKiB();
+  m.heap_start = HeapInUseKiB();
   for (auto& t : hosts) t.join();
-  const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
-  const long rss_end = RssKiB();
-  const long heap_end = HeapInUseKiB();
-  for (int fd : fds) close(fd);
-  moco::transport::asio::post(emulator->io(), [&] { emulator->Stop(); });
-  io.join();
-  emulator.reset();  // finishes the recordings
+  m.elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+  m.rss_end = RssKiB();
+  m.heap_end = HeapInUseKiB();
+  return m;
+}
 
-  long recording_problems = 0;
-  size_t recorded_entries = 0;
-  if (record) {
-    for (const auto& c : config.devices) {
-      size_t entries = 0;
-      const long p = RecordingProblems(c.record_path, &entries);
-      if (p < 0) {
-        std::printf("  recording %s cannot be read\n", c.record_path.c_str());
-        ++recording_problems;
-        continue;
-      }
-      recording_problems += p;
-      recorded_entries += entries;
+// The problems of every device's recording, decoded strictly; their entries
+// are added to `entries`.
+long RecordingsProblems(const moco::serve::EmulatorConfig& config, size_t* entries) {
+  long problems = 0;
+  for (const auto& c : config.devices) {
+    size_t n = 0;
+    const long p = RecordingProblems(c.record_path, &n);
+    if (p < 0) {
+      std::printf("  recording %s cannot be read\n", c.record_path.c_str());
+      ++problems;
+      continue;
     }
+    problems += p;
+    *entries += n;
   }
-  std::filesystem::remove_all(dir);
+  return problems;
+}
 
+// Prints the numbers and the verdict; the exit status (0 when all hold).
+int Report(const SoakArgs& args, const std::vector<HostResult>& results, const Measured& m,
+           long recording_problems, size_t recorded_entries) {
   HostResult all;
   for (const HostResult& r : results) {
     all.sent += r.sent;
@@ -358,37 +366,74 @@ int main(int argc, char** argv) {
     all.bad_frames += r.bad_frames;
     all.io_error = all.io_error || r.io_error;
   }
+  const long devices = args.devices;
   const uint64_t lost = all.sent - std::min(all.sent, all.answered);
-  if (pacing) {
+  if (args.pacing) {
     std::printf(
         "dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, paced lines, host up to "
         "%ld requests ahead\n",
-        devices, (devices + 1) / 2, devices / 2, elapsed, ahead);
+        devices, (devices + 1) / 2, devices / 2, m.elapsed, args.ahead);
   } else {
     std::printf("dmc16 soak: %ld devices (%ld pty, %ld tcp), %.1f s, target %ld req/s each\n",
-                devices, (devices + 1) / 2, devices / 2, elapsed, rate);
+                devices, (devices + 1) / 2, devices / 2, m.elapsed, args.rate);
   }
   auto u = [](uint64_t v) { return static_cast<unsigned long long>(v); };
   std::printf(
       "  requests sent %llu (%.0f/s per device), answered %llu, lost %llu, reordered %llu, "
       "duplicated %llu, invented %llu, wrong type %llu, bad frames %llu\n",
-      u(all.sent), static_cast<double>(all.sent) / elapsed / static_cast<double>(devices),
+      u(all.sent), static_cast<double>(all.sent) / m.elapsed / static_cast<double>(devices),
       u(all.answered), u(lost), u(all.out_of_order), u(all.duplicated), u(all.invented),
       u(all.wrong_type), u(all.bad_frames));
-  if (record) {
+  if (args.record) {
     std::printf("  recordings: %zu entries, %ld problem(s) decoding strictly\n", recorded_entries,
                 recording_problems);
   }
   std::printf(
       "  heap in use after warm-up %ld KiB, at end %ld KiB (growth %ld KiB); RSS %ld -> %ld KiB\n",
-      heap_start, heap_end, heap_end - heap_start, rss_start, rss_end);
+      m.heap_start, m.heap_end, m.heap_end - m.heap_start, m.rss_start, m.rss_end);
   // Flat memory: nothing the run keeps grows with the number of requests (RSS
   // also holds the allocator's high-water mark of backlogs, so it is shown
   // but not judged). Recordings are streamed to disk, so they count too.
-  const bool flat = heap_end - heap_start < 1024;
+  const bool flat = m.heap_end - m.heap_start < 1024;
   const bool ok = !all.io_error && all.sent > 0 && lost == 0 && all.out_of_order == 0 &&
                   all.duplicated == 0 && all.invented == 0 && all.wrong_type == 0 &&
                   all.bad_frames == 0 && recording_problems == 0 && flat;
   std::printf("  %s\n", ok ? "PASS" : "FAIL");
   return ok ? 0 : 1;
+}
+
+int main(int argc, char** argv) {
+  SoakArgs args;
+  if (const auto exit_code = ParseArgs(argc, argv, args)) return *exit_code;
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("moco_soak_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const moco::serve::EmulatorConfig config = SoakConfig(args, dir);
+  auto emulator = std::make_unique<moco::serve::Emulator>(config, [](std::string_view l) {
+    std::fprintf(stderr, "%.*s\n", static_cast<int>(l.size()), l.data());
+  });
+  emulator->Start();
+  std::thread io([&] { emulator->Run(); });
+  std::vector<int> fds;
+  for (long d = 0; d < args.devices; ++d) {
+    moco::transport::DeviceServer& s = emulator->server(static_cast<size_t>(d));
+    const int fd = s.pty() != nullptr ? moco::transport::testing::OpenPtyHost(s.pty_path())
+                                      : moco::transport::testing::ConnectTcp(s.tcp_port());
+    if (fd < 0) {
+      std::fprintf(stderr, "dmc16_soak: cannot open device %ld: %s\n", d, std::strerror(errno));
+      return 1;
+    }
+    fds.push_back(fd);
+  }
+  std::vector<HostResult> results(static_cast<size_t>(args.devices));
+  const Measured m = DriveHosts(args, fds, results);
+  for (int fd : fds) close(fd);
+  moco::transport::asio::post(emulator->io(), [&] { emulator->Stop(); });
+  io.join();
+  emulator.reset();  // finishes the recordings
+
+  size_t recorded_entries = 0;
+  const long recording_problems = args.record ? RecordingsProblems(config, &recorded_entries) : 0;
+  std::filesystem::remove_all(dir);
+  return Report(args, results, m, recording_problems, recorded_entries);
 }

@@ -195,6 +195,9 @@ struct Emulator::Served {
   std::vector<base::VcdWire> vcd_wires;
   std::vector<std::unique_ptr<sim::StepTrace>> step_traces;  // after `device`: destroyed first
   size_t vcd_changes = 0;
+
+  // --vcd: a STEP and a DIR wire per motor of `rig`, fed by a step trace each.
+  void TraceSteps(sim::Rig& rig);
 };
 
 namespace {
@@ -204,6 +207,62 @@ namespace {
 constexpr int64_t kVcdPulseNs = 2'000;
 constexpr int64_t kVcdDirLeadNs = 1'000;
 constexpr size_t kVcdMaxChanges = size_t{16} << 20;
+
+}  // namespace
+
+void Emulator::Served::TraceSteps(sim::Rig& rig) {
+  Served* served = this;
+  for (int id = 1; id <= rig.motor_count(); ++id) {
+    const size_t step = served->vcd_wires.size();
+    served->vcd_wires.push_back({"m" + std::to_string(id) + "_step", false, {}});
+    served->vcd_wires.push_back({"m" + std::to_string(id) + "_dir", true, {}});
+    served->step_traces.push_back(std::make_unique<sim::StepTrace>(
+        rig.motor(id), 1, 0, sim::kTimeNever, [served, step](const sim::StepEdge& e) {
+          if (served->vcd_changes >= kVcdMaxChanges) return;
+          base::VcdWire& dir = served->vcd_wires[step + 1];
+          const bool up = e.direction > 0;
+          const bool was = dir.changes.empty() ? dir.initial : dir.changes.back().second;
+          if (up != was) dir.changes.emplace_back(e.time_ns - kVcdDirLeadNs, up);
+          auto& pulses = served->vcd_wires[step].changes;
+          pulses.emplace_back(e.time_ns, true);
+          pulses.emplace_back(e.time_ns + kVcdPulseNs, false);
+          served->vcd_changes += 3;
+        }));
+  }
+}
+
+namespace {
+
+// Names the devices that have no name ("dmc16", "dmc16-2", ...), each name
+// unique, and gives a model that keeps state the default state file when it
+// has none (creating its folder). The names of those so defaulted.
+std::set<std::string> NameDevices(std::vector<DeviceConfig>& configs) {
+  std::set<std::string> names;
+  std::set<std::string> defaulted_state;
+  std::map<std::string, int> per_model;
+  for (DeviceConfig& d : configs) {
+    if (d.name.empty()) {
+      const int n = ++per_model[d.model];
+      d.name = n == 1 ? d.model : d.model + "-" + std::to_string(n);
+    }
+    if (!names.insert(d.name).second) {
+      throw ConfigError("two devices are named \"" + d.name + "\"; give each a unique \"name\"");
+    }
+    const devices::DeviceModel* model = devices::FindDeviceModel(d.model);
+    if (model != nullptr && !model->keeps_state && !d.state_path.empty()) {
+      throw ConfigError(d.name + ": a " + d.model + " keeps no state, so it takes no state file (" +
+                        d.state_path + "); remove \"state\" (only stackshot3x has NVM)");
+    }
+    if (model != nullptr && model->keeps_state && d.state_path.empty()) {
+      // The shared default: the lock taken below keeps two processes off it.
+      d.state_path = DefaultStatePath(d.name);
+      defaulted_state.insert(d.name);
+      std::error_code ec;
+      std::filesystem::create_directories(std::filesystem::path(d.state_path).parent_path(), ec);
+    }
+  }
+  return defaulted_state;
+}
 
 }  // namespace
 
@@ -226,30 +285,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
   if (config_.devices.empty()) {
     throw ConfigError("no device to serve; give at least one (e.g. --pty /tmp/dmc16)");
   }
-  std::set<std::string> names;
-  std::set<std::string> defaulted_state;
-  std::map<std::string, int> per_model;
-  for (DeviceConfig& d : config_.devices) {
-    if (d.name.empty()) {
-      const int n = ++per_model[d.model];
-      d.name = n == 1 ? d.model : d.model + "-" + std::to_string(n);
-    }
-    if (!names.insert(d.name).second) {
-      throw ConfigError("two devices are named \"" + d.name + "\"; give each a unique \"name\"");
-    }
-    const devices::DeviceModel* model = devices::FindDeviceModel(d.model);
-    if (model != nullptr && !model->keeps_state && !d.state_path.empty()) {
-      throw ConfigError(d.name + ": a " + d.model + " keeps no state, so it takes no state file (" +
-                        d.state_path + "); remove \"state\" (only stackshot3x has NVM)");
-    }
-    if (model != nullptr && model->keeps_state && d.state_path.empty()) {
-      // The shared default: the lock taken below keeps two processes off it.
-      d.state_path = DefaultStatePath(d.name);
-      defaulted_state.insert(d.name);
-      std::error_code ec;
-      std::filesystem::create_directories(std::filesystem::path(d.state_path).parent_path(), ec);
-    }
-  }
+  const std::set<std::string> defaulted_state = NameDevices(config_.devices);
   CheckFiles(config_);
   try {
     for (const DeviceConfig& d : config_.devices) {
@@ -313,27 +349,7 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
           ss->SetHostLink(devices::Stackshot3x::HostLink::kWifi);
         }
       }
-      if (!d.vcd_path.empty() && s->device->rig() != nullptr) {
-        sim::Rig& rig = *s->device->rig();
-        Served* served = s.get();
-        for (int id = 1; id <= rig.motor_count(); ++id) {
-          const size_t step = served->vcd_wires.size();
-          served->vcd_wires.push_back({"m" + std::to_string(id) + "_step", false, {}});
-          served->vcd_wires.push_back({"m" + std::to_string(id) + "_dir", true, {}});
-          served->step_traces.push_back(std::make_unique<sim::StepTrace>(
-              rig.motor(id), 1, 0, sim::kTimeNever, [served, step](const sim::StepEdge& e) {
-                if (served->vcd_changes >= kVcdMaxChanges) return;
-                base::VcdWire& dir = served->vcd_wires[step + 1];
-                const bool up = e.direction > 0;
-                const bool was = dir.changes.empty() ? dir.initial : dir.changes.back().second;
-                if (up != was) dir.changes.emplace_back(e.time_ns - kVcdDirLeadNs, up);
-                auto& pulses = served->vcd_wires[step].changes;
-                pulses.emplace_back(e.time_ns, true);
-                pulses.emplace_back(e.time_ns + kVcdPulseNs, false);
-                served->vcd_changes += 3;
-              }));
-        }
-      }
+      if (!d.vcd_path.empty() && s->device->rig() != nullptr) s->TraceSteps(*s->device->rig());
       // Last, so that a device failing to start leaves no recording behind.
       if (!d.record_path.empty()) {
         session::SessionHeader h;

@@ -280,7 +280,7 @@ struct RtJogAll {
 };
 
 // One axis of the boom-swing-track configuration: motor, steps per unit,
-// position in units x100000. (All DWORDs; spu read as signed, see dmc.cpp.)
+// position in units x100000. (All DWORDs; spu read as signed, see dmc_layouts.cpp.)
 struct VirtAxisSetup {
   uint32_t motor = 0;
   int32_t steps_per_unit = 0;

@@ -1,6 +1,6 @@
 // The one-line text of DMC v2 messages for transcripts and logs
 // (dmc-v2-protocol.txt "Message Types": each MSG_* section's fields, named
-// as the spec names them), apart from the codec in dmc.cpp.
+// as the spec names them), apart from the codec in dmc.cpp and dmc_layouts.cpp.
 #include <cstdio>
 #include <string>
 #include <string_view>

@@ -1,6 +1,6 @@
-// What the DMC v2 case files share (dmc_cases.cpp, dmc_cases_rt.cpp): the
-// checks every case makes and the cases of dmc_cases_rt.cpp that the case
-// table lists. Internal to the DMC v2 suites.
+// What the DMC v2 case files share (dmc_cases.cpp and dmc_cases_*.cpp): the
+// checks every case makes and the cases of the other files that the case
+// table in dmc_cases.cpp lists. Internal to the DMC v2 suites.
 #ifndef MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
 #define MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
 
@@ -68,6 +68,34 @@ inline constexpr TimeNs kRestTimeout = 60'000 * kMs;
 
 // Moves `motor` to `to` and waits until nothing moves.
 void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to);
+
+// --- the motor and limit cases (dmc_cases_motor.cpp)
+void Move(DmcCaseContext& c);
+void Stop(DmcCaseContext& c);
+void StopAll(DmcCaseContext& c);
+void HardStop(DmcCaseContext& c);
+void Reset(DmcCaseContext& c);
+void Configure(DmcCaseContext& c);
+void JogSpeeds(DmcCaseContext& c);
+void Couple(DmcCaseContext& c);
+void NoHostAck(DmcCaseContext& c);
+void EStop(DmcCaseContext& c);
+void SoftLimits(DmcCaseContext& c);
+void HardLimit(DmcCaseContext& c);
+
+// --- the error cases (dmc_cases_errors.cpp)
+void BadMotor(DmcCaseContext& c);
+void Checksum(DmcCaseContext& c);
+void UnknownType(DmcCaseContext& c);
+void BadLength(DmcCaseContext& c);
+void Noise(DmcCaseContext& c);
+void MaxFrame(DmcCaseContext& c);
+void Unadvertised(DmcCaseContext& c);
+
+// --- the general I/O and DMX cases (dmc_cases_io.cpp)
+void Io(DmcCaseContext& c);
+void Dmx(DmcCaseContext& c);
+void GioInputChange(DmcCaseContext& c);
 
 // --- the real-time uploads and runs the cases share (dmc_cases_rt.cpp)
 struct Uploaded {

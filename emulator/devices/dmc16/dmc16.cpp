@@ -402,163 +402,60 @@ bool Dmc16::Advertised(uint16_t type) const {
 
 void Dmc16::Handle(uint32_t id, const dmc::HostMessage& msg) {
   const uint16_t type = dmc::TypeOf(msg);
-  std::visit(
-      wire::Overloaded{
-          [&](const dmc::HiRequest&) { Send(id, profile_.Hi()); },
-          [&](const dmc::Dmx& m) { Ack(id, type, OnDmx(m)); },
-          [&](const dmc::GioOut& m) { Ack(id, type, OnGioOut(m)); },
-          [&](const dmc::GioInRequest&) {
-            // "Dragonframe may request the input state with this message";
-            // dmc-lite takes GIO_IN only as its own unsolicited message.
-            if (!profile_.behaviour.gio_in_request) {
-              Ack(id, type, AckCode::kErrUnsupported);
-              return;
-            }
-            Send(id, dmc::GioInReport{gio_.inputs() & GioMask(profile_.gio_inputs)});
-          },
-          [&](const dmc::GioCam& m) {
-            // Test of the camera outputs: shutter and meter lines follow the flags.
-            camera_.SetFlags(m.flags & (dmc::kGioCamShutter | dmc::kGioCamMeter));
-            Ack(id, type, AckCode::kOk);
-          },
-          [&](const dmc::MotorStatusRequest&) {
-            Send(id, dmc::MotorStatusResponse{rig_.MovingMask(),
-                                              static_cast<uint8_t>(dmx_.Adjusting() ? 1 : 0)});
-          },
-          [&](const dmc::MotorMove& m) { OnMotorMove(id, m); },
-          [&](const dmc::MotorStop& m) { Ack(id, type, OnMotorStop(m)); },
-          [&](const dmc::MotorStopAll& m) { Ack(id, type, OnStopAll(m)); },
-          [&](const dmc::MotorGetPositionRequest&) {
-            if (profile_.behaviour.position_response) {
-              SendPositions(id);
-              return;
-            }
-            // dmc-lite: the positions go out as a message with ID 0, and an
-            // ACK OK carries the request's ID.
-            SendPositions(0);
-            Ack(id, type, AckCode::kOk);
-          },
-          [&](const dmc::MotorResetPosition& m) {
-            const AckCode code = OnResetPosition(m);
-            // "After changing the internal position and responding to this
-            // message, the device should send a MSG_MOTOR_GET_POSITION";
-            // behaviour.position_confirm kBeforeAck sends it first.
-            const bool before =
-                profile_.behaviour.position_confirm == Dmc16Behaviour::PositionConfirm::kBeforeAck;
-            if (code == AckCode::kOk && before) SendPositionUpdate();
-            Ack(id, type, code);
-            if (code == AckCode::kOk && !before) SendPositionUpdate();
-          },
-          [&](const dmc::MotorJog& m) { Ack(id, type, OnJog(m)); },
-          [&](const dmc::MotorConfigure& m) { Ack(id, type, OnConfigure(m)); },
-          [&](const dmc::MotorSetSpeed& m) { Ack(id, type, OnSetSpeed(m)); },
-          [&](const dmc::MotorSetLimits& m) { Ack(id, type, OnSetLimits(m)); },
-          [&](const dmc::RtUploadMoveBegin& m) {
-            if (playback_.Playing()) {
-              Ack(id, type, AckCode::kErrMoving);
-              return;
-            }
-            playback_.OnUploadBegin();
-            Ack(id, type, upload_.Begin(m.start_frame, m.end_frame).code);
-          },
-          // ERR_MOVING: no upload message touches the move being played.
-          [&](const dmc::RtUploadMoveAxis& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Axis(m).code);
-          },
-          [&](const dmc::RtUploadMoveDmx& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Dmx(m).code);
-          },
-          [&](const dmc::RtUploadMoveTriggers& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Triggers(m).code);
-          },
-          [&](const dmc::RtUploadMoveEnd&) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.End().code);
-          },
-          [&](const dmc::RtPositionFrame& m) { Ack(id, type, OnPositionFrame(m.frame)); },
-          [&](const dmc::RtRunMove& m) { Ack(id, type, playback_.RunMove(m)); },
-          [&](const dmc::RtShootFrame& m) {
-            // Blur percent of the frame's 360 degrees, centred on the frame
-            // (docs/protocol-notes.md); DIRECTION 0 plays B towards A.
-            if (m.blur_percent_x10 > 1000) {
-              Ack(id, type, AckCode::kErrRange);
-              return;
-            }
-            const double half = 180.0 * m.blur_percent_x10 / 1000.0;
-            Ack(id, type,
-                playback_.ShootFrame(m.frame, m.direction == dmc::kDirectionBackward ? -1 : 1,
-                                     m.exposure_ms, 180.0 - half, 180.0 + half, m.motors));
-          },
-          [&](const dmc::RtShootFrame2& m) {
-            if (m.open_angle_deg > 360 || m.close_angle_deg > 360 ||
-                m.close_angle_deg < m.open_angle_deg) {
-              Ack(id, type, AckCode::kErrRange);
-              return;
-            }
-            Ack(id, type,
-                playback_.ShootFrame(m.frame, 1, m.exposure_ms, m.open_angle_deg, m.close_angle_deg,
-                                     m.motors));
-          },
-          [&](const dmc::RtGo&) { Ack(id, type, playback_.Go()); },
-          [&](const dmc::RtStopLoop&) { Ack(id, type, playback_.StopLoop()); },
-          [&](const dmc::RtJogAll& m) { Ack(id, type, playback_.JogAll(m)); },
-          [&](const dmc::VirtConfig& m) {
-            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : virtual_.Configure(m));
-          },
-          [&](const dmc::VirtMove& m) {
-            Ack(id, type,
-                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Move(m)));
-          },
-          [&](const dmc::VirtJog& m) {
-            Ack(id, type,
-                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Jog(m)));
-          },
-          [&](const dmc::VirtJogOnLine& m) {
-            Ack(id, type,
-                playback_.Playing() ? AckCode::kErrMoving
-                                    : AfterVirtualMotion(virtual_.JogOnLine(m)));
-          },
-          [&](const dmc::VirtStop& m) {
-            // Stopping during playback ends the run, as MOTOR_STOP does.
-            if (playback_.Playing() && m.axis >= 1 && m.axis <= 6) {
-              playback_.Abort(true);
-              rig_.StopAll();
-            }
-            Ack(id, type, virtual_.Stop(m));
-          },
-          [&](const dmc::VirtGetPositionRequest&) {
-            const auto r = virtual_.Position();
-            if (const auto* p = std::get_if<dmc::VirtPositionReport>(&r)) {
-              Send(id, *p);
-            } else {
-              Ack(id, type, std::get<AckCode>(r));
-            }
-          },
-          [&](const dmc::VirtAimPoint& m) {
-            const auto r = virtual_.SetAimPoint(m);
-            if (const auto* a = std::get_if<dmc::VirtAimPoint>(&r)) {
-              // "The response contains the same data."
-              Send(id, *a);
-            } else {
-              Ack(id, type, std::get<AckCode>(r));
-            }
-          },
-          [&](const dmc::Unknown& m) {
-            // behaviour.host_hard_stop false: dmc-lite only sends it.
-            if (m.type == dmc::ToWire(MsgType::kMotorHardStop) &&
-                profile_.behaviour.host_hard_stop) {
-              // Listed among the motor commands a device must handle, with no
-              // request data: read as "hard stop everything now".
-              virtual_.CancelJog();
-              playback_.Abort(true);
-              rig_.HardStopAll();
-              Ack(id, type, AckCode::kOk);
-              return;
-            }
-            Ack(id, type, AckCode::kErrUnsupported);
-          },
-          [&](const auto&) { Ack(id, type, AckCode::kErrUnsupported); },
-      },
-      msg);
+  std::visit(wire::Overloaded{
+                 [&](const dmc::HiRequest&) { Send(id, profile_.Hi()); },
+                 [&](const dmc::Dmx& m) { Ack(id, type, OnDmx(m)); },
+                 [&](const dmc::GioOut& m) { Ack(id, type, OnGioOut(m)); },
+                 [&](const dmc::GioInRequest&) {
+                   // "Dragonframe may request the input state with this message";
+                   // dmc-lite takes GIO_IN only as its own unsolicited message.
+                   if (!profile_.behaviour.gio_in_request) {
+                     Ack(id, type, AckCode::kErrUnsupported);
+                     return;
+                   }
+                   Send(id, dmc::GioInReport{gio_.inputs() & GioMask(profile_.gio_inputs)});
+                 },
+                 [&](const dmc::GioCam& m) {
+                   // Test of the camera outputs: shutter and meter lines follow the flags.
+                   camera_.SetFlags(m.flags & (dmc::kGioCamShutter | dmc::kGioCamMeter));
+                   Ack(id, type, AckCode::kOk);
+                 },
+                 [&](const dmc::MotorStatusRequest&) {
+                   Send(id, dmc::MotorStatusResponse{
+                                rig_.MovingMask(), static_cast<uint8_t>(dmx_.Adjusting() ? 1 : 0)});
+                 },
+                 [&](const dmc::MotorMove& m) { OnMotorMove(id, m); },
+                 [&](const dmc::MotorStop& m) { Ack(id, type, OnMotorStop(m)); },
+                 [&](const dmc::MotorStopAll& m) { Ack(id, type, OnStopAll(m)); },
+                 [&](const dmc::MotorGetPositionRequest&) {
+                   if (profile_.behaviour.position_response) {
+                     SendPositions(id);
+                     return;
+                   }
+                   // dmc-lite: the positions go out as a message with ID 0, and an
+                   // ACK OK carries the request's ID.
+                   SendPositions(0);
+                   Ack(id, type, AckCode::kOk);
+                 },
+                 [&](const dmc::MotorResetPosition& m) {
+                   const AckCode code = OnResetPosition(m);
+                   // "After changing the internal position and responding to this
+                   // message, the device should send a MSG_MOTOR_GET_POSITION";
+                   // behaviour.position_confirm kBeforeAck sends it first.
+                   const bool before = profile_.behaviour.position_confirm ==
+                                       Dmc16Behaviour::PositionConfirm::kBeforeAck;
+                   if (code == AckCode::kOk && before) SendPositionUpdate();
+                   Ack(id, type, code);
+                   if (code == AckCode::kOk && !before) SendPositionUpdate();
+                 },
+                 [&](const dmc::MotorJog& m) { Ack(id, type, OnJog(m)); },
+                 [&](const dmc::MotorConfigure& m) { Ack(id, type, OnConfigure(m)); },
+                 [&](const dmc::MotorSetSpeed& m) { Ack(id, type, OnSetSpeed(m)); },
+                 [&](const dmc::MotorSetLimits& m) { Ack(id, type, OnSetLimits(m)); },
+                 // The real-time and virtual-axis requests, and those it does not know.
+                 [&](const auto&) { HandleRealTimeAndVirtual(id, msg); },
+             },
+             msg);
 }
 
 AckCode Dmc16::AfterVirtualMotion(AckCode code) {

@@ -103,6 +103,8 @@ class Dmc16 final : public Device, private sim::RigObserver {
   void OnIdleGap();
   void OnFrame(const dmc::FrameRef& f);
   void Handle(uint32_t id, const dmc::HostMessage& m);
+  // The MSG_RT_* and MSG_VIRT_* requests, and those the device does not know.
+  void HandleRealTimeAndVirtual(uint32_t id, const dmc::HostMessage& msg);
   void Send(uint32_t id, const dmc::DeviceMessage& m);
   void SendUnsolicited(const dmc::DeviceMessage& m);
   void Ack(uint32_t id, uint16_t type, dmc::AckCode code);

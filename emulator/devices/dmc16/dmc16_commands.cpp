@@ -28,6 +28,122 @@ constexpr double kJogMinRate = 4;
 constexpr int64_t kResyncExceptionSteps = 10;
 }  // namespace
 
+// --- real-time and virtual-axis requests --------------------------------------------------
+
+// The MSG_RT_* and MSG_VIRT_* requests (Handle() passes them on), and those
+// the device does not know.
+void Dmc16::HandleRealTimeAndVirtual(uint32_t id, const dmc::HostMessage& msg) {
+  const uint16_t type = dmc::TypeOf(msg);
+  std::visit(
+      wire::Overloaded{
+          [&](const dmc::RtUploadMoveBegin& m) {
+            if (playback_.Playing()) {
+              Ack(id, type, AckCode::kErrMoving);
+              return;
+            }
+            playback_.OnUploadBegin();
+            Ack(id, type, upload_.Begin(m.start_frame, m.end_frame).code);
+          },
+          // ERR_MOVING: no upload message touches the move being played.
+          [&](const dmc::RtUploadMoveAxis& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Axis(m).code);
+          },
+          [&](const dmc::RtUploadMoveDmx& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Dmx(m).code);
+          },
+          [&](const dmc::RtUploadMoveTriggers& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.Triggers(m).code);
+          },
+          [&](const dmc::RtUploadMoveEnd&) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : upload_.End().code);
+          },
+          [&](const dmc::RtPositionFrame& m) { Ack(id, type, OnPositionFrame(m.frame)); },
+          [&](const dmc::RtRunMove& m) { Ack(id, type, playback_.RunMove(m)); },
+          [&](const dmc::RtShootFrame& m) {
+            // Blur percent of the frame's 360 degrees, centred on the frame
+            // (docs/protocol-notes.md); DIRECTION 0 plays B towards A.
+            if (m.blur_percent_x10 > 1000) {
+              Ack(id, type, AckCode::kErrRange);
+              return;
+            }
+            const double half = 180.0 * m.blur_percent_x10 / 1000.0;
+            Ack(id, type,
+                playback_.ShootFrame(m.frame, m.direction == dmc::kDirectionBackward ? -1 : 1,
+                                     m.exposure_ms, 180.0 - half, 180.0 + half, m.motors));
+          },
+          [&](const dmc::RtShootFrame2& m) {
+            if (m.open_angle_deg > 360 || m.close_angle_deg > 360 ||
+                m.close_angle_deg < m.open_angle_deg) {
+              Ack(id, type, AckCode::kErrRange);
+              return;
+            }
+            Ack(id, type,
+                playback_.ShootFrame(m.frame, 1, m.exposure_ms, m.open_angle_deg, m.close_angle_deg,
+                                     m.motors));
+          },
+          [&](const dmc::RtGo&) { Ack(id, type, playback_.Go()); },
+          [&](const dmc::RtStopLoop&) { Ack(id, type, playback_.StopLoop()); },
+          [&](const dmc::RtJogAll& m) { Ack(id, type, playback_.JogAll(m)); },
+          [&](const dmc::VirtConfig& m) {
+            Ack(id, type, playback_.Playing() ? AckCode::kErrMoving : virtual_.Configure(m));
+          },
+          [&](const dmc::VirtMove& m) {
+            Ack(id, type,
+                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Move(m)));
+          },
+          [&](const dmc::VirtJog& m) {
+            Ack(id, type,
+                playback_.Playing() ? AckCode::kErrMoving : AfterVirtualMotion(virtual_.Jog(m)));
+          },
+          [&](const dmc::VirtJogOnLine& m) {
+            Ack(id, type,
+                playback_.Playing() ? AckCode::kErrMoving
+                                    : AfterVirtualMotion(virtual_.JogOnLine(m)));
+          },
+          [&](const dmc::VirtStop& m) {
+            // Stopping during playback ends the run, as MOTOR_STOP does.
+            if (playback_.Playing() && m.axis >= 1 && m.axis <= 6) {
+              playback_.Abort(true);
+              rig_.StopAll();
+            }
+            Ack(id, type, virtual_.Stop(m));
+          },
+          [&](const dmc::VirtGetPositionRequest&) {
+            const auto r = virtual_.Position();
+            if (const auto* p = std::get_if<dmc::VirtPositionReport>(&r)) {
+              Send(id, *p);
+            } else {
+              Ack(id, type, std::get<AckCode>(r));
+            }
+          },
+          [&](const dmc::VirtAimPoint& m) {
+            const auto r = virtual_.SetAimPoint(m);
+            if (const auto* a = std::get_if<dmc::VirtAimPoint>(&r)) {
+              // "The response contains the same data."
+              Send(id, *a);
+            } else {
+              Ack(id, type, std::get<AckCode>(r));
+            }
+          },
+          [&](const dmc::Unknown& m) {
+            // behaviour.host_hard_stop false: dmc-lite only sends it.
+            if (m.type == dmc::ToWire(MsgType::kMotorHardStop) &&
+                profile_.behaviour.host_hard_stop) {
+              // Listed among the motor commands a device must handle, with no
+              // request data: read as "hard stop everything now".
+              virtual_.CancelJog();
+              playback_.Abort(true);
+              rig_.HardStopAll();
+              Ack(id, type, AckCode::kOk);
+              return;
+            }
+            Ack(id, type, AckCode::kErrUnsupported);
+          },
+          [&](const auto&) { Ack(id, type, AckCode::kErrUnsupported); },
+      },
+      msg);
+}
+
 // --- simple commands ------------------------------------------------------------------------
 
 AckCode Dmc16::OnDmx(const dmc::Dmx& m) {

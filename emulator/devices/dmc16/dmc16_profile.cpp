@@ -71,6 +71,175 @@ dmc::HiResponse Dmc16Profile::Hi() const {
   return hi;
 }
 
+namespace {
+
+// The capability bits of the virtual modes and the aim point (0x007c).
+constexpr uint32_t kVirtual = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                              dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz | dmc::kCapAimPoint;
+
+// "virtual_axes": the virtual modes advertised and the virtual jog speeds.
+void ReadVirtualAxes(ProfileReader& r, Dmc16Profile& p) {
+  ProfileReader v = r.Child("virtual_axes");
+  p.virtual_axes.enabled = v.GetBool("enabled", p.virtual_axes.enabled);
+  p.virtual_axes.capabilities = v.GetFlags("capabilities", p.virtual_axes.capabilities);
+  if ((p.virtual_axes.capabilities & ~kVirtual) != 0) {
+    v.Fail("capabilities", "has bits outside the virtual modes and the aim point",
+           "keep to 0x0004, 0x0008, 0x0010, 0x0020 and 0x0040");
+  }
+  if ((p.virtual_axes.capabilities & dmc::kCapAimPoint) != 0 &&
+      (p.virtual_axes.capabilities & (kVirtual & ~dmc::kCapAimPoint)) == 0) {
+    v.Fail("capabilities", "advertises the aim point without a virtual mode",
+           "add the mode bits (0x003c, all four as the real firmware does)");
+  }
+  p.virtual_axes.jog_line_units_per_s =
+      v.GetNumber("jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s, 1e-6, 1e6);
+  p.virtual_axes.jog_angle_deg_per_s =
+      v.GetNumber("jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s, 1e-6, 1e6);
+  v.Finish();
+}
+
+// "physical_rig": the rig profile the motors drive (read relative to the
+// device profile's folder, `base_dir`) and the motor of each joint.
+void ReadPhysicalRig(ProfileReader& r, Dmc16Profile& p, const std::string& base_dir) {
+  ProfileReader v = r.Child("physical_rig");
+  p.physical_rig.enabled = v.GetBool("enabled", true);
+  p.physical_rig.rig_path = v.GetString("rig", "", 4096);
+  if (p.physical_rig.rig_path.empty()) {
+    v.Fail("rig", "is missing", "name a rig profile, e.g. \"rig\": \"../rigs/boom-jib.json\"");
+  }
+  if (v.Has("motors")) {
+    ProfileReader m = v.Child("motors");
+    for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
+      p.physical_rig.motors[joint] = static_cast<int>(
+          m.GetInt(physics::kJointNames[joint], p.physical_rig.motors[joint], 0, p.motor_count));
+    }
+    m.Finish();
+  }
+  for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
+    const int motor = p.physical_rig.motors[joint];
+    if (motor > p.motor_count) {
+      v.Fail("motors", "names a motor beyond motor_count",
+             "use motors 1.." + std::to_string(p.motor_count) + " or 0 for a fixed joint");
+    }
+    // One stepper drives one joint: a motor shared by two joints would
+    // command both with the same steps.
+    for (size_t other = 0; other < joint && motor != 0; ++other) {
+      if (p.physical_rig.motors[other] == motor) {
+        v.Fail("motors." + std::string(physics::kJointNames[joint]),
+               "is motor " + std::to_string(motor) + ", which already drives the " +
+                   std::string(physics::kJointNames[other]),
+               "give each joint its own motor, or 0 for a fixed joint");
+      }
+    }
+  }
+  // The rig file is read with the device profile, relative to its folder.
+  std::filesystem::path rig = p.physical_rig.rig_path;
+  if (rig.is_relative() && !base_dir.empty()) {
+    std::error_code ec;
+    if (std::filesystem::exists(std::filesystem::path(base_dir) / rig, ec)) {
+      rig = std::filesystem::path(base_dir) / rig;
+    }
+  }
+  const physics::RigProfileResult loaded = physics::ReadRigProfile(rig.string());
+  if (!loaded.ok()) {
+    v.Fail("rig",
+           "(" + rig.string() + ") is not a usable rig profile: " + loaded.error().field + ": " +
+               loaded.error().message,
+           "fix the rig profile (docs/rig-dynamics.md)");
+  }
+  p.physical_rig.rig = loaded.value();
+  v.Finish();
+}
+
+// "behaviour": the switches between the firmware behaviours that differ.
+void ReadBehaviour(ProfileReader& r, Dmc16Behaviour& v) {
+  ProfileReader b = r.Child("behaviour");
+  v.receive_buffer_bytes = static_cast<uint32_t>(b.GetInt(
+      "receive_buffer_bytes", v.receive_buffer_bytes, dmc::kReceiveBufferSize, kMaxReceiveBuffer));
+  v.rescan_after_bad_frame = b.GetBool("rescan_after_bad_frame", v.rescan_after_bad_frame);
+  v.move_response = b.GetBool("move_response", v.move_response);
+  v.position_response = b.GetBool("position_response", v.position_response);
+  v.gio_in_request = b.GetBool("gio_in_request", v.gio_in_request);
+  v.host_acks_silent = b.GetBool("host_acks_silent", v.host_acks_silent);
+  v.jog_speed_checked = b.GetBool("jog_speed_checked", v.jog_speed_checked);
+  v.disabled_motors_ignore_motion =
+      b.GetBool("disabled_motors_ignore_motion", v.disabled_motors_ignore_motion);
+  v.soft_limits_bound_moves = b.GetBool("soft_limits_bound_moves", v.soft_limits_bound_moves);
+  v.arming_ms = static_cast<uint32_t>(b.GetInt("arming_ms", v.arming_ms, 0, 10'000));
+  v.stop_all_lockout_ms =
+      static_cast<uint32_t>(b.GetInt("stop_all_lockout_ms", v.stop_all_lockout_ms, 0, 60'000));
+  v.stop_all_within_ms =
+      static_cast<uint32_t>(b.GetInt("stop_all_within_ms", v.stop_all_within_ms, 0, 60'000));
+  v.positions_truncate = b.GetBool("positions_truncate", v.positions_truncate);
+  v.preroll_move_time_is_start_frame =
+      b.GetBool("preroll_move_time_is_start_frame", v.preroll_move_time_is_start_frame);
+  v.rt_end_at_last_frame = b.GetBool("rt_end_at_last_frame", v.rt_end_at_last_frame);
+  v.rt_end_after_shot = b.GetBool("rt_end_after_shot", v.rt_end_after_shot);
+  v.length_checks = GetChoice(b, "length_checks", v.length_checks, kLengthChecks);
+  v.set_speed_checked = b.GetBool("set_speed_checked", v.set_speed_checked);
+  v.position_confirm = GetChoice(b, "position_confirm", v.position_confirm, kPositionConfirm);
+  v.jog_speed_scale = GetChoice(b, "jog_speed_scale", v.jog_speed_scale, kJogSpeedScale);
+  v.jog_horizon_ms = static_cast<uint32_t>(b.GetInt("jog_horizon_ms", v.jog_horizon_ms, 0, 60'000));
+  v.coupling = GetChoice(b, "coupling", v.coupling, kCoupling);
+  // The real-time engine (dmc16_profile.h).
+  v.playback_tick_ms =
+      static_cast<uint32_t>(b.GetInt("playback_tick_ms", v.playback_tick_ms, 0, 100));
+  if (v.playback_tick_ms != 0 && v.playback_tick_ms < 5) {
+    b.Fail("playback_tick_ms", "is " + std::to_string(v.playback_tick_ms),
+           "use 0 (continuous playback) or a tick of 5..100 ms (dmc-lite: 20)");
+  }
+  v.upload_index_from_start_frame =
+      b.GetBool("upload_index_from_start_frame", v.upload_index_from_start_frame);
+  if (v.upload_index_from_start_frame && v.playback_tick_ms == 0) {
+    b.Fail("upload_index_from_start_frame", "is true without a playback tick",
+           "set \"playback_tick_ms\" (dmc-lite: 20), the engine that reads the upload so");
+  }
+  v.position_frame_clamped = b.GetBool("position_frame_clamped", v.position_frame_clamped);
+  v.rt_end_after_stop = b.GetBool("rt_end_after_stop", v.rt_end_after_stop);
+  v.trigger_frames_checked = b.GetBool("trigger_frames_checked", v.trigger_frames_checked);
+  v.camera_angles_checked = b.GetBool("camera_angles_checked", v.camera_angles_checked);
+  v.zero_preroll_nan = b.GetBool("zero_preroll_nan", v.zero_preroll_nan);
+  if (v.zero_preroll_nan && v.playback_tick_ms == 0) {
+    b.Fail("zero_preroll_nan", "is true without a playback tick",
+           "set \"playback_tick_ms\" (dmc-lite: 20), the engine whose ramp has it");
+  }
+  v.unsolicited_id_zero = b.GetBool("unsolicited_id_zero", v.unsolicited_id_zero);
+  v.reset_refused_while_any_moves =
+      b.GetBool("reset_refused_while_any_moves", v.reset_refused_while_any_moves);
+  v.host_hard_stop = b.GetBool("host_hard_stop", v.host_hard_stop);
+  b.Finish();
+}
+
+// "limit_sets": the hardware limit switches of each set.
+void ReadLimitSets(ProfileReader& r, Dmc16Profile& p, const std::string& where) {
+  const nlohmann::json& sets = r.GetRaw("limit_sets");
+  if (!sets.is_null()) {
+    if (!sets.is_array()) {
+      r.Fail("limit_sets", "must be an array", "write [ {\"set\": 1, \"low_steps\": -1000}, ... ]");
+    }
+    for (size_t i = 0; i < sets.size(); ++i) {
+      ProfileReader s(sets[i], where, "limit_sets[" + std::to_string(i) + "]");
+      Dmc16LimitSet ls;
+      ls.set = static_cast<int>(s.GetInt("set", 0, 1, p.hw_limit_sets == 0 ? 1 : p.hw_limit_sets));
+      if (!s.Has("set")) s.Fail("set", "is missing", "give the limit set number 1..hw_limit_sets");
+      if (p.hw_limit_sets == 0) {
+        s.Fail("set", "names a set, but hw_limit_sets is 0",
+               "raise hw_limit_sets or drop limit_sets");
+      }
+      constexpr int64_t kI32Min = INT32_MIN, kI32Max = INT32_MAX;
+      if (s.Has("low_steps")) ls.low_steps = s.GetInt("low_steps", 0, kI32Min, kI32Max);
+      if (s.Has("high_steps")) ls.high_steps = s.GetInt("high_steps", 0, kI32Min, kI32Max);
+      if (ls.low_steps && ls.high_steps && *ls.low_steps >= *ls.high_steps) {
+        s.Fail("high_steps", "is not above low_steps", "place the high switch above the low one");
+      }
+      s.Finish();
+      p.limit_sets.push_back(ls);
+    }
+  }
+}
+
+}  // namespace
+
 Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& where,
                                   const std::string& base_dir) {
   Dmc16Profile p;
@@ -98,81 +267,12 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
   p.upload_frame_count =
       static_cast<uint32_t>(r.GetInt("upload_frame_count", p.upload_frame_count, 1, 1'000'000));
   p.capabilities = r.GetFlags("capabilities", p.capabilities);
-  constexpr uint32_t kVirtual = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
-                                dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz | dmc::kCapAimPoint;
   if ((p.capabilities & kVirtual) != 0) {
     r.Fail("capabilities", "carries virtual-mode or aim-point bits (0x007c)",
            "clear them and write \"virtual_axes\": {\"enabled\": true} (it advertises 0x007c)");
   }
-  {
-    ProfileReader v = r.Child("virtual_axes");
-    p.virtual_axes.enabled = v.GetBool("enabled", p.virtual_axes.enabled);
-    p.virtual_axes.capabilities = v.GetFlags("capabilities", p.virtual_axes.capabilities);
-    if ((p.virtual_axes.capabilities & ~kVirtual) != 0) {
-      v.Fail("capabilities", "has bits outside the virtual modes and the aim point",
-             "keep to 0x0004, 0x0008, 0x0010, 0x0020 and 0x0040");
-    }
-    if ((p.virtual_axes.capabilities & dmc::kCapAimPoint) != 0 &&
-        (p.virtual_axes.capabilities & (kVirtual & ~dmc::kCapAimPoint)) == 0) {
-      v.Fail("capabilities", "advertises the aim point without a virtual mode",
-             "add the mode bits (0x003c, all four as the real firmware does)");
-    }
-    p.virtual_axes.jog_line_units_per_s =
-        v.GetNumber("jog_line_units_per_s", p.virtual_axes.jog_line_units_per_s, 1e-6, 1e6);
-    p.virtual_axes.jog_angle_deg_per_s =
-        v.GetNumber("jog_angle_deg_per_s", p.virtual_axes.jog_angle_deg_per_s, 1e-6, 1e6);
-    v.Finish();
-  }
-  if (r.Has("physical_rig")) {
-    ProfileReader v = r.Child("physical_rig");
-    p.physical_rig.enabled = v.GetBool("enabled", true);
-    p.physical_rig.rig_path = v.GetString("rig", "", 4096);
-    if (p.physical_rig.rig_path.empty()) {
-      v.Fail("rig", "is missing", "name a rig profile, e.g. \"rig\": \"../rigs/boom-jib.json\"");
-    }
-    if (v.Has("motors")) {
-      ProfileReader m = v.Child("motors");
-      for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
-        p.physical_rig.motors[joint] = static_cast<int>(
-            m.GetInt(physics::kJointNames[joint], p.physical_rig.motors[joint], 0, p.motor_count));
-      }
-      m.Finish();
-    }
-    for (size_t joint = 0; joint < physics::kJointCount; ++joint) {
-      const int motor = p.physical_rig.motors[joint];
-      if (motor > p.motor_count) {
-        v.Fail("motors", "names a motor beyond motor_count",
-               "use motors 1.." + std::to_string(p.motor_count) + " or 0 for a fixed joint");
-      }
-      // One stepper drives one joint: a motor shared by two joints would
-      // command both with the same steps.
-      for (size_t other = 0; other < joint && motor != 0; ++other) {
-        if (p.physical_rig.motors[other] == motor) {
-          v.Fail("motors." + std::string(physics::kJointNames[joint]),
-                 "is motor " + std::to_string(motor) + ", which already drives the " +
-                     std::string(physics::kJointNames[other]),
-                 "give each joint its own motor, or 0 for a fixed joint");
-        }
-      }
-    }
-    // The rig file is read with the device profile, relative to its folder.
-    std::filesystem::path rig = p.physical_rig.rig_path;
-    if (rig.is_relative() && !base_dir.empty()) {
-      std::error_code ec;
-      if (std::filesystem::exists(std::filesystem::path(base_dir) / rig, ec)) {
-        rig = std::filesystem::path(base_dir) / rig;
-      }
-    }
-    const physics::RigProfileResult loaded = physics::ReadRigProfile(rig.string());
-    if (!loaded.ok()) {
-      v.Fail("rig",
-             "(" + rig.string() + ") is not a usable rig profile: " + loaded.error().field + ": " +
-                 loaded.error().message,
-             "fix the rig profile (docs/rig-dynamics.md)");
-    }
-    p.physical_rig.rig = loaded.value();
-    v.Finish();
-  }
+  ReadVirtualAxes(r, p);
+  if (r.Has("physical_rig")) ReadPhysicalRig(r, p, base_dir);
   const int64_t version = r.GetInt("protocol_version", 2, 0, 0xffff);
   p.protocol_version = version == 0 ? std::nullopt : std::optional<uint16_t>(version);
   const int64_t width = r.GetInt("ack_width_bits", 16, 16, 32);
@@ -200,90 +300,8 @@ Dmc16Profile Dmc16ProfileFromJson(const nlohmann::json& j, const std::string& wh
     p.motors_enabled = m.GetBool("motors_enabled", p.motors_enabled);
     m.Finish();
   }
-  {
-    ProfileReader b = r.Child("behaviour");
-    Dmc16Behaviour& v = p.behaviour;
-    v.receive_buffer_bytes =
-        static_cast<uint32_t>(b.GetInt("receive_buffer_bytes", v.receive_buffer_bytes,
-                                       dmc::kReceiveBufferSize, kMaxReceiveBuffer));
-    v.rescan_after_bad_frame = b.GetBool("rescan_after_bad_frame", v.rescan_after_bad_frame);
-    v.move_response = b.GetBool("move_response", v.move_response);
-    v.position_response = b.GetBool("position_response", v.position_response);
-    v.gio_in_request = b.GetBool("gio_in_request", v.gio_in_request);
-    v.host_acks_silent = b.GetBool("host_acks_silent", v.host_acks_silent);
-    v.jog_speed_checked = b.GetBool("jog_speed_checked", v.jog_speed_checked);
-    v.disabled_motors_ignore_motion =
-        b.GetBool("disabled_motors_ignore_motion", v.disabled_motors_ignore_motion);
-    v.soft_limits_bound_moves = b.GetBool("soft_limits_bound_moves", v.soft_limits_bound_moves);
-    v.arming_ms = static_cast<uint32_t>(b.GetInt("arming_ms", v.arming_ms, 0, 10'000));
-    v.stop_all_lockout_ms =
-        static_cast<uint32_t>(b.GetInt("stop_all_lockout_ms", v.stop_all_lockout_ms, 0, 60'000));
-    v.stop_all_within_ms =
-        static_cast<uint32_t>(b.GetInt("stop_all_within_ms", v.stop_all_within_ms, 0, 60'000));
-    v.positions_truncate = b.GetBool("positions_truncate", v.positions_truncate);
-    v.preroll_move_time_is_start_frame =
-        b.GetBool("preroll_move_time_is_start_frame", v.preroll_move_time_is_start_frame);
-    v.rt_end_at_last_frame = b.GetBool("rt_end_at_last_frame", v.rt_end_at_last_frame);
-    v.rt_end_after_shot = b.GetBool("rt_end_after_shot", v.rt_end_after_shot);
-    v.length_checks = GetChoice(b, "length_checks", v.length_checks, kLengthChecks);
-    v.set_speed_checked = b.GetBool("set_speed_checked", v.set_speed_checked);
-    v.position_confirm = GetChoice(b, "position_confirm", v.position_confirm, kPositionConfirm);
-    v.jog_speed_scale = GetChoice(b, "jog_speed_scale", v.jog_speed_scale, kJogSpeedScale);
-    v.jog_horizon_ms =
-        static_cast<uint32_t>(b.GetInt("jog_horizon_ms", v.jog_horizon_ms, 0, 60'000));
-    v.coupling = GetChoice(b, "coupling", v.coupling, kCoupling);
-    // The real-time engine (dmc16_profile.h).
-    v.playback_tick_ms =
-        static_cast<uint32_t>(b.GetInt("playback_tick_ms", v.playback_tick_ms, 0, 100));
-    if (v.playback_tick_ms != 0 && v.playback_tick_ms < 5) {
-      b.Fail("playback_tick_ms", "is " + std::to_string(v.playback_tick_ms),
-             "use 0 (continuous playback) or a tick of 5..100 ms (dmc-lite: 20)");
-    }
-    v.upload_index_from_start_frame =
-        b.GetBool("upload_index_from_start_frame", v.upload_index_from_start_frame);
-    if (v.upload_index_from_start_frame && v.playback_tick_ms == 0) {
-      b.Fail("upload_index_from_start_frame", "is true without a playback tick",
-             "set \"playback_tick_ms\" (dmc-lite: 20), the engine that reads the upload so");
-    }
-    v.position_frame_clamped = b.GetBool("position_frame_clamped", v.position_frame_clamped);
-    v.rt_end_after_stop = b.GetBool("rt_end_after_stop", v.rt_end_after_stop);
-    v.trigger_frames_checked = b.GetBool("trigger_frames_checked", v.trigger_frames_checked);
-    v.camera_angles_checked = b.GetBool("camera_angles_checked", v.camera_angles_checked);
-    v.zero_preroll_nan = b.GetBool("zero_preroll_nan", v.zero_preroll_nan);
-    if (v.zero_preroll_nan && v.playback_tick_ms == 0) {
-      b.Fail("zero_preroll_nan", "is true without a playback tick",
-             "set \"playback_tick_ms\" (dmc-lite: 20), the engine whose ramp has it");
-    }
-    v.unsolicited_id_zero = b.GetBool("unsolicited_id_zero", v.unsolicited_id_zero);
-    v.reset_refused_while_any_moves =
-        b.GetBool("reset_refused_while_any_moves", v.reset_refused_while_any_moves);
-    v.host_hard_stop = b.GetBool("host_hard_stop", v.host_hard_stop);
-    b.Finish();
-  }
-  const nlohmann::json& sets = r.GetRaw("limit_sets");
-  if (!sets.is_null()) {
-    if (!sets.is_array()) {
-      r.Fail("limit_sets", "must be an array", "write [ {\"set\": 1, \"low_steps\": -1000}, ... ]");
-    }
-    for (size_t i = 0; i < sets.size(); ++i) {
-      ProfileReader s(sets[i], where, "limit_sets[" + std::to_string(i) + "]");
-      Dmc16LimitSet ls;
-      ls.set = static_cast<int>(s.GetInt("set", 0, 1, p.hw_limit_sets == 0 ? 1 : p.hw_limit_sets));
-      if (!s.Has("set")) s.Fail("set", "is missing", "give the limit set number 1..hw_limit_sets");
-      if (p.hw_limit_sets == 0) {
-        s.Fail("set", "names a set, but hw_limit_sets is 0",
-               "raise hw_limit_sets or drop limit_sets");
-      }
-      constexpr int64_t kI32Min = INT32_MIN, kI32Max = INT32_MAX;
-      if (s.Has("low_steps")) ls.low_steps = s.GetInt("low_steps", 0, kI32Min, kI32Max);
-      if (s.Has("high_steps")) ls.high_steps = s.GetInt("high_steps", 0, kI32Min, kI32Max);
-      if (ls.low_steps && ls.high_steps && *ls.low_steps >= *ls.high_steps) {
-        s.Fail("high_steps", "is not above low_steps", "place the high switch above the low one");
-      }
-      s.Finish();
-      p.limit_sets.push_back(ls);
-    }
-  }
+  ReadBehaviour(r, p.behaviour);
+  ReadLimitSets(r, p, where);
   r.Finish();
   return p;
 }

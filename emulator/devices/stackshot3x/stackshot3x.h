@@ -314,6 +314,8 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // replies with data are sent by the handler itself).
   void HandleRail(const stackshot::Packet& p, const stackshot::HostCommand& c);
   void HandleConfig(const stackshot::Packet& p, const stackshot::HostCommand& c);
+  // A CC_RAIL_CONFIG_* command being answered, in steps (stackshot3x_config_commands.cpp).
+  struct ConfigCall;
   void HandleSystem(const stackshot::Packet& p, const stackshot::HostCommand& c);
   void HandleMotion(const stackshot::Packet& p, const stackshot::HostCommand& c);
 
