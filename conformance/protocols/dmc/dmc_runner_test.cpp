@@ -83,10 +83,9 @@ TEST(Runner, TheReferenceFirmwareFailsOnlyWhereItDepartsFromAMustOrAShould) {
       // and stills angles past 360 are taken; a 0 ms pre-roll answers
       // ERR_PREROLL where only the post-roll crosses the limit. NOTE:
       // POSITION_FRAME outside the upload is clamped; no RT_END after
-      // STOP_ALL. (DMC-RT-021 passes: the case's three stills RUN_MOVEs come
-      // within one 20 ms tick, before the motors leave for the pre-roll, so
-      // the last re-arms; natively a tick between them made one run answer
-      // ERR_MOVING.)
+      // STOP_ALL. (DMC-RT-021 passes: a stills run with an angle past 360
+      // that the device took is disarmed, and the rig stood on frame 0
+      // again, before the good one.)
       {"DMC-RT-008", Status::kFail},
       {"DMC-RT-018", Status::kFail},
       {"DMC-RT-024", Status::kFail},
