@@ -3,6 +3,7 @@
 // 3.10), and the DfMoco dialect (section 3, ERRATA 3.9).
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "devices/stackshot3x/stackshot3x.h"
 
@@ -639,7 +640,8 @@ void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {
     scheduler_.Cancel(s.dfmoco_timer);
     s.dfmoco_timer = sim::Scheduler::kNoTimer;
   }
-  AddLog(now ? "serial dialect: DfMoco, 57600 baud" : "serial dialect: binary, 38400 baud");
+  AddLog(std::string("serial dialect: ") + (now ? "DfMoco, " : "binary, ") +
+         std::to_string(Line().serial.baud) + " baud");
 }
 
 void Stackshot3x::SendLine(const dfmoco::DeviceReply& reply) {
