@@ -28,6 +28,7 @@
 #include "session/pcapng.h"
 #include "session/session.h"
 #include "transport/control_socket.h"
+#include "wire/protocol.h"
 #include "wire/transcript.h"
 
 namespace {
@@ -613,14 +614,15 @@ struct TapCli {
         "the device, and the tap opens the device's serial port (or TCP address). Bytes pass "
         "unchanged both ways, and each chunk is recorded with its arrival time and decoded "
         "messages into a session file that mococheck replay/fuzz and mocosim decode/plot read "
-        "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (57600 "
-        "baud) and a host setting another speed on the PTY; a host closing and reopening the "
-        "PTY does not end it; a device going away is reported and looked for again; Ctrl-C "
-        "(SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
-        "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "
-        "--record dragonframe.jsonl  (then point Dragonframe at /tmp/dmc16)\n"
-        "Example: mocosim tap --protocol stackshot --device tcp:192.168.1.20:5000 --tcp 5001 "
-        "--record stack.jsonl");
+        "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (" +
+            std::to_string(moco::wire::Info(moco::wire::Protocol::kStackshotDfmoco).line.baud) +
+            " baud) and a host setting another speed on the PTY; a host closing and reopening "
+            "the PTY does not end it; a device going away is reported and looked for again; "
+            "Ctrl-C (SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
+            "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "
+            "--record dragonframe.jsonl  (then point Dragonframe at /tmp/dmc16)\n"
+            "Example: mocosim tap --protocol stackshot --device tcp:192.168.1.20:5000 --tcp "
+            "5001 --record stack.jsonl");
     AddProtocol();
     cmd->add_option("--device", config.device,
                     "The real device's side: serial:PATH (a serial port, raw 8N1 at --baud; a "
@@ -635,10 +637,9 @@ struct TapCli {
         "The host's side: listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = "
         "any free port, logged). Example: --tcp 127.0.0.1:5001");
     pty_opt->excludes(tcp_opt);
-    moco::cli::AddNumber(
-        cmd, "--baud", config.baud, uint32_t{0}, uint32_t{4000000},
-        "Line speed of a serial device (default 0: the protocol's: DMC v2 115200, DFMoco "
-        "57600, StackShot 38400). Example: --baud 57600");
+    moco::cli::AddNumber(cmd, "--baud", config.baud, uint32_t{0}, uint32_t{4000000},
+                         "Line speed of a serial device (default 0: the protocol's: " +
+                             moco::wire::DefaultBaudList() + "). Example: --baud 57600");
     cmd->add_option("--flow", flow,
                     "Flow control on the serial port: none (default) or rtscts (hardware "
                     "RTS/CTS). Example: --flow rtscts")

@@ -17,6 +17,7 @@
 #include "conformance/cli/commands.h"
 #include "conformance/core/report.h"
 #include "conformance/protocols/registry.h"
+#include "wire/protocol.h"
 
 namespace moco::conformance::cli {
 namespace {
@@ -434,8 +435,8 @@ Runner AddRunCommand(CLI::App& app, CLI::App*& sub) {
   run->add_option("--shard", a->shard, "Run only shard i of n (1-based), e.g. 2/4")
       ->capture_default_str();
   AddNumber(run, "--baud", a->baud, uint32_t{0}, uint32_t{4000000},
-            "Baud rate of a pty:/serial: target (default 0: the protocol's: DMC v2 115200, "
-            "DFMoco 57600, StackShot 38400)");
+            "Baud rate of a pty:/serial: target (default 0: the protocol's: " +
+                wire::DefaultBaudList() + ")");
   AddNumber(run, "--deadline-ms", a->deadline_ms, int64_t{1}, int64_t{600000},
             "DMC-DL-* answer deadline");
   run->add_option("--deadline", a->deadlines,

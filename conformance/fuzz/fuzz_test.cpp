@@ -204,7 +204,7 @@ class MuteStatusDmc16 final : public devices::Device {
                 }),
         inner_(devices::CreateDevice("dmc16", "", s, filter_)) {}
   std::string_view Model() const override { return "dmc16-mute-status"; }
-  devices::LineSettings Line() const override { return inner_->Line(); }
+  devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
   void PowerOff() override { inner_->PowerOff(); }
   bool Powered() const override { return inner_->Powered(); }

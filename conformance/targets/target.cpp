@@ -25,6 +25,7 @@
 #include "devices/stackshot3x/stackshot3x.h"
 #include "sim/io.h"
 #include "sim/rig.h"
+#include "wire/protocol.h"
 
 #ifdef MOCO_HAVE_SIMAVR
 #include "conformance/targets/simavr_target.h"
@@ -194,7 +195,9 @@ std::string FdTarget::NotADevice(const struct stat& st) const {
 std::optional<std::string> FdTarget::Open() {
   if (kind_ == Kind::kSerial) {
     const std::optional<speed_t> speed = base::TermiosSpeed(baud_);
-    if (!speed) return base::NonStandardBaudHint(baud_);
+    if (!speed) {
+      return base::NonStandardBaudHint(baud_, "the protocols' lines: " + wire::DefaultBaudList());
+    }
     // Never O_CREAT or O_TRUNC, and nothing is written before the path is
     // known to be a terminal, a character device or a socket: a regular file
     // given by mistake is left as it was.

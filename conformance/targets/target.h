@@ -20,6 +20,7 @@
 #include "sim/io.h"
 #include "sim/scheduler.h"
 #include "wire/bytes.h"
+#include "wire/dmc_constants.h"
 
 namespace moco::conformance {
 
@@ -165,7 +166,9 @@ class FdTarget final : public Target {
   enum class Kind { kSerial, kTcp };
   // kSerial: `address` is a path; kTcp: "host:port" (IPv4 literal or a name).
   // `scheme` labels a kSerial target in Name() ("pty" or "serial", as given).
-  FdTarget(Kind kind, std::string address, uint32_t baud = 115200, std::string scheme = "pty");
+  // `baud` defaults to a DMC v2 device's line.
+  FdTarget(Kind kind, std::string address, uint32_t baud = dmc::kBaudRate,
+           std::string scheme = "pty");
   ~FdTarget() override;
   FdTarget(const FdTarget&) = delete;
   FdTarget& operator=(const FdTarget&) = delete;

@@ -38,15 +38,15 @@ std::optional<uint32_t> BaudOfTermiosSpeed(speed_t speed) {
   return std::nullopt;
 }
 
-std::string NonStandardBaudHint(uint32_t baud) {
+std::string NonStandardBaudHint(uint32_t baud, std::string_view usual) {
   std::string list;
   for (const Rate& r : kRates) {
     if (r.baud < 1200) continue;  // named, but no motion controller runs that slow
     list += (list.empty() ? "" : ", ") + std::to_string(r.baud);
   }
+  if (!usual.empty()) list += "; " + std::string(usual);
   return "baud rate " + std::to_string(baud) +
-         " is not one the serial driver can set; use a standard rate (" + list +
-         "; DMC v2 devices run at 115200, DFMoco at 57600, a StackShot at 38400)";
+         " is not one the serial driver can set; use a standard rate (" + list + ")";
 }
 
 }  // namespace moco::base

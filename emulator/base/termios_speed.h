@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace moco::base {
 
@@ -17,8 +18,9 @@ std::optional<speed_t> TermiosSpeed(uint32_t baud);
 // The baud rate of a B* constant, or nullopt for B0 and unknown values.
 std::optional<uint32_t> BaudOfTermiosSpeed(speed_t speed);
 // What to tell a user who asked for `baud`: that the rate cannot be set, and
-// the rates to choose from instead.
-std::string NonStandardBaudHint(uint32_t baud);
+// the rates to choose from instead; `usual`, when given, follows the list
+// (the caller's devices' rates: base knows no protocol).
+std::string NonStandardBaudHint(uint32_t baud, std::string_view usual = {});
 
 }  // namespace moco::base
 

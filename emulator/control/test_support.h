@@ -38,7 +38,7 @@ class FakeDevice final : public devices::Device, private sim::RigObserver {
         gio_(scheduler, kDebounceNs) {}
 
   std::string_view Model() const override { return model_; }
-  devices::LineSettings Line() const override { return {}; }
+  devices::DeviceLine Line() const override { return {}; }
   void PowerOn() override {
     powered_ = true;
     power_on_ns.push_back(scheduler_.Now());
@@ -87,7 +87,7 @@ class FakeDevice final : public devices::Device, private sim::RigObserver {
 class BareDevice final : public devices::Device {
  public:
   std::string_view Model() const override { return "bare"; }
-  devices::LineSettings Line() const override { return {}; }
+  devices::DeviceLine Line() const override { return {}; }
   void PowerOn() override { powered_ = true; }
   void PowerOff() override { powered_ = false; }
   bool Powered() const override { return powered_; }

@@ -5,7 +5,6 @@
 #ifndef MOCO_DEVICES_DEVICE_H_
 #define MOCO_DEVICES_DEVICE_H_
 
-#include <cstdint>
 #include <functional>
 #include <string_view>
 #include <utility>
@@ -14,6 +13,7 @@
 
 #include "devices/usb_bridge.h"
 #include "wire/bytes.h"
+#include "wire/line.h"
 
 namespace moco::sim {
 class Rig;
@@ -33,19 +33,16 @@ class ByteSink {
   virtual void Write(wire::ByteView bytes) = 0;
 };
 
-// Serial line settings the transport honours when pacing (baud / 10 bytes/s
-// for 8N1), and the USB serial bridge between the device's UART and the host.
-struct LineSettings {
-  uint32_t baud = 115200;
-  uint8_t data_bits = 8;
-  uint8_t stop_bits = 1;
-  char parity = 'N';
+// The line a device is reached over: its serial settings (the one
+// wire::LineSettings; a transport paces at serial.BytesPerSecond()) and the
+// USB serial bridge between the device's UART and the host. The bridge stays
+// here rather than in wire: it is not part of a protocol (the same protocol
+// runs behind an FTDI chip, a 16U2 or the board's own CDC port, as a
+// profile's "usb_bridge" says), it is a timing model of hardware (packet
+// sizes, latency timers) rather than a codec, and a profile reads it.
+struct DeviceLine {
+  wire::LineSettings serial;
   UsbBridge bridge;  // none: the host reads bytes as the UART completes them
-  // Bytes per second on the wire for this setting (start + data + parity + stop bits).
-  uint32_t BytesPerSecond() const {
-    const uint32_t bits = 1u + data_bits + (parity == 'N' ? 0u : 1u) + stop_bits;
-    return baud / bits;
-  }
 };
 
 // Something the simulated hardware did by itself, not in answer to the host: a
@@ -64,7 +61,7 @@ class Device {
   // Model name for logs, e.g. "dmc16".
   virtual std::string_view Model() const = 0;
   // The line the real device uses; transports pace at this rate unless told not to.
-  virtual LineSettings Line() const = 0;
+  virtual DeviceLine Line() const = 0;
 
   virtual void PowerOn() = 0;
   virtual void PowerOff() = 0;

@@ -24,6 +24,7 @@
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
 #include "transport/test_support.h"
+#include "wire/dfmoco.h"
 
 namespace {
 
@@ -202,9 +203,11 @@ class LineReader {
   Clock::time_point arrived_;
 };
 
-// The DFMoco Arduino over a PTY: `ms` reply latency (paced at 57600 baud and
-// unpaced) and the timing of the once-a-second `mp` reports of a move.
+// The DFMoco Arduino over a PTY: `ms` reply latency (paced at its line,
+// dfmoco::kBaudRate, and unpaced) and the timing of the once-a-second `mp`
+// reports of a move.
 void Dfmoco(const std::string& pty, int n) {
+  const std::string baud = std::to_string(moco::dfmoco::kBaudRate);
   for (bool paced : {false, true}) {
     moco::serve::EmulatorConfig config;
     config.log_level = moco::serve::LogLevel::kError;
@@ -231,7 +234,7 @@ void Dfmoco(const std::string& pty, int n) {
       if (i >= 0) us.push_back(std::chrono::duration<double, std::micro>(l->first - t0).count());
     }
     std::printf("dfmoco pty %-8s ms -> reply     median %7.1f  p99 %7.1f us\n",
-                paced ? "57600" : "unpaced", Median(us), P99(us));
+                paced ? baud.c_str() : "unpaced", Median(us), P99(us));
     if (paced) {
       // A 6-second move: reports are due every second of the sketch's report
       // clock (0.5 s after its start, then every 1 s); compare their arrival
@@ -251,9 +254,10 @@ void Dfmoco(const std::string& pty, int n) {
       }
       if (!err_us.empty()) {
         std::printf(
-            "dfmoco pty 57600    mp spacing error vs 1 s: median %7.1f  max %7.1f us (%zu "
+            "dfmoco pty %-8s mp spacing error vs 1 s: median %7.1f  max %7.1f us (%zu "
             "reports)\n",
-            Median(err_us), *std::max_element(err_us.begin(), err_us.end()), mp.size());
+            baud.c_str(), Median(err_us), *std::max_element(err_us.begin(), err_us.end()),
+            mp.size());
       }
     }
     close(fd);

@@ -38,7 +38,7 @@ struct TapConfig {
   std::string profile;
   std::string host;    // "pty:/tmp/dmc16", "tcp:5000", "tcp:0.0.0.0:5000"
   std::string device;  // "serial:/dev/ttyUSB0", "/dev/ttyUSB0", "tcp:HOST:PORT"
-  uint32_t baud = 0;   // 0: the protocol's line (DMC 115200, DFMoco 57600, StackShot 38400)
+  uint32_t baud = 0;   // 0: the protocol's line (wire::Info(protocol).line.baud)
   bool rtscts = false;
   std::string record_path;         // empty: pass bytes through without recording
   std::string note;                // the header's "note"; empty: where the tap ran

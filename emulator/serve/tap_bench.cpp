@@ -10,7 +10,7 @@
 // see the same machine load. Devices: an echo of a 12-byte frame (a DMC HI
 // request's size) and an emulated DMC-16 answering MSG_HI (dmc-v2-protocol.txt
 // "MSG_HI [0x0001]"; 12 bytes out, 63 back), each unpaced (the tap's own cost against the
-// fastest link there is) and paced at 115200 baud (a DMC-16's line).
+// fastest link there is) and paced at a DMC-16's line (dmc::kBaudRate).
 //   tap_bench [iterations]
 // and flow control with a slow side (docs/tap.md "Flow control"): a device
 // sending BYTES to a host that reads nothing until the tap holds the device
@@ -45,6 +45,7 @@
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
 #include "transport/test_support.h"
+#include "wire/dmc_constants.h"
 
 namespace {
 
@@ -319,7 +320,8 @@ void Measure(Kind kind, bool paced, int n, int warmup) {
   }
   std::filesystem::remove_all(dir);
   const std::string device = std::string(kind == Kind::kEcho ? "echo 12 B" : "DMC-16 HI") +
-                             (paced ? ", paced at 115200 baud" : ", unpaced");
+                             (paced ? ", paced at " + std::to_string(moco::dmc::kBaudRate) + " baud"
+                                    : std::string(", unpaced"));
   const double direct = Median(us[0]);
   for (int p = 0; p < kPaths; ++p) {
     std::printf("| %s | %s | %.1f / %.1f us | %+.1f us | %.2f |\n", device.c_str(), kPathNames[p],

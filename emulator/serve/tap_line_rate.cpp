@@ -4,7 +4,7 @@
 #include <variant>
 #include <vector>
 
-#include "wire/stackshot_constants.h"
+#include "wire/protocol.h"
 
 namespace moco::serve {
 
@@ -23,9 +23,9 @@ std::optional<LineChange> LineRateFollower::OnDeviceBytes(wire::ByteView bytes) 
   device_.Feed(bytes, packets);
   for (const stackshot::DecodedPacket& d : packets) {
     if (!switch_.OnDevicePacket(d.packet)) continue;
-    // Section 3: from here on the line carries DfMoco text at 57600.
+    // Section 3: from here on the line carries DfMoco text at that dialect's rate.
     dialect_ = wire::Protocol::kStackshotDfmoco;
-    return LineChange{dialect_, stackshot::kDfMocoBaudRate};
+    return LineChange{dialect_, wire::Info(dialect_).line.baud};
   }
   return std::nullopt;
 }

@@ -1,4 +1,4 @@
-// Serial line pacing (devices/device.h LineSettings): byte completion times.
+// Serial line pacing (wire/line.h LineSettings): byte completion times.
 #include "transport/line_pacer.h"
 
 namespace moco::transport {

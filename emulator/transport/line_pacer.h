@@ -1,4 +1,4 @@
-// Serial line pacing (devices/device.h LineSettings): a UART sends one byte
+// Serial line pacing (wire/line.h LineSettings): a UART sends one byte
 // after another, each taking 1/BytesPerSecond() s; a byte reaches the other
 // end when its stop bit ends. Pure arithmetic on the scheduler clock.
 #ifndef MOCO_TRANSPORT_LINE_PACER_H_

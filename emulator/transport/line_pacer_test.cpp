@@ -1,4 +1,4 @@
-// Tests for serial line pacing (devices/device.h LineSettings): a byte at
+// Tests for serial line pacing (wire/line.h LineSettings): a byte at
 // baud B, 8N1, takes 10/B s, and reaches the far end when its stop bit ends.
 #include "transport/line_pacer.h"
 
@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "devices/device.h"
+#include "wire/line.h"
 
 namespace moco::transport {
 namespace {
@@ -15,7 +15,7 @@ namespace {
 using sim::TimeNs;
 
 TEST(LinePacerTest, BytesPerSecondIsBaudOverTenFor8N1) {
-  devices::LineSettings line;
+  wire::LineSettings line;
   line.baud = 115200;
   EXPECT_EQ(line.BytesPerSecond(), 11520u);
   line.baud = 57600;  // DFMoco

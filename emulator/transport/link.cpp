@@ -64,11 +64,11 @@ void Link::SetDevice(devices::Device* device) {
 // ---- Device -> host ---------------------------------------------------------
 
 void Link::ApplyLine(bool always) {
-  const devices::LineSettings line = device_->Line();
+  const devices::DeviceLine line = device_->Line();
   const devices::UsbBridge bridge = options_.pacing ? line.bridge : devices::UsbBridge::None();
   // A CDC port has no UART: the baud rate paces nothing.
   const uint32_t rate =
-      options_.pacing && (!bridge.active() || bridge.uart_paced) ? line.BytesPerSecond() : 0;
+      options_.pacing && (!bridge.active() || bridge.uart_paced) ? line.serial.BytesPerSecond() : 0;
   if (always || rate != line_rate_) {
     line_rate_ = rate;
     in_pacer_ = LinePacer(rate);
@@ -81,8 +81,8 @@ void Link::ApplyLine(bool always) {
 }
 
 void Link::FollowLineRate() {
-  // A device may change its line (a StackShot switching to its DfMoco dialect
-  // at 57600): the pacers follow from the next byte on.
+  // A device may change its line (a StackShot switching to its DfMoco
+  // dialect's rate): the pacers follow from the next byte on.
   if (!options_.pacing || device_ == nullptr) return;
   ApplyLine(/*always=*/false);
 }

@@ -82,7 +82,7 @@ using LogFn = std::function<void(std::string_view)>;
 void LogToStderr(std::string_view line);
 
 struct LinkOptions {
-  // Pace both directions at the device's LineSettings::BytesPerSecond().
+  // Pace both directions at the device's Line().serial.BytesPerSecond().
   bool pacing = true;
   // Device output waiting for the host is kept up to this many bytes; beyond
   // it, newly written bytes are dropped and counted (LinkStats::overflowed).
@@ -130,7 +130,7 @@ struct LinkStats {
 // time of the write, passed through faults, queued, and written to the stream
 // when the line rate allows (a byte no earlier than the end of its own
 // character time) and the host is present. Behind a USB serial bridge
-// (LineSettings::bridge) the bytes the UART completed wait in the bridge and
+// (DeviceLine::bridge) the bytes the UART completed wait in the bridge and
 // are written a packet at a time, when the bridge would send it; a CDC port
 // has no UART, so neither direction is paced at the line rate.
 //

@@ -91,7 +91,8 @@ class Recorder final : public TrafficObserver {
 
 class LinkTest : public ::testing::Test {
  protected:
-  void Build(LinkOptions o, const devices::LineSettings& line = {}) {
+  // The default line: a DMC v2 device's, 115200 8N1 without a bridge.
+  void Build(LinkOptions o, const devices::DeviceLine& line = {{.baud = 115200}, {}}) {
     o.observer = &recorder_;
     o.log = [this](std::string_view l) { log_ += std::string(l) + "\n"; };
     link_ = std::make_unique<Link>(driver_, o);
@@ -344,19 +345,16 @@ TEST_F(LinkTest, UnpacedFaultFreeBytesPassStraightWithTheQueuesResults) {
 
 // ---- USB serial bridges (devices/usb_bridge.h) ------------------------------
 
-devices::LineSettings Bridged(uint32_t baud, const devices::UsbBridge& bridge) {
-  devices::LineSettings line;
-  line.baud = baud;
-  line.bridge = bridge;
-  return line;
+devices::DeviceLine Bridged(uint32_t baud, const devices::UsbBridge& bridge) {
+  return {{.baud = baud}, bridge};
 }
 
 // What the bridge makes of the device's writes (LinkTest's recorder: "D:"
 // entries with their scheduler times): the UART's arrival time of each byte,
 // then the packets, as transport/usb_bridge_pacer.h computes them.
 std::vector<UsbBridgePacer::Packet> ExpectedPackets(const std::vector<Recorded>& log,
-                                                    const devices::LineSettings& line) {
-  LinePacer uart(line.bridge.uart_paced ? line.BytesPerSecond() : 0);
+                                                    const devices::DeviceLine& line) {
+  LinePacer uart(line.bridge.uart_paced ? line.serial.BytesPerSecond() : 0);
   std::vector<sim::TimeNs> arrivals;
   for (const Recorded& r : log) {
     if (!r.what.starts_with("D:")) continue;
@@ -398,7 +396,7 @@ void ExpectWholePacketsNeverEarly(const std::vector<UsbBridgePacer::Packet>& pac
 // reaches the host in whole packets at the latency timer's ticks (every
 // 16 ms of the device's clock), never byte by byte.
 TEST_F(LinkTest, FtdiBridgeDeliversAShortReplyInOnePieceAtTheLatencyTick) {
-  const devices::LineSettings line = Bridged(38400, devices::UsbBridge::Ftdi());
+  const devices::DeviceLine line = Bridged(38400, devices::UsbBridge::Ftdi());
   Build(LinkOptions{}, line);
   auto end = AttachFake();
   device_->echo = false;
@@ -419,7 +417,7 @@ TEST_F(LinkTest, FtdiBridgeDeliversAShortReplyInOnePieceAtTheLatencyTick) {
 // A CDC port has no UART: host bytes reach the device at once, and the echo
 // leaves in the next 1 ms USB frame; 64-byte packets leave when full.
 TEST_F(LinkTest, CdcBridgeIsUnpacedAndDeliversInTheNextUsbFrame) {
-  const devices::LineSettings line = Bridged(115200, devices::UsbBridge::Cdc());
+  const devices::DeviceLine line = Bridged(115200, devices::UsbBridge::Cdc());
   Build(LinkOptions{}, line);
   auto end = AttachFake();
   end->HostSends("abcdef");

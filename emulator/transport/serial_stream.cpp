@@ -13,13 +13,19 @@
 #include <stdexcept>
 
 #include "base/termios_speed.h"
+#include "wire/protocol.h"
 
 namespace moco::transport {
 namespace {
 
+// That `baud` cannot be set, the rates that can, and the protocols' lines.
+std::string BaudHint(uint32_t baud) {
+  return base::NonStandardBaudHint(baud, "the protocols' lines: " + wire::DefaultBaudList());
+}
+
 std::optional<std::string> Apply(int fd, uint32_t baud, bool rtscts) {
   const std::optional<speed_t> speed = base::TermiosSpeed(baud);
-  if (!speed) return base::NonStandardBaudHint(baud);
+  if (!speed) return BaudHint(baud);
   termios t{};
   if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);
   cfmakeraw(&t);
@@ -54,8 +60,7 @@ bool IsStandardBaud(uint32_t baud) { return base::TermiosSpeed(baud).has_value()
 std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std::string& path,
                                                  const SerialSettings& settings) {
   if (!IsStandardBaud(settings.baud)) {
-    throw std::runtime_error("serial port " + path + ": " +
-                             base::NonStandardBaudHint(settings.baud));
+    throw std::runtime_error("serial port " + path + ": " + BaudHint(settings.baud));
   }
   const int fd = open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) {
@@ -86,7 +91,7 @@ std::unique_ptr<SerialStream> SerialStream::Open(asio::io_context& io, const std
 
 std::optional<std::string> SerialStream::SetBaud(uint32_t baud) {
   const std::optional<speed_t> speed = base::TermiosSpeed(baud);
-  if (!speed) return base::NonStandardBaudHint(baud);
+  if (!speed) return BaudHint(baud);
   const int fd = stream().native_handle();
   termios t{};
   if (tcgetattr(fd, &t) != 0) return std::string("tcgetattr: ") + std::strerror(errno);

@@ -15,7 +15,7 @@
 namespace moco::transport {
 
 struct SerialSettings {
-  uint32_t baud = 115200;
+  uint32_t baud = 0;    // a standard rate (IsStandardBaud); the tap gives its line's
   bool rtscts = false;  // hardware flow control (CRTSCTS); off: none at all
 };
 

@@ -10,17 +10,19 @@
 
 #include "devices/device.h"
 #include "transport/asio.h"
+#include "wire/dmc_constants.h"
 
 namespace moco::transport::testing {
 
 // Echoes every host byte back (when echo is on) and records what it saw.
 class EchoDevice final : public devices::Device {
  public:
-  explicit EchoDevice(devices::ByteSink& sink, uint32_t baud = 115200) : sink_(sink) {
-    line_.baud = baud;
+  // At a DMC v2 device's line unless told otherwise.
+  explicit EchoDevice(devices::ByteSink& sink, uint32_t baud = dmc::kBaudRate) : sink_(sink) {
+    line_.serial.baud = baud;
   }
   std::string_view Model() const override { return "echo"; }
-  devices::LineSettings Line() const override { return line_; }
+  devices::DeviceLine Line() const override { return line_; }
   void PowerOn() override {
     powered_ = true;
     ++power_ons;
@@ -37,7 +39,7 @@ class EchoDevice final : public devices::Device {
   }
   void OnHostLink(bool open) override { link_events.push_back(open); }
   // Before the link reads it (Link::SetDevice).
-  void SetLine(const devices::LineSettings& line) { line_ = line; }
+  void SetLine(const devices::DeviceLine& line) { line_ = line; }
   // Writes as the device (from the io thread).
   void Send(std::string_view text) {
     sink_.Write(wire::ByteView(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
@@ -51,7 +53,7 @@ class EchoDevice final : public devices::Device {
 
  private:
   devices::ByteSink& sink_;
-  devices::LineSettings line_;
+  devices::DeviceLine line_;
   bool powered_ = false;
 };
 

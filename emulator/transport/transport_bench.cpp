@@ -23,6 +23,7 @@
 #include "transport/device_server.h"
 #include "transport/dmc_host_client.h"
 #include "transport/test_support.h"
+#include "wire/dmc_constants.h"
 
 namespace {
 
@@ -137,8 +138,10 @@ int main(int argc, char** argv) {
     Run("pty echo", "pty:" + pty_path, false, bytes, iterations);
     Run("tcp echo (127.0.0.1)", "tcp:127.0.0.1:0", false, bytes, iterations);
   }
-  // For scale: a paced 115200-baud line (16 B take 1.39 ms each way; an echo
-  // device answers byte by byte, so the two directions overlap).
-  Run("pty echo, paced 115200", "pty:" + pty_path, true, 16, std::max(100, iterations / 20));
+  // For scale: a paced line at a DMC v2 device's rate (16 B take 1.39 ms each
+  // way at 115200 baud; an echo device answers byte by byte, so the two
+  // directions overlap).
+  Run("pty echo, paced " + std::to_string(moco::dmc::kBaudRate), "pty:" + pty_path, true, 16,
+      std::max(100, iterations / 20));
   return 0;
 }

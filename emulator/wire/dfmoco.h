@@ -35,7 +35,8 @@
 namespace moco::dfmoco {
 
 // --- Wire constants (dfmoco-protocol.txt "Protocol", FACTS "DFMoco") ------------------
-inline constexpr int kBaudRate = 57600;               // 8N1, also in StackShot DfMoco mode
+// "Speed: 57600 Baud", 8 data bits, 1 stop bit (ERRATA 2.1: 57600 8N1).
+inline constexpr uint32_t kBaudRate = 57600;
 inline constexpr std::string_view kLineEnd = "\r\n";  // every line in and out
 inline constexpr size_t kMaxArgs = 40;                // 40 or more: `error: too many args`
 // Longest line the framer keeps, terminator excluded. The longest well-formed line is a

@@ -11,6 +11,14 @@
 
 namespace moco::dmc {
 
+// --- The line ------------------------------------------------------------------
+// dmc-v2-protocol.txt names no line speed. 115200 baud 8N1 is the setting a
+// DMC v2 device is opened at (FACTS "DMC v2": dmc-lite's "port is USB CDC (the
+// 115200 baud setting does not pace it)"; docs/device-facts.md, DMC v2;
+// docs/profiles.md `baud`). The DMC-16 profile's default and the protocol table's
+// DMC line read it.
+inline constexpr uint32_t kBaudRate = 115200;
+
 // --- Frame layout ("Message Format"; ERRATA 1.1, 1.2) -------------------------
 inline constexpr uint8_t kMarker0 = 'D';
 inline constexpr uint8_t kMarker1 = 'F';

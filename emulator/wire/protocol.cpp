@@ -1,12 +1,15 @@
 // The protocol table (see protocol.h). Framing comes from each codec's
 // constants: DMC v2 frames (dmc-v2-protocol.txt "Message Format"), DFMoco lines
 // (dfmoco-protocol.txt "Message Format"), StackShot packets
-// (stackshot-protocol.txt section 2; ERRATA stackshot: 57600 in DfMoco mode).
+// (stackshot-protocol.txt section 2). Each default line is the rate its codec
+// names, 8N1: dmc::kBaudRate, dfmoco::kBaudRate, stackshot::kBaudRate, and
+// stackshot::kDfMocoBaudRate for a StackShot in DfMoco mode (ERRATA 3.7).
 #include "wire/protocol.h"
 
 #include <algorithm>
 #include <array>
 
+#include "wire/dfmoco.h"
 #include "wire/dmc_constants.h"
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"
@@ -92,7 +95,7 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      "DMC v2",
      "DMC-",
      "dmc2",
-     {115200},
+     {dmc::kBaudRate},
      &DmcNext,
      &DmcRepair,
      &DmcGreeting,
@@ -102,7 +105,7 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      "DFMoco",
      "DFM-",
      "",
-     {57600},
+     {dfmoco::kBaudRate},
      &LineNext,
      &LineRepair,
      &LineGreeting,
@@ -112,18 +115,19 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      "StackShot 3X",
      "SS-",
      "stackshot3x",
-     {38400},
+     {stackshot::kBaudRate},
      &StackshotNext,
      &StackshotRepair,
      &StackshotGreeting,
      &MakeStackshotTranscript},
-    // A StackShot switched to Dragonframe's DfMoco mode speaks DFMoco lines at 57600.
+    // A StackShot switched to Dragonframe's DfMoco mode speaks DFMoco lines
+    // (stackshot-protocol.txt section 3).
     {Protocol::kStackshotDfmoco,
      "stackshot-dfmoco",
      "StackShot 3X (DfMoco mode)",
      "",
      "",
-     {57600},
+     {stackshot::kDfMocoBaudRate},
      &LineNext,
      &LineRepair,
      &LineGreeting,
@@ -159,6 +163,12 @@ std::string NameList(std::span<const Protocol> protocols) {
     s += ProtocolName(protocols[i]);
   }
   return s;
+}
+
+std::string DefaultBaudList() {
+  const auto baud = [](Protocol p) { return std::to_string(Info(p).line.baud); };
+  return "DMC v2 " + baud(Protocol::kDmc) + ", DFMoco " + baud(Protocol::kDfmoco) + ", StackShot " +
+         baud(Protocol::kStackshot);
 }
 
 std::vector<Bytes> SplitMessages(Protocol p, Side side, ByteView stream) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "wire/bytes.h"
+#include "wire/line.h"
 
 namespace moco::wire {
 
@@ -24,11 +25,6 @@ enum class Protocol { kDmc, kDfmoco, kStackshot, kStackshotDfmoco };
 enum class Side { kHost, kDevice };
 
 class TranscriptSides;  // wire/transcript_sides.h
-
-// A serial line's settings (8 data bits, no parity, 1 stop bit, no flow control).
-struct LineSettings {
-  uint32_t baud = 115200;
-};
 
 struct MessageCut {
   size_t skip = 0;
@@ -41,7 +37,10 @@ struct ProtocolInfo {
   std::string_view title;        // "DMC v2": prose
   std::string_view rule_prefix;  // "DMC-": the conformance rules' ids ("" when none)
   std::string_view alias;        // another name accepted on command lines ("dmc2"), or ""
-  LineSettings line;             // the line a real device of this protocol uses by default
+  // The line a real device of this protocol uses by default: 8N1 at the rate
+  // its codec names (dmc::kBaudRate, dfmoco::kBaudRate, stackshot::kBaudRate,
+  // stackshot::kDfMocoBaudRate).
+  LineSettings line;
   // Where the first whole message from `side` in `bytes` is: `skip` bytes of
   // noise, then `length` bytes of message (framing plausible, every byte
   // present); {bytes.size(), 0} when no whole message is there.
@@ -68,6 +67,9 @@ std::optional<Protocol> ParseProtocol(std::string_view name);
 std::optional<Protocol> ParseProtocolOrAlias(std::string_view text);
 // "dmc, dfmoco or stackshot": the names of `protocols`, for messages.
 std::string NameList(std::span<const Protocol> protocols);
+// "DMC v2 115200, DFMoco 57600, StackShot 38400": the default line rate of
+// each protocol a device starts in, for help texts and messages.
+std::string DefaultBaudList();
 
 // Cuts a byte stream from `side` into whole messages; the bytes between them
 // (noise, a message cut short) are kept as messages of their own, so joining

@@ -7,8 +7,10 @@
 
 #include "wire/dfmoco.h"
 #include "wire/dmc.h"
+#include "wire/dmc_constants.h"
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"
+#include "wire/stackshot_constants.h"
 
 namespace moco::wire {
 namespace {
@@ -39,6 +41,28 @@ TEST(ProtocolTable, DefaultLinesAreTheDevicesOwn) {
   EXPECT_EQ(Info(Protocol::kDfmoco).line.baud, 57600u);
   EXPECT_EQ(Info(Protocol::kStackshot).line.baud, 38400u);
   EXPECT_EQ(Info(Protocol::kStackshotDfmoco).line.baud, 57600u);
+  // Each row reads its codec's constant, and every line is 8N1.
+  EXPECT_EQ(Info(Protocol::kDmc).line.baud, dmc::kBaudRate);
+  EXPECT_EQ(Info(Protocol::kDfmoco).line.baud, dfmoco::kBaudRate);
+  EXPECT_EQ(Info(Protocol::kStackshot).line.baud, stackshot::kBaudRate);
+  EXPECT_EQ(Info(Protocol::kStackshotDfmoco).line.baud, stackshot::kDfMocoBaudRate);
+  for (const ProtocolInfo& row : Protocols()) {
+    EXPECT_EQ(row.line,
+              (LineSettings{.baud = row.line.baud, .data_bits = 8, .stop_bits = 1, .parity = 'N'}))
+        << row.name;
+    EXPECT_EQ(row.line.BytesPerSecond(), row.line.baud / 10) << row.name;
+  }
+  EXPECT_EQ(DefaultBaudList(), "DMC v2 115200, DFMoco 57600, StackShot 38400");
+}
+
+TEST(LineSettings, BytesPerSecondCountsStartParityAndStopBits) {
+  EXPECT_EQ((LineSettings{.baud = 115200}).BytesPerSecond(), 11520u);               // 8N1: 10 bits
+  EXPECT_EQ((LineSettings{.baud = 11000, .parity = 'E'}).BytesPerSecond(), 1000u);  // 8E1: 11
+  EXPECT_EQ(
+      (LineSettings{.baud = 11000, .data_bits = 7, .stop_bits = 2, .parity = 'O'}).BytesPerSecond(),
+      1000u);  // 7O2: 1 + 7 + 1 + 2 bits
+  // No rate given: 0 bytes/s, which a transport takes as unpaced.
+  EXPECT_EQ(LineSettings{}.BytesPerSecond(), 0u);
 }
 
 TEST(ProtocolTable, NameListReadsAsProse) {
@@ -83,7 +107,8 @@ TEST(ProtocolTable, SplitsFramesFromNoiseAndKeepsACutFrameAsNoise) {
 TEST(ProtocolTable, SplitsLinesAndKeepsAnUnterminatedTail) {
   const std::string text = "hi\r\nmp 1\r\nms";
   const auto parts =
-      SplitMessages(Protocol::kDfmoco, Side::kHost, ByteView(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
+      SplitMessages(Protocol::kDfmoco, Side::kHost,
+                    ByteView(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
   ASSERT_EQ(parts.size(), 3u);
   EXPECT_EQ(std::string(parts[1].begin(), parts[1].end()), "mp 1\r\n");
   EXPECT_EQ(std::string(parts[2].begin(), parts[2].end()), "ms");

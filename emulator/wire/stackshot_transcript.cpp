@@ -4,6 +4,7 @@
 #include <string>
 
 #include "wire/stackshot.h"
+#include "wire/stackshot_constants.h"
 #include "wire/stackshot_mode_switch.h"
 #include "wire/transcript_sides.h"
 
@@ -70,8 +71,9 @@ class StackshotSides final : public TranscriptSides {
       out.push_back(Line(side, d));
       if (side == Side::kDevice && switch_.OnDevicePacket(d.packet)) {
         // Section 3: from the next byte on, DFMoco text both ways.
-        out.push_back(
-            {side, false, "(the line switches to DfMoco mode: DFMoco text at 57600 baud)"});
+        out.push_back({side, false,
+                       "(the line switches to DfMoco mode: DFMoco text at " +
+                           std::to_string(stackshot::kDfMocoBaudRate) + " baud)"});
         dfmoco_ = MakeStackshotDfmocoTranscript();
         return;
       }

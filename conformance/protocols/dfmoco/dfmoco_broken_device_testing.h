@@ -66,7 +66,7 @@ class BrokenDfmoco final : public devices::Device, private devices::ByteSink {
         late_(std::move(late)),
         inner_(s, *this, std::move(profile)) {}
   std::string_view Model() const override { return "dfmoco-broken"; }
-  devices::LineSettings Line() const override { return inner_.Line(); }
+  devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override { inner_.PowerOn(); }
   void PowerOff() override {
     inner_.PowerOff();

@@ -33,7 +33,7 @@ class TestDfmoco final : public devices::Device {
       : sink_(out, devices::FaultySink::CutInto(std::move(cuts))),
         inner_(s, sink_, std::move(profile), std::move(faults)) {}
   std::string_view Model() const override { return "dfmoco-test"; }
-  devices::LineSettings Line() const override { return inner_.Line(); }
+  devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override { inner_.PowerOn(); }
   void PowerOff() override { inner_.PowerOff(); }
   bool Powered() const override { return inner_.Powered(); }

@@ -27,7 +27,7 @@ class BrokenStackshot final : public devices::Device, private devices::ByteSink 
   BrokenStackshot(sim::Scheduler& s, devices::ByteSink& out, LineBreakage b, SsInput in)
       : s_(s), out_(out), b_(std::move(b)), in_(std::move(in)), inner_(s, *this) {}
   std::string_view Model() const override { return "stackshot3x-broken"; }
-  devices::LineSettings Line() const override { return inner_.Line(); }
+  devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override {
     inner_.PowerOn();
     // Settings->Mode->Motion->DfMoco on the panel (section 3).

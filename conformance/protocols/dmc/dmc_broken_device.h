@@ -36,7 +36,7 @@ class BrokenDmc16 final : public devices::Device {
               }),
         inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
   std::string_view Model() const override { return "dmc16-broken"; }
-  devices::LineSettings Line() const override { return inner_->Line(); }
+  devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
   void PowerOff() override { inner_->PowerOff(); }
   bool Powered() const override { return inner_->Powered(); }

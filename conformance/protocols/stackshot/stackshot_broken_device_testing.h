@@ -99,7 +99,7 @@ class BrokenStackshot3x final : public devices::Device {
         inner_(std::make_unique<devices::Stackshot3x>(s, replies_, devices::Stackshot3xProfile{},
                                                       store)) {}
   std::string_view Model() const override { return "stackshot3x-broken"; }
-  devices::LineSettings Line() const override { return inner_->Line(); }
+  devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
   void PowerOff() override { inner_->PowerOff(); }
   bool Powered() const override { return inner_->Powered(); }

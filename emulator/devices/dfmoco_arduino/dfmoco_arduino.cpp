@@ -624,7 +624,7 @@ void DfmocoArduino::Transmit(const std::string& bytes) {
     burst_bytes_ = 0;
   }
   burst_bytes_ += bytes.size();
-  const auto bps = static_cast<uint64_t>(Line().BytesPerSecond());
+  const auto bps = static_cast<uint64_t>(Line().serial.BytesPerSecond());
   const uint64_t burst_ns =
       (burst_bytes_ * static_cast<uint64_t>(sim::kNsPerSecond) + bps - 1) / bps;
   uart_free_ns_ = burst_anchor_ns_ + static_cast<TimeNs>(burst_ns);

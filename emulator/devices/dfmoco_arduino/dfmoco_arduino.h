@@ -14,8 +14,9 @@
 //    (15 waiting) feeding one transmit buffer, i.e. at most 16 messages
 //    outstanding; one more is dropped silently. The text is formatted when the
 //    message reaches the transmit buffer (so `mp` carries the position then).
-//    The UART sends 57600/10 bytes per second; a message is written to the
-//    ByteSink whole at the moment its first byte starts.
+//    The UART sends Line().serial.BytesPerSecond() bytes per second (5760 at
+//    57600 8N1); a message is written to the ByteSink whole at the moment its
+//    first byte starts.
 //  - Motion: one sim::Rig; every motor follows the sketch's own planner
 //    (SketchAxis: 50 ms chunks planned one chunk ahead of their steps, 20 kHz,
 //    25 us steps), computed 2 s ahead and extended window by window; `pr v`
@@ -45,6 +46,7 @@
 #include "sim/rig.h"
 #include "sim/scheduler.h"
 #include "wire/dfmoco.h"
+#include "wire/protocol.h"
 
 namespace moco::devices {
 
@@ -79,8 +81,8 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
 
   // --- Device ---
   std::string_view Model() const override { return "dfmoco"; }
-  LineSettings Line() const override {
-    return LineSettings{dfmoco::kBaudRate, 8, 1, 'N', profile_.usb_bridge};
+  DeviceLine Line() const override {
+    return {wire::Info(wire::Protocol::kDfmoco).line, profile_.usb_bridge};
   }
   // Boots: after profile.boot_delay_ms the sketch starts and queues `hi`.
   void PowerOn() override;

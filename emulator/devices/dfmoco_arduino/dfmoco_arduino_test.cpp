@@ -93,7 +93,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(DfmocoArduino, IdentityAndLine) {
   Bench b;
   EXPECT_EQ(b.dev.Model(), "dfmoco");
-  const LineSettings line = b.dev.Line();
+  const wire::LineSettings line = b.dev.Line().serial;
   EXPECT_EQ(line.baud, 57600u);
   EXPECT_EQ(line.data_bits, 8);
   EXPECT_EQ(line.stop_bits, 1);

@@ -65,12 +65,7 @@ Dmc16::~Dmc16() {
   CancelTimer(idle_timer_);
 }
 
-LineSettings Dmc16::Line() const {
-  LineSettings l;
-  l.baud = profile_.baud;
-  l.bridge = profile_.usb_bridge;
-  return l;
-}
+DeviceLine Dmc16::Line() const { return {{.baud = profile_.baud}, profile_.usb_bridge}; }
 
 // --- lifecycle ------------------------------------------------------------------------
 

@@ -58,7 +58,7 @@ class Dmc16 final : public Device, private sim::RigObserver {
 
   // --- Device ---
   std::string_view Model() const override { return "dmc16"; }
-  LineSettings Line() const override;
+  DeviceLine Line() const override;
   // Boots: motors at rest on step 0 with the profile's speeds, outputs off,
   // no upload; sends the unsolicited HI (dmc-v2-protocol.txt MSG_HI).
   void PowerOn() override;

@@ -15,6 +15,7 @@
 #include "devices/usb_bridge.h"
 #include "physics/bullet/rig_dynamics.h"
 #include "wire/dmc.h"
+#include "wire/dmc_constants.h"
 
 namespace moco::devices {
 
@@ -231,7 +232,7 @@ struct Dmc16Profile {
   // HI PROTOCOL VERSION; nullopt sends the 49-byte HI of older devices (FACTS).
   std::optional<uint16_t> protocol_version = 2;
   dmc::AckWidth ack_width = dmc::AckWidth::k16;
-  uint32_t baud = 115200;
+  uint32_t baud = dmc::kBaudRate;
   // The USB serial bridge to the host. No bridge (bytes as the UART at
   // `baud` completes them): the DMC-16's own bridge has not been measured.
   // dmc-lite's GIGA is CDC (FACTS "DMC v2"), which its profile sets.

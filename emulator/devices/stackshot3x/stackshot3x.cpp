@@ -9,6 +9,8 @@
 #include <memory>
 #include <utility>
 
+#include "wire/protocol.h"
+
 namespace moco::devices {
 namespace {
 
@@ -57,9 +59,10 @@ Stackshot3x::~Stackshot3x() {
   rig_.SetObserver(nullptr);
 }
 
-LineSettings Stackshot3x::Line() const {
-  return LineSettings{SpeaksDfmoco() ? stackshot::kDfMocoBaudRate : stackshot::kBaudRate, 8, 1, 'N',
-                      profile_.usb_bridge};
+DeviceLine Stackshot3x::Line() const {
+  const wire::Protocol dialect =
+      SpeaksDfmoco() ? wire::Protocol::kStackshotDfmoco : wire::Protocol::kStackshot;
+  return {wire::Info(dialect).line, profile_.usb_bridge};
 }
 
 bool Stackshot3x::InDfmocoMode() const {

@@ -157,8 +157,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
 
   // --- Device ---
   std::string_view Model() const override { return "stackshot3x"; }
-  // 38400 8N1 in binary mode, 57600 8N1 in DfMoco mode (ERRATA 3.7).
-  LineSettings Line() const override;
+  // The protocol table's line of the dialect spoken: stackshot::kBaudRate 8N1
+  // in binary mode, stackshot::kDfMocoBaudRate 8N1 in DfMoco mode (ERRATA 3.7).
+  DeviceLine Line() const override;
   // Reads the NVM from the store, takes slot 0 (or the factory defaults) as
   // the active configuration and answers after profile.boot_delay_ms.
   void PowerOn() override;

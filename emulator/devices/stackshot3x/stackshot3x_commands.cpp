@@ -4,6 +4,7 @@
 // stackshot3x_config_commands.cpp.
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "devices/stackshot3x/stackshot3x.h"
 #include "devices/stackshot3x/stackshot3x_commands_internal.h"
@@ -354,7 +355,8 @@ void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {
     scheduler_.Cancel(s.dfmoco_timer);
     s.dfmoco_timer = sim::Scheduler::kNoTimer;
   }
-  AddLog(now ? "serial dialect: DfMoco, 57600 baud" : "serial dialect: binary, 38400 baud");
+  AddLog(std::string("serial dialect: ") + (now ? "DfMoco, " : "binary, ") +
+         std::to_string(Line().serial.baud) + " baud");
 }
 
 void Stackshot3x::SendLine(const dfmoco::DeviceReply& reply) {

@@ -64,7 +64,7 @@ TEST(Stackshot3xProfileTest, RegistryBuildsTheModel) {
   } sink;
   auto dev = CreateDevice("stackshot3x", "", sched, sink);
   EXPECT_EQ(dev->Model(), "stackshot3x");
-  EXPECT_EQ(dev->Line().baud, 38400u);
+  EXPECT_EQ(dev->Line().serial.baud, 38400u);
   EXPECT_NE(dev->rig(), nullptr);
   EXPECT_EQ(dev->rig()->motor_count(), 3);
 }

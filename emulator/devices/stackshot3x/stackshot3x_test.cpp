@@ -858,12 +858,12 @@ void Line(SsBench& b, std::string_view l) {
 
 TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
   SsBench b;
-  EXPECT_EQ(b.dev->Line().baud, 38400u);
+  EXPECT_EQ(b.dev->Line().serial.baud, 38400u);
   ASSERT_EQ(b.Status(Write(
                 Command::kRailConfigGlobalMode, 0,
                 stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco})),
             Action::kRspOk);
-  EXPECT_EQ(b.dev->Line().baud, 57600u);
+  EXPECT_EQ(b.dev->Line().serial.baud, 57600u);
   Text(b);
   Line(b, "hi");
   EXPECT_EQ(Text(b), "hi 1 3 1.2.6\r\n");
@@ -894,7 +894,7 @@ TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
   // Set over serial and not saved: a power cycle comes back in binary mode.
   b.dev->PowerOff();
   b.dev->PowerOn();
-  EXPECT_EQ(b.dev->Line().baud, 38400u);
+  EXPECT_EQ(b.dev->Line().serial.baud, 38400u);
   EXPECT_EQ(b.Ask(Read(Command::kPing, 0, stackshot::PingRequest{1})).data, (wire::Bytes{0xFE, 0}));
   // The panel switches both ways.
   b.dev->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
@@ -1040,7 +1040,7 @@ TEST(Stackshot3xTest, OverWifiDfmocoModeIsTakenButTheLinkKeepsTheBinaryProtocol)
             Action::kRspOk);
   EXPECT_TRUE(b.dev->InDfmocoMode());
   EXPECT_FALSE(b.dev->SpeaksDfmoco());
-  EXPECT_EQ(b.dev->Line().baud, 38400u);
+  EXPECT_EQ(b.dev->Line().serial.baud, 38400u);
   EXPECT_EQ(std::get<stackshot::EnumValue<stackshot::GlobalMode>>(
                 b.AskRead(Read(Command::kRailConfigGlobalMode)).payload)
                 .value,
