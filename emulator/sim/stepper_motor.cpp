@@ -99,15 +99,19 @@ MoveStatus StepperMotor::CheckCanMove(int64_t target_steps) const {
   return MoveStatus::kOk;
 }
 
-MoveStatus StepperMotor::MoveTo(int64_t target_steps) {
-  const MoveStatus status = CheckCanMove(target_steps);
-  if (status != MoveStatus::kOk) return status;
+PlanRequest StepperMotor::MoveRequest(int64_t target_steps) const {
   PlanRequest req;
   req.kind = PlanRequest::Kind::kMoveTo;
   req.target_steps = target_steps;
   req.max_velocity_steps_per_s = profile_.max_velocity_steps_per_s;
   req.max_accel_steps_per_s2 = profile_.max_accel_steps_per_s2;
-  Replan(req);
+  return req;
+}
+
+MoveStatus StepperMotor::MoveTo(int64_t target_steps) {
+  const MoveStatus status = CheckCanMove(target_steps);
+  if (status != MoveStatus::kOk) return status;
+  Replan(MoveRequest(target_steps));
   return MoveStatus::kOk;
 }
 
@@ -195,12 +199,7 @@ void StepperMotor::ApplyPending() {
   pending_timer_ = Scheduler::kNoTimer;
   const TimeNs now = scheduler_.Now();
   if (!pending_.stop) {
-    PlanRequest req;
-    req.kind = PlanRequest::Kind::kMoveTo;
-    req.target_steps = pending_.target_steps;
-    req.max_velocity_steps_per_s = profile_.max_velocity_steps_per_s;
-    req.max_accel_steps_per_s2 = profile_.max_accel_steps_per_s2;
-    Replan(req);
+    Replan(MoveRequest(pending_.target_steps));
     return;
   }
   if (plan_.empty() || now >= plan_.EndNs()) {

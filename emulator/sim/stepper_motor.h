@@ -218,6 +218,8 @@ class StepperMotor {
 
  private:
   MoveStatus CheckCanMove(int64_t target_steps) const;
+  // MoveTo()'s plan request under the profile's limits.
+  PlanRequest MoveRequest(int64_t target_steps) const;
   // Stop() and HardStop() at `decel_steps_per_s2`, bounded by the soft limits.
   void StopWith(double decel_steps_per_s2);
   // Stop()'s deceleration now.
