@@ -31,6 +31,13 @@ class ByteSink {
   // Takes a copy of `bytes`; never blocks and never fails from the device's
   // point of view (a transport queues, paces or drops as the link would).
   virtual void Write(wire::ByteView bytes) = 0;
+  // Whether host bytes wait on the line that the device has not been handed
+  // yet (in a transport's kernel buffer or paced queue): the line is not
+  // silent then, however long ago the last bytes were handed over. A device
+  // that times the line's silence (the DMC-16's idle gap) asks before giving
+  // a partial message up. Default: none (in-process, bytes are handed over as
+  // they are written).
+  virtual bool HostBytesWaiting() { return false; }
 };
 
 // The line a device is reached over: its serial settings (the one

@@ -37,6 +37,7 @@ class FaultySink final : public ByteSink {
   FaultySink(ByteSink& out, DmcFault fault);
 
   void Write(wire::ByteView bytes) override;
+  bool HostBytesWaiting() override { return out_.HostBytesWaiting(); }
 
   // Every message unchanged.
   static Fault PassThrough();

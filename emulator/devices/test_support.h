@@ -31,6 +31,11 @@ class RecordingSink final : public ByteSink {
     pending_.insert(pending_.end(), bytes.begin(), bytes.end());
   }
 
+  // What HostBytesWaiting() answers: a test stands in for a transport
+  // with host bytes still in its kernel buffer.
+  bool HostBytesWaiting() override { return host_bytes_waiting; }
+  bool host_bytes_waiting = false;
+
   // Everything written, in order, as one string.
   std::string All() const {
     std::string s;

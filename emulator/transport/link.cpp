@@ -279,6 +279,11 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
     return;
   }
   stats_.bytes_from_host += n;
+  // A read that took (nearly) the whole buffer most likely left bytes
+  // behind, where the kernel may not count them yet: a PTY's line discipline
+  // holds 4095 bytes, and the rest waits in its flip buffer until a kernel
+  // worker moves it. Until the next read, host bytes count as waiting.
+  last_read_full_ = n + 1 >= read_buf_.size();
   const wire::ByteView bytes(read_buf_.data(), n);
   if (now < cut_until_ns_) {
     stats_.cut_dropped += n;
@@ -306,6 +311,11 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
   reading_ = false;
   StartRead();
   driver_.Kick();
+}
+
+bool Link::HostBytesWaiting() {
+  if (!in_.empty() || last_read_full_) return true;
+  return stream_ != nullptr && !stopped_ && stream_->Available() > 0;
 }
 
 void Link::DeliverInbound() {
@@ -371,6 +381,7 @@ void Link::DetachInternal() {
   stream_.reset();
   ++stream_gen_;
   reading_ = false;
+  last_read_full_ = false;
   if (writing_) {
     // The write in flight goes with the stream: the host never got it whole.
     stats_.discarded += write_buf_.size();

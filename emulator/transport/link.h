@@ -48,6 +48,9 @@ class ByteStream {
   virtual wire::Bytes Reclaim() { return {}; }
   // "127.0.0.1:51234", "/dev/pts/3": for log lines.
   virtual std::string PeerName() const = 0;
+  // Bytes the far end wrote that wait to be read (the kernel's count); 0 when
+  // unknown.
+  virtual size_t Available() { return 0; }
 };
 
 // Adapts an Asio stream (tcp::socket, posix::stream_descriptor) to ByteStream.
@@ -70,6 +73,12 @@ class AsioByteStream : public ByteStream {
     stream_.close(ignored);
   }
   std::string PeerName() const override { return peer_; }
+  size_t Available() override {
+    typename Stream::bytes_readable command(true);
+    ErrorCode ec;
+    stream_.io_control(command, ec);
+    return ec ? 0 : command.get();
+  }
   Stream& stream() { return stream_; }
 
  private:
@@ -152,6 +161,10 @@ class Link final : public devices::ByteSink {
 
   // devices::ByteSink: device output. Never blocks.
   void Write(wire::ByteView bytes) override;
+  // devices::ByteSink: host bytes not yet handed to the device: in the paced
+  // inbound queue, or in the kernel while this end is behind (the io thread
+  // busy with other devices, or reading held back by a full outgoing queue).
+  bool HostBytesWaiting() override;
 
   // Serves `stream` from now on. `on_end` runs (on the io thread) when the
   // stream ends by itself (EOF or an error, with the reason), not after
@@ -285,6 +298,7 @@ class Link final : public devices::ByteSink {
   std::array<uint8_t, kReadChunk> read_buf_{};
   bool reading_ = false;
   bool hold_reading_ = false;
+  bool last_read_full_ = false;  // the last read took the whole buffer (HostBytesWaiting)
   std::deque<InByte> in_;
   uint32_t line_rate_ = 0;  // bytes/s the pacers run at (0: unpaced)
   LinePacer in_pacer_;

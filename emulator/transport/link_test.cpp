@@ -28,6 +28,7 @@ struct FakeEnd {
   asio::mutable_buffer read_buf;
   bool closed = false;
   wire::Bytes to_reclaim;
+  size_t available = 0;  // what the kernel would count as unread
 
   void HostSends(std::string_view s) {
     ASSERT_TRUE(pending_read) << "the link is not reading";
@@ -66,6 +67,7 @@ class FakeStream final : public ByteStream {
   }
   wire::Bytes Reclaim() override { return std::exchange(end_->to_reclaim, {}); }
   std::string PeerName() const override { return "fake"; }
+  size_t Available() override { return end_->available; }
 
  private:
   std::shared_ptr<FakeEnd> end_;
@@ -137,6 +139,26 @@ TEST_F(LinkTest, TapSeesTheDevicesViewWithNonDecreasingSchedulerTimes) {
     EXPECT_GE(recorder_.log[i].t_ns, recorder_.log[i - 1].t_ns);
   }
   EXPECT_LE(recorder_.log.back().t_ns, scheduler_.Now());
+}
+
+// A device timing the line's silence asks whether host bytes still wait:
+// those the kernel counts, and after a read that filled the whole buffer,
+// those it may not count yet, until the next read.
+TEST_F(LinkTest, HostBytesWaitWhileTheKernelHoldsThemOrAReadFilledTheBuffer) {
+  Build(Unpaced());
+  auto end = AttachFake();
+  EXPECT_FALSE(link_->HostBytesWaiting());
+  end->available = 7;
+  EXPECT_TRUE(link_->HostBytesWaiting());
+  end->available = 0;
+  const std::string full(4096, 'x');
+  end->HostSends(full);
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == full.size(); }));
+  EXPECT_TRUE(link_->HostBytesWaiting()) << "a full read leaves bytes behind";
+  ASSERT_TRUE(RunUntil(io_, [&] { return static_cast<bool>(end->pending_read); }));
+  end->HostSends("y");
+  ASSERT_TRUE(RunUntil(io_, [&] { return end->written.size() == full.size() + 1; }));
+  EXPECT_FALSE(link_->HostBytesWaiting());
 }
 
 TEST_F(LinkTest, PacedHostBytesReachTheDeviceOneCharacterTimeApart) {

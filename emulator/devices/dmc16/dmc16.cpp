@@ -263,6 +263,13 @@ void Dmc16::OnIdleGap() {
     ArmIdleGap();
     return;
   }
+  if (out_.HostBytesWaiting()) {
+    // The host's bytes wait on the line, not yet handed over (a transport
+    // behind in its reading): the line was not idle, the frame may go on.
+    last_host_bytes_ns_ = scheduler_.Now();
+    ArmIdleGap();
+    return;
+  }
   decoder_->Finish([this](const dmc::FrameEvent& e) { OnFrameEvent(e); });
 }
 

@@ -197,6 +197,38 @@ TEST(Dmc16Framing, RequestsSwallowedByACorruptedLengthAreAnsweredAtTheIdleGap) {
   EXPECT_EQ(RepliesTo(h, 50), 0u);
 }
 
+// The gap is the line's silence, not the transport's: while the host's bytes
+// wait unread (a transport behind in its reading, under load), a frame cut
+// at a read's end is not given up, and completes when its rest is handed
+// over.
+TEST(Dmc16Framing, APartialFrameIsKeptPastTheGapWhileHostBytesWaitUnread) {
+  Host h(SmallProfile());
+  const wire::Bytes frame = dmc::Encode(60, dmc::HostMessage{dmc::HiRequest{}});
+  const size_t cut = 5;
+  h.SendRaw(wire::Bytes(frame.begin(), frame.begin() + cut));
+  h.sink().host_bytes_waiting = true;
+  h.RunFor(3 * Dmc16::kLineIdleGapNs);
+  EXPECT_EQ(RepliesTo(h, 60), 0u);
+  h.sink().host_bytes_waiting = false;
+  h.SendRaw(wire::Bytes(frame.begin() + cut, frame.end()));
+  h.RunMs(1);
+  ASSERT_EQ(RepliesTo(h, 60), 1u);
+  EXPECT_TRUE(std::holds_alternative<dmc::HiResponse>(h.Reply(60).msg));
+}
+
+// Once nothing waits, the gap runs from when the line was last seen busy.
+TEST(Dmc16Framing, APartialFrameIsGivenUpAGapAfterTheWaitingBytesAreGone) {
+  Host h(SmallProfile());
+  h.SendRaw(CorruptedLength(50));
+  h.sink().host_bytes_waiting = true;
+  h.RunFor(Dmc16::kLineIdleGapNs);
+  h.sink().host_bytes_waiting = false;
+  h.RunFor(Dmc16::kLineIdleGapNs);
+  const uint32_t id = h.Send(dmc::HiRequest{});
+  EXPECT_EQ(h.Reply(id).t_ns, h.now()) << "the false frame was given up by then";
+  EXPECT_EQ(RepliesTo(h, 50), 0u);
+}
+
 // "For received messages, this checksum should be zero. If it is not the
 // device should respond with response code ACK_ERR_CHECKSUM": a received
 // message has a header a request can have. A false "DF" in noise whose Type

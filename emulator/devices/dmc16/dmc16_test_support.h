@@ -60,6 +60,7 @@ class Host {
     return id;
   }
   void SendRaw(const wire::Bytes& b) { device_.OnHostBytes(b); }
+  RecordingSink& sink() { return sink_; }
 
   // The one reply to request `id` (fails the test unless exactly one).
   const Out& Reply(uint32_t id) {
