@@ -4,11 +4,8 @@
 #include "conformance/core/pin_judge.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <map>
-#include <optional>
 #include <sstream>
 
 namespace moco::conformance {
@@ -37,25 +34,6 @@ std::string Seconds(TimeNs t) {
   char text[32];
   std::snprintf(text, sizeof text, "%.6f s", static_cast<double>(t) / 1e9);
   return text;
-}
-
-std::vector<std::string_view> Words(std::string_view line) {
-  std::vector<std::string_view> out;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && line[i] == ' ') ++i;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ') ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
-
-std::optional<int64_t> Number(std::string_view w) {
-  int64_t v = 0;
-  const auto r = std::from_chars(w.data(), w.data() + w.size(), v);
-  if (r.ec != std::errc() || r.ptr != w.data() + w.size()) return std::nullopt;
-  return v;
 }
 
 // One motor's STEP and DIR as the rules read them.
@@ -107,51 +85,6 @@ MotorView ViewOf(const PinTrace& trace, size_t i) {
 }
 
 std::string Id(std::string_view prefix, const char* n) { return std::string(prefix) + n; }
-
-}  // namespace
-
-std::vector<PinPositionEvent> DfmocoPinEvents(const std::vector<Chunk>& traffic) {
-  std::vector<PinPositionEvent> out;
-  std::string host_line, device_line;
-  std::map<int, int64_t> pending;  // motor -> position an np / zm asked for
-  for (const Chunk& c : traffic) {
-    std::string& line = c.from_host ? host_line : device_line;
-    for (const uint8_t b : c.bytes) {
-      if (b != '\r' && b != '\n') {
-        if (line.size() < 256) line.push_back(static_cast<char>(b));
-        continue;
-      }
-      if (line.empty()) continue;
-      const std::vector<std::string_view> w = Words(line);
-      const auto arg = [&](size_t k) { return k < w.size() ? Number(w[k]) : std::nullopt; };
-      const auto motor = arg(1);
-      if (!w.empty() && motor && *motor >= 1 && *motor <= 64) {
-        const int m = static_cast<int>(*motor);
-        if (c.from_host) {
-          if (w[0] == "np" && w.size() == 3 && arg(2)) pending[m] = *arg(2);
-          if (w[0] == "zm" && w.size() == 2) pending[m] = 0;
-        } else if ((w[0] == "np" && w.size() == 3 && arg(2)) || (w[0] == "zm" && w.size() == 2)) {
-          out.push_back({PinPositionEvent::Kind::kReset, c.t_ns, m, w[0] == "zm" ? 0 : *arg(2)});
-          pending.erase(m);
-        } else if (w[0] == "mp" && w.size() == 3 && arg(2)) {
-          const auto p = pending.find(m);
-          const bool reset = p != pending.end() && p->second == *arg(2);
-          out.push_back({reset ? PinPositionEvent::Kind::kReset : PinPositionEvent::Kind::kReport,
-                         c.t_ns, m, *arg(2)});
-          if (reset) pending.erase(p);
-        } else if (w[0] == "pr" && w.size() == 3 && arg(2)) {
-          out.push_back({PinPositionEvent::Kind::kPulseRate, c.t_ns, m, *arg(2)});
-        }
-      } else if (!c.from_host && line == "parse error") {
-        pending.clear();
-      }
-      line.clear();
-    }
-  }
-  return out;
-}
-
-namespace {
 
 // What the checks of one motor work with.
 struct MotorJudge {
@@ -427,12 +360,6 @@ void JudgePins(std::string_view prefix, const PinTrace& trace,
     JudgeAcceleration(judge, MaxPulseRate(events, m.motor, end, o.default_pulse_rate));
     JudgeReversals(judge);
   }
-}
-
-void JudgePinsFor(Protocol protocol, const PinTrace& trace, const std::vector<Chunk>& traffic,
-                  const PinJudgeOptions& options, TimeNs end_ns, Verdicts& v) {
-  if (protocol != Protocol::kDfmoco) return;
-  JudgePins("DFM-", trace, DfmocoPinEvents(traffic), options, end_ns, v);
 }
 
 }  // namespace moco::conformance

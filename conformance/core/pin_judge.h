@@ -15,7 +15,8 @@
 
 namespace moco::conformance {
 
-// What the protocol said about a motor's position, in any protocol's terms.
+// What the protocol said about a motor's position, in any protocol's terms
+// (a protocol's traits read them from its traffic: PinEvents, core/run.h).
 struct PinPositionEvent {
   enum class Kind {
     kReport,     // the device reported `position` (a report or an answer)
@@ -27,11 +28,6 @@ struct PinPositionEvent {
   int motor = 1;         // 1-based
   int64_t position = 0;
 };
-
-// The DFMoco lines of `traffic` as position events: `mp m p` reports, `np m p`
-// and `zm m` answers (and the sketch's `mp m p` answering an np or zm) as
-// resets, `pr m v` answers as pulse rates.
-std::vector<PinPositionEvent> DfmocoPinEvents(const std::vector<Chunk>& traffic);
 
 struct PinJudgeOptions {
   DriverProfile driver;
@@ -48,10 +44,6 @@ struct PinJudgeOptions {
 void JudgePins(std::string_view prefix, const PinTrace& trace,
                const std::vector<PinPositionEvent>& events, const PinJudgeOptions& options,
                sim::TimeNs end_ns, Verdicts& v);
-
-// Judges `trace` for `protocol` when it has a pin family (DFMoco); else nothing.
-void JudgePinsFor(Protocol protocol, const PinTrace& trace, const std::vector<Chunk>& traffic,
-                  const PinJudgeOptions& options, sim::TimeNs end_ns, Verdicts& v);
 
 }  // namespace moco::conformance
 

@@ -170,20 +170,6 @@ TEST(PinJudge, AReportOfTheChunkStillBeingSteppedOutIsJudgedAsMoving) {
   EXPECT_EQ(StatusOf(v, "DFM-PIN-002"), Status::kPass);
 }
 
-TEST(PinJudge, DfmocoLinesBecomeReportsResetsAndPulseRates) {
-  std::vector<Chunk> traffic = {{0, true, {'n', 'p', ' ', '1', ' ', '7', '\r', '\n'}},
-                                {10, false, {'m', 'p', ' ', '1', ' ', '7', '\r', '\n'}},
-                                {20, false, {'m', 'p', ' ', '1', ' ', '9', '\r', '\n'}},
-                                {30, false, {'p', 'r', ' ', '2', ' ', '9', '9', '\r', '\n'}}};
-  const auto e = DfmocoPinEvents(traffic);
-  ASSERT_EQ(e.size(), 3u);
-  EXPECT_EQ(e[0].kind, PinPositionEvent::Kind::kReset);  // the sketch answers np with mp
-  EXPECT_EQ(e[1].kind, PinPositionEvent::Kind::kReport);
-  EXPECT_EQ(e[1].position, 9);
-  EXPECT_EQ(e[2].kind, PinPositionEvent::Kind::kPulseRate);
-  EXPECT_EQ(e[2].motor, 2);
-}
-
 TEST(PinProfiles, TheDriverFilesHoldTheBuiltInDatasheetFigures) {
   for (const DriverProfile& d : BuiltInDrivers()) {
     const auto read = LoadDriver(Root() + "/fixtures/drivers/" + d.name + ".json");

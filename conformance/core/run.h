@@ -28,6 +28,10 @@
 //     static std::optional<Device> Greet(Host& host, Target& target, const Device& discovered);
 //     // The motor positions the device reported in `traffic`, for plots.
 //     static PositionSeries Positions(const std::vector<Chunk>& traffic);
+//     // Optional, for a protocol with a pin family (core/pin_judge.h): its
+//     // rule prefix ("DFM-") and the position events of `traffic`.
+//     static constexpr std::string_view kPinRulePrefix;
+//     static std::vector<PinPositionEvent> PinEvents(const std::vector<Chunk>& traffic);
 //     // The fuzzer's and replay's hooks of each protocol the folder speaks
 //     // (core/fuzz_protocol.h).
 //     static std::span<const FuzzHooks> Fuzz();
@@ -198,7 +202,10 @@ bool RunCase(Target& target, const typename Traits::Case& k, const RunOptions& o
   host.Close();
   if (const PinTrace* pins = target.Pins(); pins != nullptr && options.pins) {
     // What a step driver saw during the case (conformance/rules/pin_rules.cpp).
-    JudgePinsFor(Traits::kProtocol, *pins, host.traffic(), *options.pins, host.Now(), verdicts);
+    if constexpr (requires { Traits::PinEvents(host.traffic()); }) {
+      JudgePins(Traits::kPinRulePrefix, *pins, Traits::PinEvents(host.traffic()), *options.pins,
+                host.Now(), verdicts);
+    }
     result.pins = std::make_shared<const PinTrace>(*pins);
   }
   if (host.link_lost()) result.log.push_back("the link to the device was lost");

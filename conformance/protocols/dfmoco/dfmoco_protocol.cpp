@@ -2,7 +2,6 @@
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 
 #include <charconv>
-#include <cstdio>
 #include <string>
 
 namespace moco::conformance {
@@ -148,27 +147,6 @@ std::optional<DfmDevice> DfmocoProtocol::Greet(DfmHost& host, Target& target,
     }
   }
   return std::nullopt;
-}
-
-PositionSeries DfmocoProtocol::Positions(const std::vector<Chunk>& traffic) {
-  PositionSeries s;
-  std::string pending;
-  for (const Chunk& c : traffic) {
-    if (c.from_host) continue;
-    pending.append(c.bytes.begin(), c.bytes.end());
-    size_t nl;
-    while ((nl = pending.find('\n')) != std::string::npos) {
-      std::string line = pending.substr(0, nl);
-      pending.erase(0, nl + 1);
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      int motor = 0;
-      long long pos = 0;
-      if (std::sscanf(line.c_str(), "mp %d %lld", &motor, &pos) == 2 && motor > 0 && motor <= 32) {
-        s[motor].emplace_back(c.t_ns, pos);
-      }
-    }
-  }
-  return s;
 }
 
 }  // namespace moco::conformance

@@ -56,8 +56,13 @@ struct DfmocoProtocol {
   static std::string CaseNotApplicable(const DfmCase& k, const DfmDevice& device) {
     return DfmocoDialectExcludes(k.suite + "/" + k.name, device);
   }
-  // Every `mp` line the device sent.
+  // Every `mp` line the device sent (dfmoco_traffic.cpp).
   static PositionSeries Positions(const std::vector<Chunk>& traffic);
+  // The pin rules' family (DFM-PIN-*, conformance/rules/pin_rules.cpp) and
+  // what the traffic said of the motors' positions and pulse rates
+  // (dfmoco_traffic.cpp).
+  static constexpr std::string_view kPinRulePrefix = "DFM-";
+  static std::vector<PinPositionEvent> PinEvents(const std::vector<Chunk>& traffic);
   // The fuzzer's hooks (core/fuzz_protocol.h), in dfmoco_fuzz_hooks.cpp.
   static std::span<const FuzzHooks> Fuzz();
   // The longest line a fuzz mutant carries (its line end aside).
