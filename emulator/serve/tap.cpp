@@ -528,7 +528,7 @@ void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
   stats_.peak_to_host_bytes = std::max(stats_.peak_to_host_bytes, link.queued_bytes());
   NoteLinkLosses();
   if (const auto change = follower_.OnDeviceBytes(bytes)) {
-    recorder_->SetDialectAfter(stats_.device_read_bytes, change->dialect);
+    recorder_->SetDialectAfter(stats_.device_read_bytes - n + change->offset, change->dialect);
     ChangeLine(change->baud, "the device acknowledged a switch to " +
                                  std::string(wire::ProtocolName(change->dialect)));
   }
