@@ -133,7 +133,9 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      &LineNext,
      &LineRepair,
      &LineGreeting,
-     &MakeStackshotDfmocoTranscript},
+     &MakeStackshotDfmocoTranscript,
+     nullptr,
+     Protocol::kDfmoco},
 }};
 
 }  // namespace

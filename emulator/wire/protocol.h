@@ -78,6 +78,10 @@ struct ProtocolInfo {
   // its own: the watcher that reads the switch from the traffic. Null for a
   // line that never switches (or only in ways the traffic does not show).
   std::unique_ptr<LineSwitchWatcher> (*line_switches)() = nullptr;
+  // A dialect of another protocol: that protocol's hosts, rules and runner
+  // apply to it (a StackShot in DfMoco mode is a DFMoco device); nullopt
+  // for a protocol of its own.
+  std::optional<Protocol> dialect_of = std::nullopt;
 };
 
 // The watcher of a line speaking `p` (ProtocolInfo::line_switches); null
