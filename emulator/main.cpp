@@ -56,6 +56,20 @@ void PrintLines(int64_t t_ns, const std::vector<TranscriptLine>& lines, bool sho
   }
 }
 
+// "StackShot 3X (DfMoco mode) at 57600 baud": what a device's line can switch
+// to (devices/registry.h also_speaks), for help texts.
+std::string LineSwitchList() {
+  std::string list;
+  for (const moco::devices::DeviceModel& m : moco::devices::DeviceModels()) {
+    for (const moco::wire::Protocol p : m.also_speaks) {
+      if (!list.empty()) list += ", ";
+      list += std::string(moco::wire::Info(p).title) + " at " +
+              std::to_string(moco::wire::Info(p).line.baud) + " baud";
+    }
+  }
+  return list;
+}
+
 // `mocosim decode SESSION`: prints the session as a transcript. Exit 0 when
 // every byte decoded cleanly, 1 when the traffic has problems (they are
 // printed with "!!"), 2 when the file cannot be read.
@@ -81,6 +95,8 @@ int Decode(const std::string& path, bool show_time, bool strict) {
     if (e.is_event) {
       std::printf("%12.6f  event        %s\n", static_cast<double>(e.t_ns) / 1e9,
                   e.event.dump().c_str());
+      // The traffic after a recorded switch of the line speaks its protocol.
+      if (const auto p = moco::session::LineSwitchOf(e)) decoder.SwitchTo(*p);
       continue;
     }
     PrintLines(e.t_ns,
@@ -445,7 +461,7 @@ struct DeviceCli {
         "--tcp", tcp_spec,
         "Listen on TCP [HOST:]PORT instead (default host 127.0.0.1; port 0 = any free port)");
     pty_opt->excludes(tcp_opt);
-    if (model.protocol == moco::wire::Protocol::kStackshot) {
+    if (model.wifi) {
       wifi_opt = cmd->add_option(
           "--wifi", wifi_spec,
           "Serve over Wi-Fi as the real unit does: hear the host's FINDSTACK on UDP, then "
@@ -614,9 +630,9 @@ struct TapCli {
         "the device, and the tap opens the device's serial port (or TCP address). Bytes pass "
         "unchanged both ways, and each chunk is recorded with its arrival time and decoded "
         "messages into a session file that mococheck replay/fuzz and mocosim decode/plot read "
-        "like a --record'ed one. The tap follows a StackShot's switch to DfMoco mode (" +
-            std::to_string(moco::wire::Info(moco::wire::Protocol::kStackshotDfmoco).line.baud) +
-            " baud) and a host setting another speed on the PTY; a host closing and reopening "
+        "like a --record'ed one. The tap follows a device's switch to another protocol (" +
+            LineSwitchList() +
+            ") and a host setting another speed on the PTY; a host closing and reopening "
             "the PTY does not end it; a device going away is reported and looked for again; "
             "Ctrl-C (SIGINT, SIGTERM, SIGHUP) completes the recording.\n"
             "Example: mocosim tap --protocol dmc --device serial:/dev/ttyUSB0 --pty /tmp/dmc16 "

@@ -50,8 +50,10 @@ struct ResolvedTarget {
   TargetSpec spec;
   Protocol protocol = Protocol::kDmc;
   std::unique_ptr<Target> target;  // not opened yet; nullptr with in_process_only_message
-  // in-process:stackshot3x with --protocol dfmoco: the device runs in DfMoco mode.
-  bool stackshot_dfmoco = false;
+  // An in-process model that starts speaking another protocol it also speaks
+  // (devices::LineFor; in-process:stackshot3x with --protocol dfmoco: its
+  // DfMoco mode); nullopt: its own.
+  std::optional<Protocol> speaking;
 };
 
 // Parses the target, settles the protocol (a model that speaks another

@@ -51,7 +51,8 @@ int Fuzz(const FuzzArgs& a) {
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
   const std::string model = std::get<ResolvedTarget>(resolved).spec.address;
-  FuzzExecutor executor(proto, InProcessTarget::ForModel(model, a.profile));
+  FuzzExecutor executor(proto, InProcessTarget::ForModel(
+                                   model, a.profile, std::get<ResolvedTarget>(resolved).speaking));
   if (auto err = executor.Open()) return Fail(*err);
   FuzzOptions options;
   options.seed = a.seed;

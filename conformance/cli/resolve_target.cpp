@@ -55,10 +55,12 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
   }
 
   // The protocol: the traffic's, else as given, else the in-process model's,
-  // else DMC v2.
+  // else DMC v2. An in-process model may start speaking another protocol it
+  // also speaks (the registry's also_speaks: a StackShot 3X in DfMoco mode
+  // for DFMoco traffic, stackshot-protocol.txt section 3).
   if (request.protocol) {
     out.protocol = *request.protocol;
-    if (model != nullptr && model->protocol != out.protocol) {
+    if (model != nullptr && !devices::LineFor(*model, out.protocol)) {
       return "in-process:" + ts.address + " does not speak " + request.traffic_name + " protocol " +
              std::string(ProtocolName(out.protocol));
     }
@@ -67,28 +69,26 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
     if (!p) {
       return "--protocol " + request.protocol_option + ": give " + wire::NameList(kAllProtocols);
     }
-    // A StackShot 3X speaks DfMoco in its DfMoco mode (stackshot-protocol.txt
-    // section 3): the in-process device is then started in that mode.
-    const bool stackshot_dfmoco = model != nullptr && ts.address == "stackshot3x" &&
-                                  *p == Protocol::kDfmoco &&
-                                  request.in_process_only_message.empty();
-    if (model != nullptr && model->protocol != *p && !stackshot_dfmoco) {
+    if (model != nullptr && !devices::LineFor(*model, *p)) {
       return "--protocol " + request.protocol_option + " does not match in-process:" + ts.address +
-             ", which speaks " + std::string(ProtocolName(model->protocol)) +
+             ", which speaks " + devices::SpokenNames(*model) +
              "; drop --protocol or pick the matching model";
     }
     out.protocol = *p;
-    out.stackshot_dfmoco = stackshot_dfmoco;
   } else if (model != nullptr) {
     out.protocol = model->protocol;
+  }
+  if (model != nullptr) {
+    const wire::Protocol line = *devices::LineFor(*model, out.protocol);
+    if (line != model->protocol) out.speaking = line;
   }
 
   if (!request.profile.empty() && !in_process) {
     return "--profile applies to in-process targets only; an external device has its own";
   }
   if (!request.in_process_only_message.empty()) return out;
-  if (out.stackshot_dfmoco) {
-    out.target = InProcessTarget::ForModel(ts.address, request.profile, true);
+  if (out.speaking) {
+    out.target = InProcessTarget::ForModel(ts.address, request.profile, out.speaking);
     return out;
   }
   auto made = MakeTarget(ts, request.profile,

@@ -22,7 +22,6 @@
 
 #include "base/termios_speed.h"
 #include "devices/registry.h"
-#include "devices/stackshot3x/stackshot3x.h"
 #include "sim/io.h"
 #include "sim/rig.h"
 #include "wire/protocol.h"
@@ -59,34 +58,15 @@ InProcessTarget::~InProcessTarget() {
 
 std::unique_ptr<InProcessTarget> InProcessTarget::ForModel(const std::string& model,
                                                            const std::string& profile_path,
-                                                           bool stackshot_dfmoco) {
-  if (model == "stackshot3x") {
-    // NVM outlives the device, so Restart() is a power cycle that keeps it.
-    auto nvm = std::make_shared<devices::MemoryStateStore>();
-    auto first = std::make_shared<bool>(true);
-    return std::make_unique<InProcessTarget>(
-        model,
-        [profile_path, nvm, stackshot_dfmoco, first](sim::Scheduler& s, devices::ByteSink& sink) {
-          auto device = std::make_unique<devices::Stackshot3x>(
-              s, sink,
-              profile_path.empty() ? devices::Stackshot3xProfile{}
-                                   : devices::LoadStackshot3xProfile(profile_path),
-              nvm.get());
-          if (stackshot_dfmoco && *first) {
-            // The panel's Settings->Mode->Motion->DfMoco (stackshot-protocol.txt
-            // section 3) stores the power-on mode in NVM: the power-on that
-            // follows (Build()) starts in DfMoco mode, and so does every Restart().
-            device->PowerOn();
-            device->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
-            device->PowerOff();
-          }
-          *first = false;
-          return device;
-        });
-  }
+                                                           std::optional<wire::Protocol> speaking) {
+  const devices::DeviceModel* m = devices::FindDeviceModel(model);
+  // NVM outlives the device, so Restart() is a power cycle that keeps it.
+  auto nvm =
+      m != nullptr && m->keeps_state ? std::make_shared<devices::MemoryStateStore>() : nullptr;
+  const devices::DeviceStart start{speaking};
   return std::make_unique<InProcessTarget>(
-      model, [model, profile_path](sim::Scheduler& s, devices::ByteSink& sink) {
-        return devices::CreateDevice(model, profile_path, s, sink);
+      model, [model, profile_path, nvm, start](sim::Scheduler& s, devices::ByteSink& sink) {
+        return devices::CreateDevice(model, profile_path, s, sink, nvm.get(), start);
       });
 }
 

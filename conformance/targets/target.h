@@ -117,13 +117,14 @@ class InProcessTarget final : public Target {
   // `name` is the model for Name(); `factory` builds the device (again on Restart()).
   InProcessTarget(std::string name, DeviceFactory factory);
   // A registered model (devices::CreateDevice) with its profile (empty: built-in).
-  // A model with NVM (stackshot3x) keeps it in memory across Restart(), as a
+  // A model with NVM (keeps_state) keeps it in memory across Restart(), as a
   // real power cycle does; each target starts with empty NVM.
-  // `stackshot_dfmoco`: a stackshot3x starts in DfMoco mode (Settings->Mode->
-  // Motion->DfMoco set on its panel, kept in its NVM as the power-on mode).
-  static std::unique_ptr<InProcessTarget> ForModel(const std::string& model,
-                                                   const std::string& profile_path,
-                                                   bool stackshot_dfmoco = false);
+  // `speaking`: the protocol its line speaks from power-on, one the model
+  // also speaks (devices::DeviceStart; a StackShot 3X's DfMoco mode, kept in
+  // its NVM as a real unit keeps it); nullopt: the model's own.
+  static std::unique_ptr<InProcessTarget> ForModel(
+      const std::string& model, const std::string& profile_path,
+      std::optional<wire::Protocol> speaking = std::nullopt);
   ~InProcessTarget() override;
 
   std::string Name() const override { return "in-process:" + name_; }

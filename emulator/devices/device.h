@@ -5,6 +5,7 @@
 #ifndef MOCO_DEVICES_DEVICE_H_
 #define MOCO_DEVICES_DEVICE_H_
 
+#include <cstdint>
 #include <functional>
 #include <string_view>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "devices/usb_bridge.h"
 #include "wire/bytes.h"
 #include "wire/line.h"
+#include "wire/protocol.h"
 
 namespace moco::sim {
 class Rig;
@@ -52,6 +54,21 @@ struct DeviceLine {
   UsbBridge bridge;  // none: the host reads bytes as the UART completes them
 };
 
+// What carries the host's bytes to a device: its serial line (a USB serial
+// port), or a network connection that stands for it (a StackShot 3X's Wi-Fi,
+// stackshot-protocol.txt section 4).
+enum class HostLink : uint8_t { kSerial, kWifi };
+
+// A device's line now speaks another protocol (and so, often, at another
+// rate): a StackShot 3X entering or leaving its DfMoco mode
+// (stackshot-protocol.txt section 3). `line` is the device's Line() after
+// the switch.
+struct LineSwitch {
+  wire::Protocol protocol = wire::Protocol::kDmc;
+  DeviceLine line;
+};
+using LineSwitchListener = std::function<void(const LineSwitch& change)>;
+
 // Something the simulated hardware did by itself, not in answer to the host: a
 // JSON object whose "event" names it ("stall", "collision", ...) with its own
 // fields. The listener stamps it with the scheduler's time.
@@ -78,6 +95,10 @@ class Device {
   virtual void OnHostBytes(wire::ByteView bytes) = 0;
   // The host opened (true) or closed (false) the link. Most devices do not care.
   virtual void OnHostLink(bool /*open*/) {}
+  // What carries the host's bytes (default kSerial); the serving layer says
+  // so before PowerOn(). A device whose protocol or framing depends on it
+  // follows; most do not care.
+  virtual void SetHostLink(HostLink /*link*/) {}
 
   // The simulated hardware behind the device, for the run-time control
   // channel (e-stop, limit switches, inputs). Null when the device has none.
@@ -96,14 +117,32 @@ class Device {
   // replaces the previous listener, null for none. Called back from the
   // scheduler's thread, never re-entrantly from inside this call.
   void SetEventListener(DeviceEventListener listener) { event_listener_ = std::move(listener); }
+  // Who hears of each switch of the device's line to another protocol: what
+  // carries its bytes (the transport paces at the new rate, a recording
+  // notes the switch, docs/sessions.md "line_switch"). Called synchronously,
+  // after the bytes the device wrote in the old protocol (a switch's
+  // acknowledgement) and before any it writes in the new one; replaces the
+  // previous listener, null for none. A device is created speaking its
+  // model's protocol (devices/registry.h) and announces every change, the
+  // first at PowerOn() when it powers on speaking another (a mode its NVM
+  // keeps, or the one it was created to start in: DeviceStart).
+  void SetLineSwitchListener(LineSwitchListener listener) {
+    line_switch_listener_ = std::move(listener);
+  }
 
  protected:
   void EmitEvent(const nlohmann::json& event) const {
     if (event_listener_) event_listener_(event);
   }
+  // The device's line speaks `protocol` from its next byte on (Line() is
+  // already the new line).
+  void AnnounceLineSwitch(wire::Protocol protocol) const {
+    if (line_switch_listener_) line_switch_listener_({protocol, Line()});
+  }
 
  private:
   DeviceEventListener event_listener_;
+  LineSwitchListener line_switch_listener_;
 };
 
 }  // namespace moco::devices

@@ -1,6 +1,7 @@
 // The device models by name (see registry.h).
 #include "devices/registry.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -15,23 +16,35 @@ namespace {
 // One factory per model: the profile file (empty: the built-in defaults),
 // then the device.
 std::unique_ptr<Device> MakeDmc16(const std::string& profile_path, sim::Scheduler& scheduler,
-                                  ByteSink& out, StateStore* /*state*/) {
+                                  ByteSink& out, StateStore* /*state*/,
+                                  const DeviceStart& /*start*/) {
   Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
   return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
 }
 
 std::unique_ptr<Device> MakeDfmoco(const std::string& profile_path, sim::Scheduler& scheduler,
-                                   ByteSink& out, StateStore* /*state*/) {
+                                   ByteSink& out, StateStore* /*state*/,
+                                   const DeviceStart& /*start*/) {
   DfmocoProfile profile = profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
   return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
 }
 
 std::unique_ptr<Device> MakeStackshot3x(const std::string& profile_path, sim::Scheduler& scheduler,
-                                        ByteSink& out, StateStore* state) {
+                                        ByteSink& out, StateStore* state,
+                                        const DeviceStart& start) {
   Stackshot3xProfile profile =
       profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
-  return std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
+  auto device = std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
+  if (start.speaking == wire::Protocol::kStackshotDfmoco) {
+    // Settings->Mode->Motion->DfMoco on the panel (stackshot-protocol.txt
+    // section 3) is kept in NVM as the power-on mode.
+    device->SetPowerOnMode(stackshot::GlobalMode::kMotionDfMoco);
+  }
+  return device;
 }
+
+// A StackShot 3X in DfMoco mode speaks DFMoco lines on its USB port.
+constexpr wire::Protocol kStackshot3xAlso[] = {wire::Protocol::kStackshotDfmoco};
 
 }  // namespace
 
@@ -42,7 +55,8 @@ const std::vector<DeviceModel>& DeviceModels() {
       {"dfmoco", "DFMoco Arduino (Uno or Mega), Dragonframe's ASCII sketch protocol",
        wire::Protocol::kDfmoco, "fixtures/profiles/dfmoco-uno.json", false, &MakeDfmoco},
       {"stackshot3x", "Cognisys StackShot 3X three-axis controller, StackShot binary protocol",
-       wire::Protocol::kStackshot, "fixtures/profiles/stackshot3x.json", true, &MakeStackshot3x},
+       wire::Protocol::kStackshot, "fixtures/profiles/stackshot3x.json", true, &MakeStackshot3x,
+       kStackshot3xAlso, /*wifi=*/true},
   };
   return kModels;
 }
@@ -54,10 +68,35 @@ const DeviceModel* FindDeviceModel(std::string_view name) {
   return nullptr;
 }
 
+std::optional<wire::Protocol> LineFor(const DeviceModel& model, wire::Protocol host) {
+  auto serves = [host](wire::Protocol line) {
+    return line == host || wire::Info(line).dialect_of == host;
+  };
+  if (serves(model.protocol)) return model.protocol;
+  for (const wire::Protocol p : model.also_speaks) {
+    if (serves(p)) return p;
+  }
+  return std::nullopt;
+}
+
+std::string SpokenNames(const DeviceModel& model) {
+  std::vector<wire::Protocol> all{model.protocol};
+  all.insert(all.end(), model.also_speaks.begin(), model.also_speaks.end());
+  return wire::NameList(all);
+}
+
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
-                                     sim::Scheduler& scheduler, ByteSink& out, StateStore* state) {
+                                     sim::Scheduler& scheduler, ByteSink& out, StateStore* state,
+                                     const DeviceStart& start) {
   if (const DeviceModel* m = FindDeviceModel(model)) {
-    return m->create(profile_path, scheduler, out, state);
+    if (start.speaking && *start.speaking != m->protocol &&
+        std::find(m->also_speaks.begin(), m->also_speaks.end(), *start.speaking) ==
+            m->also_speaks.end()) {
+      throw std::invalid_argument(std::string(m->name) + " does not speak " +
+                                  std::string(wire::ProtocolName(*start.speaking)) +
+                                  "; it speaks " + SpokenNames(*m));
+    }
+    return m->create(profile_path, scheduler, out, state, start);
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {

@@ -13,7 +13,6 @@
 #include "base/vcd.h"
 #include "devices/profile.h"
 #include "devices/registry.h"
-#include "devices/stackshot3x/stackshot3x.h"
 #include "serve/file_state_store.h"
 #include "serve/link_control_adapter.h"
 #include "serve/session_tap.h"
@@ -58,6 +57,9 @@ class TeeObserver final : public TrafficObserver {
   void OnLinkEvent(sim::TimeNs t, std::string_view k, std::string_view d) override {
     for (TrafficObserver* o : observers_) o->OnLinkEvent(t, k, d);
   }
+  void OnLineSwitch(sim::TimeNs t, wire::Protocol p, const wire::LineSettings& l) override {
+    for (TrafficObserver* o : observers_) o->OnLineSwitch(t, p, l);
+  }
 
  private:
   std::vector<TrafficObserver*> observers_;
@@ -76,6 +78,9 @@ class DebugTap final : public TrafficObserver {
       log_(name_ + " " + stamp + (side == wire::Side::kHost ? " host -> dev  " : " dev  -> host ") +
            (l.problem ? "!! " : "") + l.text);
     }
+  }
+  void OnLineSwitch(sim::TimeNs, wire::Protocol p, const wire::LineSettings&) override {
+    decoder_.SwitchTo(p);
   }
 
  private:
@@ -343,12 +348,9 @@ Emulator::Emulator(EmulatorConfig config, LogFn log)
       } catch (const std::exception& e) {
         throw ConfigError(d.name + ": " + e.what());
       }
-      if (s->server->wifi() != nullptr) {
-        // A StackShot on Wi-Fi: TCP framing, binary protocol only.
-        if (auto* ss = dynamic_cast<devices::Stackshot3x*>(s->device.get())) {
-          ss->SetHostLink(devices::Stackshot3x::HostLink::kWifi);
-        }
-      }
+      // A device served over Wi-Fi frames (and, a StackShot, speaks) as its
+      // network link does.
+      if (s->server->wifi() != nullptr) s->device->SetHostLink(devices::HostLink::kWifi);
       if (!d.vcd_path.empty() && s->device->rig() != nullptr) s->TraceSteps(*s->device->rig());
       // Last, so that a device failing to start leaves no recording behind.
       if (!d.record_path.empty()) {

@@ -2,6 +2,7 @@
 // file reader, and start-up errors that name the problem.
 #include "serve/serve.h"
 
+#include <poll.h>
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
@@ -15,9 +16,12 @@
 #include <thread>
 
 #include "base/file_io.h"
+#include "devices/registry.h"
+#include "serve/file_state_store.h"
 #include "session/session.h"
 #include "transport/dmc_host_client.h"
 #include "wire/stackshot.h"
+#include "wire/transcript.h"
 
 namespace moco::serve {
 namespace {
@@ -282,6 +286,84 @@ TEST(Serve, Stackshot3xEndToEndOverPtyKeepsItsSerialNumberInTheStateFile) {
     io.join();
     EXPECT_TRUE(fs::exists(dir / "nvm.json"));
   }
+  fs::remove_all(dir);
+}
+
+// A StackShot 3X set to DfMoco mode on its panel powers on speaking DFMoco
+// (stackshot-protocol.txt section 3): its recording says so with a
+// "line_switch" event, and a transcript that follows the recorded switches
+// (as `mocosim decode` does) reads the DFMoco lines after it.
+TEST(Serve, Stackshot3xPoweringOnInDfmocoModeIsRecordedAsALineSwitch) {
+  const fs::path dir = TempDir();
+  {
+    FileStateStore nvm(dir / "nvm.json");
+    devices::StateLoad first;
+    ASSERT_FALSE(nvm.Open(&first).has_value());
+    sim::Scheduler sched;
+    struct Null final : devices::ByteSink {
+      void Write(wire::ByteView) override {}
+    } sink;
+    devices::CreateDevice("stackshot3x", "", sched, sink, &nvm,
+                          devices::DeviceStart{wire::Protocol::kStackshotDfmoco});
+  }
+  EmulatorConfig config;
+  config.log_level = LogLevel::kError;
+  DeviceConfig d;
+  d.model = "stackshot3x";
+  d.endpoint = "pty:" + (dir / "ss").string();
+  d.state_path = (dir / "nvm.json").string();
+  d.record_path = (dir / "ss.jsonl").string();
+  config.devices = {d};
+  {
+    Emulator e(config, [](std::string_view) {});
+    e.Start();
+    std::thread io([&] { e.Run(); });
+    const int fd = testing::OpenPtyHost(e.server(0).pty_path());
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(write(fd, "hi\r\n", 4), 4);
+    std::string answer;
+    for (int i = 0; i < 50 && answer.find('\n') == std::string::npos; ++i) {
+      pollfd p{fd, POLLIN, 0};
+      if (poll(&p, 1, 100) <= 0) continue;
+      char buf[64];
+      const ssize_t n = read(fd, buf, sizeof buf);
+      if (n > 0) answer.append(buf, static_cast<size_t>(n));
+    }
+    EXPECT_EQ(answer.rfind("hi ", 0), 0u) << answer;
+    close(fd);
+    asio::post(e.io(), [&] { e.Stop(); });
+    io.join();
+  }
+  auto loaded = session::LoadSession(dir / "ss.jsonl");
+  ASSERT_TRUE(std::holds_alternative<session::Session>(loaded));
+  const session::Session& s = std::get<session::Session>(loaded);
+  EXPECT_EQ(s.header.protocol, wire::Protocol::kStackshot);
+  wire::TranscriptDecoder decoder(s.header.protocol);
+  std::string text;
+  size_t problems = 0;
+  bool switched = false;
+  auto add = [&](const std::vector<wire::TranscriptLine>& lines) {
+    for (const wire::TranscriptLine& l : lines) {
+      text += l.text + "\n";
+      problems += l.problem;
+    }
+  };
+  for (const session::SessionEntry& entry : s.entries) {
+    if (const auto p = session::LineSwitchOf(entry)) {
+      EXPECT_EQ(*p, wire::Protocol::kStackshotDfmoco);
+      EXPECT_EQ(entry.event.value("baud", 0u), 57600u);
+      switched = true;
+      decoder.SwitchTo(*p);
+    }
+    if (entry.is_event) continue;
+    EXPECT_TRUE(switched) << "the switch comes before the first byte";
+    add(decoder.Feed(entry.from == session::Origin::kHost ? wire::Side::kHost : wire::Side::kDevice,
+                     entry.bytes));
+  }
+  add(decoder.Finish());
+  EXPECT_TRUE(switched);
+  EXPECT_EQ(problems, 0u) << text;
+  EXPECT_NE(text.find("hello: protocol 1, 3 motors"), std::string::npos) << text;
   fs::remove_all(dir);
 }
 

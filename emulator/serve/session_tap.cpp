@@ -22,4 +22,10 @@ void SessionTap::OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::strin
       {{"t_ns", t_ns}, {"event", std::string(kind)}, {"detail", std::string(detail)}}));
 }
 
+void SessionTap::OnLineSwitch(sim::TimeNs t_ns, wire::Protocol protocol,
+                              const wire::LineSettings& line) {
+  writer_.Append(session::LineSwitchEvent(t_ns, protocol, line));
+  if (decoder_) decoder_->SwitchTo(protocol);
+}
+
 }  // namespace moco::serve

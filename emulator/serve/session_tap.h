@@ -17,7 +17,8 @@ namespace moco::serve {
 // {"event": <kind>, "detail": <detail>}. The writer must outlive the tap and
 // its header should say "clock": "virtual" (times are scheduler times).
 // With a protocol, each traffic line also carries "decoded": the one-line
-// descriptions of the messages that chunk completed.
+// descriptions of the messages that chunk completed. A switch of the
+// device's line to another protocol is a "line_switch" event.
 class SessionTap final : public transport::TrafficObserver {
  public:
   explicit SessionTap(session::SessionWriter& writer,
@@ -26,6 +27,9 @@ class SessionTap final : public transport::TrafficObserver {
         decoder_(protocol ? std::make_unique<wire::TranscriptDecoder>(*protocol) : nullptr) {}
   void OnTraffic(sim::TimeNs t_ns, transport::Direction dir, wire::ByteView bytes) override;
   void OnLinkEvent(sim::TimeNs t_ns, std::string_view kind, std::string_view detail) override;
+  // A "line_switch" event (session::LineSwitchEvent); "decoded" follows it.
+  void OnLineSwitch(sim::TimeNs t_ns, wire::Protocol protocol,
+                    const wire::LineSettings& line) override;
 
  private:
   session::SessionWriter& writer_;

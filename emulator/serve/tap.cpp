@@ -122,7 +122,8 @@ class Tap::Recorder final : public transport::TrafficObserver {
     item.event = std::move(line);
     Push(std::move(item), {});
   }
-  // Chunks from now on are decoded in `dialect`.
+  // Chunks from now on are decoded in `dialect`, after a "line_switch"
+  // event (docs/sessions.md) at the time of the last line recorded.
   void SetDialect(wire::Protocol dialect) {
     if (!recording_) {
       dialect_ = dialect;
@@ -158,7 +159,7 @@ class Tap::Recorder final : public transport::TrafficObserver {
     Kind kind = Kind::kTraffic;
     bool host = false;                              // kTraffic: host -> device
     wire::Protocol dialect = wire::Protocol::kDmc;  // kDialect
-    sim::TimeNs t_ns = 0;                           // kTraffic
+    sim::TimeNs t_ns = 0;                           // kTraffic, kDialect
     size_t size = 0;                                // kTraffic: its bytes in Batch::bytes
     nlohmann::json event;                           // kEvent
   };
@@ -174,6 +175,13 @@ class Tap::Recorder final : public transport::TrafficObserver {
     {
       std::lock_guard<std::mutex> lock(mu_);
       if (stop_) return;
+      // Times never go back: a switch is stamped with the last line's time.
+      if (item.kind == Kind::kEvent) {
+        last_t_ = std::max(last_t_, item.event.value("t_ns", sim::TimeNs{0}));
+      } else {
+        item.t_ns = std::max(item.t_ns, last_t_);
+        last_t_ = item.t_ns;
+      }
       const size_t before = pending_.bytes.size();
       wake = pending_.items.empty();
       item.size = bytes.size();
@@ -216,7 +224,10 @@ class Tap::Recorder final : public transport::TrafficObserver {
     for (Item& item : batch.items) {
       switch (item.kind) {
         case Kind::kDialect:
-          decoder_ = std::make_unique<wire::TranscriptDecoder>(item.dialect);
+          lines_.push_back(session::LineSwitchEvent(item.t_ns, item.dialect,
+                                                    wire::Info(item.dialect).line,
+                                                    "acknowledged by the device"));
+          decoder_->SwitchTo(item.dialect);
           break;
         case Kind::kEvent:
           lines_.push_back(session::SessionEntry::Event(std::move(item.event)));
@@ -246,9 +257,10 @@ class Tap::Recorder final : public transport::TrafficObserver {
   std::deque<std::pair<uint64_t, wire::Protocol>> switches_;  // io thread
   std::mutex mu_;
   std::condition_variable cv_;
-  Batch pending_;        // guarded by mu_
-  bool stop_ = false;    // guarded by mu_
-  std::string failure_;  // guarded by mu_; read after the join
+  Batch pending_;           // guarded by mu_
+  sim::TimeNs last_t_ = 0;  // guarded by mu_: the time of the last item pushed
+  bool stop_ = false;       // guarded by mu_
+  std::string failure_;     // guarded by mu_; read after the join
   std::thread thread_;
   // The writer thread's (before Start() and after the join: the caller's).
   session::SessionWriter* writer_ = nullptr;
@@ -323,10 +335,14 @@ std::variant<DeviceSpec, std::string> ParseDeviceSpec(std::string_view spec) {
 }
 
 std::string DefaultTapDevice(wire::Protocol protocol) {
-  const wire::Protocol base =
-      protocol == wire::Protocol::kStackshotDfmoco ? wire::Protocol::kStackshot : protocol;
   for (const devices::DeviceModel& m : devices::DeviceModels()) {
-    if (m.protocol == base) return std::string(m.name);
+    if (m.protocol == protocol) return std::string(m.name);
+  }
+  // A protocol a model's line switches to (a StackShot's DfMoco mode).
+  for (const devices::DeviceModel& m : devices::DeviceModels()) {
+    for (const wire::Protocol p : m.also_speaks) {
+      if (p == protocol) return std::string(m.name);
+    }
   }
   return {};
 }
@@ -528,7 +544,7 @@ void Tap::OnDeviceRead(const ErrorCode& ec, size_t n) {
   stats_.peak_to_host_bytes = std::max(stats_.peak_to_host_bytes, link.queued_bytes());
   NoteLinkLosses();
   if (const auto change = follower_.OnDeviceBytes(bytes)) {
-    recorder_->SetDialectAfter(stats_.device_read_bytes, change->dialect);
+    recorder_->SetDialectAfter(stats_.device_read_bytes - n + change->offset, change->dialect);
     ChangeLine(change->baud, "the device acknowledged a switch to " +
                                  std::string(wire::ProtocolName(change->dialect)));
   }

@@ -218,6 +218,8 @@ speed(57600); send("68690d0a"); expect(b"hi ")' || fail "StackShot host"
   [ "$(stty -F "$work/dev" speed)" = 57600 ] || fail "the device's port is not at 57600"
   stop_tap
   grep '"event":"line_rate"' s.jsonl | grep -q '"baud":57600' || fail "the change is not recorded"
+  grep '"event":"line_switch"' s.jsonl | grep -q '"protocol":"stackshot-dfmoco"' ||
+    fail "the switch of protocol is not recorded"
   grep -q '"decoded":\["hello: protocol' s.jsonl ||
     fail "DfMoco after the switch is not decoded as DfMoco"
   serve dmc16 dmc

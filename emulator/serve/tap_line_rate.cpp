@@ -1,33 +1,28 @@
-// A StackShot's line-rate change read from the traffic (see tap_line_rate.h).
+// A line's change of protocol and rate read from the traffic (see tap_line_rate.h).
 #include "serve/tap_line_rate.h"
-
-#include <variant>
-#include <vector>
-
-#include "wire/protocol.h"
 
 namespace moco::serve {
 
-LineRateFollower::LineRateFollower(wire::Protocol protocol) : dialect_(protocol) {}
+LineRateFollower::LineRateFollower(wire::Protocol protocol)
+    : dialect_(protocol), watcher_(wire::WatchLineSwitches(protocol)) {}
 
 void LineRateFollower::OnHostBytes(wire::ByteView bytes) {
-  if (dialect_ != wire::Protocol::kStackshot) return;
-  std::vector<stackshot::DecodedPacket> packets;
-  host_.Feed(bytes, packets);
-  for (const stackshot::DecodedPacket& d : packets) switch_.OnHostPacket(d.packet);
+  if (watcher_ == nullptr) return;
+  // A host never completes a switch: the device's acknowledgement does.
+  (void)watcher_->Feed(wire::Side::kHost, bytes);
 }
 
 std::optional<LineChange> LineRateFollower::OnDeviceBytes(wire::ByteView bytes) {
-  if (dialect_ != wire::Protocol::kStackshot) return std::nullopt;
-  std::vector<stackshot::DecodedPacket> packets;
-  device_.Feed(bytes, packets);
-  for (const stackshot::DecodedPacket& d : packets) {
-    if (!switch_.OnDevicePacket(d.packet)) continue;
-    // Section 3: from here on the line carries DfMoco text at that dialect's rate.
-    dialect_ = wire::Protocol::kStackshotDfmoco;
-    return LineChange{dialect_, wire::Info(dialect_).line.baud};
+  if (watcher_ == nullptr) return std::nullopt;
+  const std::optional<wire::LineSwitchAt> at = watcher_->Feed(wire::Side::kDevice, bytes);
+  if (!at) return std::nullopt;
+  // From here on the line carries the new protocol at its rate.
+  dialect_ = at->protocol;
+  watcher_ = wire::WatchLineSwitches(dialect_);
+  if (watcher_ != nullptr && at->offset < bytes.size()) {
+    (void)watcher_->Feed(wire::Side::kDevice, bytes.subspan(at->offset));
   }
-  return std::nullopt;
+  return LineChange{dialect_, wire::Info(dialect_).line.baud, at->offset};
 }
 
 }  // namespace moco::serve

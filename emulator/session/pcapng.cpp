@@ -108,13 +108,26 @@ std::string SessionToPcapng(const Session& session, PcapngStats* stats) {
     b.EndOptions();
     b.Finish(out);
   }
-  const std::string protocol(ProtocolName(session.header.protocol));
-  Interface(protocol, "host->device", out);
-  Interface(protocol, "device->host", out);
+  auto interfaces = [&out](Protocol p) {
+    const std::string protocol(ProtocolName(p));
+    Interface(protocol, "host->device", out);
+    Interface(protocol, "device->host", out);
+  };
+  Protocol speaking = session.header.protocol;
+  interfaces(speaking);
+  uint32_t pair = 0;  // 2 x the interfaces of the protocol spoken now
 
   for (const SessionEntry& e : session.entries) {
     if (e.is_event) {
-      ++counted.events_left_out;
+      const std::optional<Protocol> next = LineSwitchOf(e);
+      if (!next) {
+        ++counted.events_left_out;
+      } else if (*next != speaking) {
+        speaking = *next;
+        interfaces(speaking);
+        pair += 2;
+        ++counted.line_switches;
+      }
       continue;
     }
     const bool from_host = e.from == Origin::kHost;
@@ -123,7 +136,7 @@ std::string SessionToPcapng(const Session& session, PcapngStats* stats) {
     for (size_t at = 0; at < bytes.size(); at += kPcapngMaxPacketBytes) {
       const std::string_view piece = bytes.substr(at, kPcapngMaxPacketBytes);
       Block b(kEnhancedPacketBlock);
-      b.U32(from_host ? kPcapngHostToDevice : kPcapngDeviceToHost);
+      b.U32(pair + (from_host ? kPcapngHostToDevice : kPcapngDeviceToHost));
       b.U32(static_cast<uint32_t>(t >> 32));
       b.U32(static_cast<uint32_t>(t & 0xffffffffu));
       b.U32(static_cast<uint32_t>(piece.size()));  // captured

@@ -6,6 +6,10 @@
 // packets hold the link's bytes exactly as they crossed it, no pseudo-header;
 // tools/wireshark/mocosim.lua registers on it. The interfaces' descriptions
 // name the protocol ("mocosim dmc host->device") so the dissector knows it.
+// A "line_switch" event (docs/sessions.md) adds a pair of interfaces named
+// with the new protocol, and the packets after it are on them: interface
+// 2k is host -> device, 2k + 1 device -> host, for the k-th protocol the
+// line spoke.
 #ifndef MOCO_SESSION_PCAPNG_H_
 #define MOCO_SESSION_PCAPNG_H_
 
@@ -24,7 +28,8 @@ inline constexpr uint16_t kPcapngLinkTypeUser0 = 147;
 // protocols is near this size.
 inline constexpr size_t kPcapngMaxPacketBytes = 65535;
 
-// The interface a direction's packets are on.
+// The interface a direction's packets are on (before any line switch; after
+// the k-th, 2k more).
 inline constexpr uint32_t kPcapngHostToDevice = 0;
 inline constexpr uint32_t kPcapngDeviceToHost = 1;
 
@@ -32,6 +37,7 @@ struct PcapngStats {
   size_t packets = 0;          // Enhanced Packet Blocks written
   size_t bytes = 0;            // traffic bytes in them
   size_t events_left_out = 0;  // event lines (control, faults): not traffic, not exported
+  size_t line_switches = 0;    // "line_switch" events: a pair of interfaces each
 };
 
 // The whole capture file for `session`. Chunks with no bytes are left out;

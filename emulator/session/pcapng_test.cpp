@@ -148,6 +148,30 @@ TEST(PcapngTest, EachChunkIsOnePacketWithItsTimeDirectionAndExactBytes) {
   EXPECT_EQ(stats.events_left_out, 1u);
 }
 
+// A recorded line switch: a pair of interfaces named with the new protocol,
+// and the packets after it on them; a switch to the protocol already spoken
+// changes nothing.
+TEST(PcapngTest, ALineSwitchStartsAPairOfInterfacesNamedWithTheNewProtocol) {
+  Session s;
+  s.header.protocol = Protocol::kStackshot;
+  s.entries.push_back(Traffic(1, Origin::kHost, {0x55}));
+  s.entries.push_back(LineSwitchEvent(2, Protocol::kStackshotDfmoco, {.baud = 57600}));
+  s.entries.push_back(LineSwitchEvent(2, Protocol::kStackshotDfmoco, {.baud = 57600}));
+  s.entries.push_back(Traffic(3, Origin::kHost, {'h'}));
+  s.entries.push_back(Traffic(4, Origin::kDevice, {'h'}));
+  PcapngStats stats;
+  const Capture c = Read(SessionToPcapng(s, &stats));
+  ASSERT_EQ(c.interfaces.size(), 4u);
+  EXPECT_EQ(OptionText(c.interfaces[2], 3), "mocosim stackshot-dfmoco host->device");
+  EXPECT_EQ(OptionText(c.interfaces[3], 3), "mocosim stackshot-dfmoco device->host");
+  ASSERT_EQ(c.packets.size(), 3u);
+  EXPECT_EQ(c.packets[0].interface, kPcapngHostToDevice);
+  EXPECT_EQ(c.packets[1].interface, 2 + kPcapngHostToDevice);
+  EXPECT_EQ(c.packets[2].interface, 2 + kPcapngDeviceToHost);
+  EXPECT_EQ(stats.line_switches, 1u);
+  EXPECT_EQ(stats.events_left_out, 0u);
+}
+
 TEST(PcapngTest, AChunkLongerThanAPacketIsSplitInOrderAtTheSameTime) {
   Session s;
   s.header.protocol = Protocol::kStackshot;

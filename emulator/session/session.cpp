@@ -217,6 +217,26 @@ SessionEntry SessionEntry::Event(nlohmann::json line) {
   return e;
 }
 
+SessionEntry LineSwitchEvent(int64_t t_ns, Protocol protocol, const wire::LineSettings& line,
+                             std::string_view detail) {
+  json j = {{"event", "line_switch"},
+            {"protocol", std::string(ProtocolName(protocol))},
+            {"baud", line.baud}};
+  if (!detail.empty()) j["detail"] = std::string(detail);
+  SessionEntry e = SessionEntry::Event(std::move(j));
+  e.t_ns = t_ns;
+  return e;
+}
+
+std::optional<Protocol> LineSwitchOf(const SessionEntry& e) {
+  if (!e.is_event || !e.event.is_object() || e.event.value("event", "") != "line_switch") {
+    return std::nullopt;
+  }
+  const auto it = e.event.find("protocol");
+  if (it == e.event.end() || !it->is_string()) return std::nullopt;
+  return ParseProtocol(it->get<std::string>());
+}
+
 nlohmann::json EntryToJson(const SessionEntry& e) {
   if (e.is_event) {
     json j = e.event;

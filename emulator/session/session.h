@@ -16,6 +16,7 @@
 
 #include "base/file_io.h"
 #include "wire/bytes.h"
+#include "wire/line.h"
 #include "wire/transcript.h"
 
 namespace moco::session {
@@ -51,6 +52,16 @@ struct SessionEntry {
   // entry keeps as its time instead).
   static SessionEntry Event(nlohmann::json line);
 };
+
+// The event a recording writes where the device's line switches protocol
+// (docs/sessions.md "line_switch"): {"event": "line_switch", "protocol":
+// <name>, "baud": <rate>, "t_ns": t_ns}, and "detail" when not empty. The
+// traffic after it speaks `protocol`.
+SessionEntry LineSwitchEvent(int64_t t_ns, Protocol protocol, const wire::LineSettings& line,
+                             std::string_view detail = {});
+// The protocol a "line_switch" event switches the line to; nullopt for any
+// other entry (and for a protocol this program does not know).
+std::optional<Protocol> LineSwitchOf(const SessionEntry& e);
 
 struct Session {
   SessionHeader header;

@@ -226,6 +226,28 @@ TEST(SessionTest, EventLinesAreTheirJsonDump) {
   EXPECT_EQ(line, "{\"baud\":57600,\"event\":\"line_rate\",\"t_ns\":7}\n");
 }
 
+TEST(SessionTest, ALineSwitchEventNamesTheProtocolAndRate) {
+  const SessionEntry e =
+      LineSwitchEvent(42, Protocol::kStackshotDfmoco, wire::LineSettings{.baud = 57600});
+  std::string line;
+  AppendEntryLine(e, line);
+  EXPECT_EQ(line,
+            "{\"baud\":57600,\"event\":\"line_switch\",\"protocol\":\"stackshot-dfmoco\","
+            "\"t_ns\":42}\n");
+  auto parsed =
+      ParseSession("{\"mocosim_session\":1,\"protocol\":\"stackshot\"}\n" + line +
+                   "{\"t_ns\":43,\"event\":\"line_switch\",\"protocol\":\"carrier-pigeon\"}\n"
+                   "{\"t_ns\":44,\"event\":\"estop\",\"protocol\":\"dmc\"}\n");
+  ASSERT_TRUE(std::holds_alternative<Session>(parsed));
+  const Session& s = std::get<Session>(parsed);
+  ASSERT_EQ(s.entries.size(), 3u);
+  EXPECT_EQ(s.entries[0].t_ns, 42);
+  EXPECT_EQ(LineSwitchOf(s.entries[0]), Protocol::kStackshotDfmoco);
+  // A protocol this program does not know, and another event: no switch.
+  EXPECT_EQ(LineSwitchOf(s.entries[1]), std::nullopt);
+  EXPECT_EQ(LineSwitchOf(s.entries[2]), std::nullopt);
+}
+
 TEST(SessionTest, ALastLineCutShortKeepsTheLinesBeforeIt) {
   const std::string whole =
       "{\"mocosim_session\":1,\"protocol\":\"dmc\"}\n"

@@ -50,7 +50,14 @@ ByteStream::Handler Link::Guard(void (Link::*member)(const ErrorCode&, size_t)) 
 
 void Link::SetDevice(devices::Device* device) {
   if (stopped_) return;
+  if (device_ != nullptr && device_ != device) device_->SetLineSwitchListener(nullptr);
   device_ = device;
+  if (device_ != nullptr) {
+    device_->SetLineSwitchListener(
+        [this, weak = std::weak_ptr<bool>(alive_)](const devices::LineSwitch& change) {
+          if (!weak.expired()) OnLineSwitch(change);
+        });
+  }
   if (device_ == nullptr) {
     in_.clear();
     CancelTimer(in_wake_);
@@ -77,6 +84,14 @@ void Link::ApplyLine(bool always) {
   if (always || bridge != bridge_pacer_.bridge()) {
     UnbridgeAll();  // bytes held by the old bridge pass through the new one
     bridge_pacer_ = UsbBridgePacer(bridge);
+  }
+}
+
+void Link::OnLineSwitch(const devices::LineSwitch& change) {
+  if (stopped_ || device_ == nullptr) return;
+  FollowLineRate();
+  if (options_.observer != nullptr) {
+    options_.observer->OnLineSwitch(scheduler_.Now(), change.protocol, change.line.serial);
   }
 }
 

@@ -235,6 +235,9 @@ class Link final : public devices::ByteSink {
   static constexpr sim::TimeNs kReclaimRetryNs = 20 * sim::kNsPerMs;
 
   void FollowLineRate();
+  // The device announced a switch of its line: pace at its rate, tell the
+  // observer.
+  void OnLineSwitch(const devices::LineSwitch& change);
   // Sets the pacers from the device's line: `always` resets them even when
   // the line is unchanged.
   void ApplyLine(bool always);

@@ -7,6 +7,8 @@
 
 #include "sim/scheduler.h"
 #include "wire/bytes.h"
+#include "wire/line.h"
+#include "wire/protocol.h"
 
 namespace moco::transport {
 
@@ -38,6 +40,12 @@ class TrafficObserver {
   // said. A byte taken back from a PTY the host closed unread and written
   // again is not reported again. Default: ignored.
   virtual void OnDelivered(sim::TimeNs /*t_ns*/, Direction /*dir*/, wire::ByteView /*bytes*/) {}
+  // The device's line speaks `protocol` at `line` from the next byte on
+  // (devices::LineSwitch), in order with the traffic: after the bytes the
+  // device wrote before the switch, before any host byte it reads after.
+  // Default: ignored.
+  virtual void OnLineSwitch(sim::TimeNs /*t_ns*/, wire::Protocol /*protocol*/,
+                            const wire::LineSettings& /*line*/) {}
 };
 
 }  // namespace moco::transport

@@ -14,6 +14,7 @@
 #include "wire/dmc_frame.h"
 #include "wire/stackshot.h"
 #include "wire/stackshot_constants.h"
+#include "wire/stackshot_mode_switch.h"
 #include "wire/transcript_sides.h"
 
 namespace moco::wire {
@@ -119,7 +120,8 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      &StackshotNext,
      &StackshotRepair,
      &StackshotGreeting,
-     &MakeStackshotTranscript},
+     &MakeStackshotTranscript,
+     &stackshot::WatchDfmocoModeSwitch},
     // A StackShot switched to Dragonframe's DfMoco mode speaks DFMoco lines
     // (stackshot-protocol.txt section 3).
     {Protocol::kStackshotDfmoco,
@@ -131,7 +133,9 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
      &LineNext,
      &LineRepair,
      &LineGreeting,
-     &MakeStackshotDfmocoTranscript},
+     &MakeStackshotDfmocoTranscript,
+     nullptr,
+     Protocol::kDfmoco},
 }};
 
 }  // namespace
@@ -139,6 +143,11 @@ const std::array<ProtocolInfo, 4> kProtocols = {{
 std::span<const ProtocolInfo> Protocols() { return kProtocols; }
 
 const ProtocolInfo& Info(Protocol p) { return kProtocols.at(static_cast<size_t>(p)); }
+
+std::unique_ptr<LineSwitchWatcher> WatchLineSwitches(Protocol p) {
+  const ProtocolInfo& info = Info(p);
+  return info.line_switches != nullptr ? info.line_switches() : nullptr;
+}
 
 std::string_view ProtocolName(Protocol p) { return Info(p).name; }
 

@@ -26,6 +26,27 @@ enum class Side { kHost, kDevice };
 
 class TranscriptSides;  // wire/transcript_sides.h
 
+// Where a line's traffic switches protocol: after the first `offset` bytes of
+// the chunk that showed it, the line speaks `protocol`; `note` says so for a
+// transcript ("DfMoco mode: DFMoco text at 57600 baud").
+struct LineSwitchAt {
+  size_t offset = 0;
+  Protocol protocol = Protocol::kDmc;
+  std::string note;
+};
+
+// Reads a line's traffic for the device's switch to another protocol, as
+// its acknowledgement shows it (a StackShot 3X entering DfMoco mode,
+// stackshot-protocol.txt section 3). One per line; feeds of both directions
+// in the order they crossed.
+class LineSwitchWatcher {
+ public:
+  virtual ~LineSwitchWatcher() = default;
+  // A chunk that crossed from `side`; the switch it completes, if any. The
+  // watcher is done after a switch: the new protocol's row gives the next.
+  virtual std::optional<LineSwitchAt> Feed(Side side, ByteView bytes) = 0;
+};
+
 struct MessageCut {
   size_t skip = 0;
   size_t length = 0;
@@ -53,7 +74,19 @@ struct ProtocolInfo {
   Bytes (*greeting)() = nullptr;
   // Decoders of both directions for transcripts (wire/transcript.h).
   std::unique_ptr<TranscriptSides> (*transcript)() = nullptr;
+  // A line of this protocol that can switch to another one by a message of
+  // its own: the watcher that reads the switch from the traffic. Null for a
+  // line that never switches (or only in ways the traffic does not show).
+  std::unique_ptr<LineSwitchWatcher> (*line_switches)() = nullptr;
+  // A dialect of another protocol: that protocol's hosts, rules and runner
+  // apply to it (a StackShot in DfMoco mode is a DFMoco device); nullopt
+  // for a protocol of its own.
+  std::optional<Protocol> dialect_of = std::nullopt;
 };
+
+// The watcher of a line speaking `p` (ProtocolInfo::line_switches); null
+// when such a line never switches by its traffic.
+std::unique_ptr<LineSwitchWatcher> WatchLineSwitches(Protocol p);
 
 // Every protocol, in the enum's order.
 std::span<const ProtocolInfo> Protocols();

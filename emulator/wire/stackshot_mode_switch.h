@@ -8,6 +8,9 @@
 #ifndef MOCO_WIRE_STACKSHOT_MODE_SWITCH_H_
 #define MOCO_WIRE_STACKSHOT_MODE_SWITCH_H_
 
+#include <memory>
+
+#include "wire/protocol.h"
 #include "wire/stackshot_frame.h"
 
 namespace moco::stackshot {
@@ -25,6 +28,11 @@ class DfmocoModeSwitch {
  private:
   bool requested_ = false;  // a DfMoco mode write awaits its answer
 };
+
+// A StackShot binary line's watcher: the acknowledged switch to DfMoco mode,
+// found to the byte (the DFMoco text may follow the acknowledgement in the
+// same chunk), as wire::Protocol::kStackshotDfmoco.
+std::unique_ptr<wire::LineSwitchWatcher> WatchDfmocoModeSwitch();
 
 }  // namespace moco::stackshot
 

@@ -1,11 +1,11 @@
-// StackShot 3X transcripts (see transcript_sides.h); a line switched to
-// DfMoco mode (wire/stackshot_mode_switch.h) is followed as DFMoco text.
+// StackShot 3X transcripts (see transcript_sides.h). A line switched to
+// DfMoco mode (wire/stackshot_mode_switch.h) is followed by the transcript
+// decoder, as every line that changes protocol (wire/transcript.h).
 #include <map>
 #include <string>
 
 #include "wire/stackshot.h"
 #include "wire/stackshot_constants.h"
-#include "wire/stackshot_mode_switch.h"
 #include "wire/transcript_sides.h"
 
 namespace moco::wire {
@@ -18,24 +18,6 @@ class StackshotSides final : public TranscriptSides {
   StackshotSides() : host_(false), device_(true) {}
 
   void Feed(Side side, ByteView bytes, std::vector<TranscriptLine>& out) override {
-    if (dfmoco_) {
-      dfmoco_->Feed(side, bytes, out);
-      return;
-    }
-    if (side == Side::kDevice && switch_.pending()) {
-      // The acknowledgement of a switch to DfMoco mode may end anywhere in
-      // this chunk, and DFMoco text follow it: packet by packet.
-      for (size_t i = 0; i < bytes.size(); ++i) {
-        std::vector<stackshot::DecodedPacket> packets;
-        device_.Feed(bytes.subspan(i, 1), packets);
-        Describe(side, packets, out);
-        if (dfmoco_) {
-          dfmoco_->Feed(side, bytes.subspan(i + 1), out);
-          return;
-        }
-      }
-      return;
-    }
     std::vector<stackshot::DecodedPacket> packets;
     (side == Side::kHost ? host_ : device_).Feed(bytes, packets);
     Describe(side, packets, out);
@@ -56,7 +38,6 @@ class StackshotSides final : public TranscriptSides {
         out.push_back({side, true, std::to_string(partial) + " byte(s) of an incomplete packet"});
       }
     }
-    if (dfmoco_) dfmoco_->Finish(out);
   }
 
  private:
@@ -69,14 +50,6 @@ class StackshotSides final : public TranscriptSides {
              "skipped " + std::to_string(d.skipped_before) + " byte(s) before a sync byte"});
       }
       out.push_back(Line(side, d));
-      if (side == Side::kDevice && switch_.OnDevicePacket(d.packet)) {
-        // Section 3: from the next byte on, DFMoco text both ways.
-        out.push_back({side, false,
-                       "(the line switches to DfMoco mode: DFMoco text at " +
-                           std::to_string(stackshot::kDfMocoBaudRate) + " baud)"});
-        dfmoco_ = MakeStackshotDfmocoTranscript();
-        return;
-      }
     }
   }
 
@@ -87,7 +60,6 @@ class StackshotSides final : public TranscriptSides {
     const std::string note =
         d.checksum_ok ? "" : " [checksum byte differs from the default algorithm]";
     if (side == Side::kHost) {
-      switch_.OnHostPacket(d.packet);
       last_action_[d.packet.command] = static_cast<stackshot::Action>(d.packet.action);
       auto c = stackshot::DecodeHostPacket(d.packet);
       if (!c.ok()) {
@@ -110,9 +82,6 @@ class StackshotSides final : public TranscriptSides {
   stackshot::PacketDecoder host_;
   stackshot::PacketDecoder device_;
   std::map<uint16_t, stackshot::Action> last_action_;
-  stackshot::DfmocoModeSwitch switch_;
-  // Once the line switched to DfMoco mode: its DFMoco decoders.
-  std::unique_ptr<TranscriptSides> dfmoco_;
 };
 
 }  // namespace

@@ -38,25 +38,49 @@ std::vector<TranscriptLine> Printable(std::vector<TranscriptLine> lines) {
 
 }  // namespace
 
-TranscriptDecoder::TranscriptDecoder(Protocol protocol) : sides_(Info(protocol).transcript()) {}
+TranscriptDecoder::TranscriptDecoder(Protocol protocol)
+    : protocol_(protocol),
+      sides_(Info(protocol).transcript()),
+      watcher_(WatchLineSwitches(protocol)) {}
 
 TranscriptDecoder::~TranscriptDecoder() = default;
 
+void TranscriptDecoder::SwitchTo(Protocol protocol) {
+  if (protocol == protocol_) return;
+  earlier_.push_back(std::move(sides_));
+  protocol_ = protocol;
+  sides_ = Info(protocol).transcript();
+  watcher_ = WatchLineSwitches(protocol);
+}
+
+void TranscriptDecoder::FeedSides(Side from, ByteView bytes, std::vector<TranscriptLine>& out) {
+  while (watcher_ != nullptr) {
+    const std::optional<LineSwitchAt> at = watcher_->Feed(from, bytes);
+    if (!at) break;
+    sides_->Feed(from, bytes.first(at->offset), out);
+    out.push_back({from, false, "(the line switches to " + at->note + ")"});
+    SwitchTo(at->protocol);
+    bytes = bytes.subspan(at->offset);
+  }
+  sides_->Feed(from, bytes, out);
+}
+
 std::vector<TranscriptLine> TranscriptDecoder::Feed(Side from, ByteView bytes) {
   std::vector<TranscriptLine> out;
-  sides_->Feed(from, bytes, out);
+  FeedSides(from, bytes, out);
   return Printable(std::move(out));
 }
 
 std::vector<TranscriptLine> TranscriptDecoder::Feed(Side from, ByteView bytes, int64_t t_ns) {
   std::vector<TranscriptLine> out;
   sides_->Elapse(from, t_ns, out);
-  sides_->Feed(from, bytes, out);
+  FeedSides(from, bytes, out);
   return Printable(std::move(out));
 }
 
 std::vector<TranscriptLine> TranscriptDecoder::Finish() {
   std::vector<TranscriptLine> out;
+  for (const auto& s : earlier_) s->Finish(out);
   sides_->Finish(out);
   return Printable(std::move(out));
 }

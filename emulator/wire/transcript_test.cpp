@@ -217,6 +217,31 @@ TEST(TranscriptTest, StackshotFollowsTheLineIntoDfmocoMode) {
 // hides the frames behind it only until its side's line is idle for 50 ms;
 // the next chunk from that side gives it up and rescans its bytes, as the
 // DMC-16 does. The other side's chunks change nothing.
+// A switch the traffic does not show (a StackShot set to DfMoco mode on its
+// panel): the caller says so, as `mocosim decode` does at a recorded
+// "line_switch"; what the old protocol's decoders held is reported at the end.
+TEST(TranscriptTest, SwitchToFollowsASwitchTheTrafficDoesNotShow) {
+  TranscriptDecoder d(Protocol::kStackshot);
+  EXPECT_EQ(d.protocol(), Protocol::kStackshot);
+  std::vector<TranscriptLine> all = d.Feed(Side::kHost, Bytes{0x55, 0x10});  // a packet cut short
+  d.SwitchTo(Protocol::kStackshotDfmoco);
+  d.SwitchTo(Protocol::kStackshotDfmoco);  // already: nothing changes
+  EXPECT_EQ(d.protocol(), Protocol::kStackshotDfmoco);
+  for (auto& l : d.Feed(Side::kHost, View("hi\r\n"))) all.push_back(l);
+  for (auto& l : d.Feed(Side::kDevice, View("hi 1 3 1.2.6\r\n"))) all.push_back(l);
+  for (auto& l : d.Finish()) all.push_back(l);
+  std::string text;
+  size_t problems = 0;
+  for (const TranscriptLine& l : all) {
+    text += l.text + "\n";
+    problems += l.problem;
+  }
+  EXPECT_EQ(problems, 1u) << text;  // the two bytes of the packet cut short
+  EXPECT_NE(text.find("incomplete packet"), std::string::npos) << text;
+  EXPECT_EQ(text.find("skipped"), std::string::npos) << text;
+  EXPECT_NE(text.find("hello: protocol 1, 3 motors"), std::string::npos) << text;
+}
+
 TEST(TranscriptTest, DmcPartialFrameIsGivenUpAtTheNextChunkAfterAnIdleGap) {
   TranscriptDecoder d(Protocol::kDmc);
   Bytes damaged;

@@ -38,7 +38,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DISSECTOR = os.path.join(HERE, "mocosim.lua")
 
 
-def decode_messages(mocosim, session):
+def decode_messages(mocosim, session, protocol):
     out = subprocess.run([mocosim, "decode", "--no-time", session], check=True,
                          capture_output=True, text=True).stdout
     messages = []
@@ -47,6 +47,15 @@ def decode_messages(mocosim, session):
             messages.append(("host", line[len("host -> dev  "):].lstrip(" ")))
         elif line.startswith("dev  -> host  "):
             messages.append(("device", line[len("dev  -> host  "):]))
+            if messages[-1][1].startswith("(the line switches to DfMoco mode"):
+                protocol = "stackshot-dfmoco"
+        elif "  event  " in line:
+            # A recorded line switch to another protocol: the dissector
+            # shows it on the first packet after it, whichever its side.
+            event = json.loads(line[line.index("{"):])
+            if event.get("event") == "line_switch" and event.get("protocol") != protocol:
+                protocol = event["protocol"]
+                messages.append(("*", "(the line switches to " + protocol + ")"))
     return messages
 
 
@@ -70,7 +79,8 @@ def tshark_messages(tshark, capture):
         # A unit separator between messages: decode writes no control
         # character, while '|' or ',' can be in a message.
         for text in texts.split("\x1f"):
-            messages.append((side, text))
+            switch = re.fullmatch(r"\(the line switches to [\w-]+\)", text)
+            messages.append(("*" if switch else side, text))
     return messages, junk_shown
 
 
@@ -101,6 +111,12 @@ def keys(protocol, messages):
     DfMoco mode carries DFMoco lines from the switch on."""
     out = []
     for m in messages:
+        switch = re.fullmatch(r"\(the line switches to ([\w-]+)\)", m[1])
+        if m[0] == "*" and switch:
+            # A recorded line switch (docs/sessions.md "line_switch").
+            protocol = switch.group(1)
+            out.append(m)
+            continue
         out.append(key(protocol, m))
         if protocol == "stackshot" and m[1].startswith("(the line switches to DfMoco mode"):
             protocol = "stackshot-dfmoco"
@@ -149,7 +165,7 @@ def compare(mocosim, tshark, workdir, session, label):
     capture = os.path.join(workdir, label + ".pcapng")
     subprocess.run([mocosim, "export", "--pcapng", session, "-o", capture], check=True,
                    capture_output=True)
-    decoded = decode_messages(mocosim, session)
+    decoded = decode_messages(mocosim, session, protocol)
     want = keys(protocol, decoded)
     shown, junk_shown = tshark_messages(tshark, capture)
     got = keys(protocol, shown)

@@ -885,7 +885,9 @@ end
 
 function mocosim.dissector(tvb, pinfo, tree)
   local iface = f_if_id()
-  local from_host = not iface or iface.value == 0
+  -- Interfaces come in pairs, host -> device first: a line switch recorded
+  -- in the session starts a new pair named with the new protocol.
+  local from_host = not iface or iface.value % 2 == 0
 
   local r = results[pinfo.number]
   local protocol
@@ -893,14 +895,25 @@ function mocosim.dissector(tvb, pinfo, tree)
     protocol = r.protocol
   else
     protocol = protocol_of()
+    local pair = iface and math.floor(iface.value / 2) or 0
+    local switched_to = nil
+    if streams.pair and pair ~= streams.pair and protocol ~= streams.speaking then
+      -- A recorded line switch (docs/sessions.md "line_switch") to another
+      -- protocol: its decoders start afresh, as mocosim decode's do.
+      streams = {}
+      switched_to = protocol
+    end
+    streams.pair = pair
     -- A StackShot line that switched to DfMoco mode carries DFMoco text.
     if protocol == "stackshot" and streams.line and streams.line.switched then
       protocol = "stackshot-dfmoco"
     end
+    streams.speaking = protocol
     local st = stream_for(protocol, from_host)
     -- r.base: the stream offset of this packet's first byte.
     r = { base = st.fed or 0, items = {}, protocol = protocol }
     local function keep(item) r.items[#r.items + 1] = item end
+    if switched_to then keep({ text = "(the line switches to " .. switched_to .. ")" }) end
     local t = f_time()
     local now = t and (t.value.secs * 1000000000 + t.value.nsecs)
     if st.give_up and now and st.last_ns and now - st.last_ns >= DMC_IDLE_GAP_NS then

@@ -59,10 +59,16 @@ Stackshot3x::~Stackshot3x() {
   rig_.SetObserver(nullptr);
 }
 
-DeviceLine Stackshot3x::Line() const {
-  const wire::Protocol dialect =
-      SpeaksDfmoco() ? wire::Protocol::kStackshotDfmoco : wire::Protocol::kStackshot;
-  return {wire::Info(dialect).line, profile_.usb_bridge};
+DeviceLine Stackshot3x::Line() const { return {wire::Info(Speaking()).line, profile_.usb_bridge}; }
+
+wire::Protocol Stackshot3x::Speaking() const {
+  return SpeaksDfmoco() ? wire::Protocol::kStackshotDfmoco : wire::Protocol::kStackshot;
+}
+
+void Stackshot3x::AnnounceSpeaking() {
+  if (Speaking() == announced_) return;
+  announced_ = Speaking();
+  AnnounceLineSwitch(announced_);
 }
 
 bool Stackshot3x::InDfmocoMode() const {
@@ -84,6 +90,7 @@ void Stackshot3x::SetHostLink(HostLink link) {
     decoder_.Flush();
     framer_.Reset();
   }
+  if (powered_) AnnounceSpeaking();
 }
 
 // ---------------------------------------------------------------------------
@@ -97,6 +104,9 @@ void Stackshot3x::PowerOn() {
   LoadNvm();
   config_ = slots_[0].value_or(Stackshot3xConfig::Defaults(profile_));
   AddLog("power on");
+  // The power-on mode is slot 0's: a unit set to DfMoco mode on its panel
+  // powers on speaking DfMoco (stackshot-protocol.txt section 3).
+  AnnounceSpeaking();
   if (profile_.boot_delay_ms == 0) {
     Boot();
   } else {

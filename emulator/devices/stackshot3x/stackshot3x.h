@@ -123,7 +123,7 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // kSerial: the USB serial port (binary protocol, or the DfMoco dialect in
   // GLOBAL_MODE_MOTION_DFMOCO; the 2 ms inter-frame gap). kWifi: a TCP
   // connection (binary protocol only: DfMoco "runs over USB"; no gap).
-  enum class HostLink : uint8_t { kSerial, kWifi };
+  using HostLink = devices::HostLink;
 
   static constexpr int kAxes = 3;
   static constexpr int kShutters = 2;
@@ -183,10 +183,13 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // are the power-on settings, stores the mode in slot 0 (created from the
   // factory defaults when empty). The way out of DfMoco mode.
   void SetGlobalModeFromPanel(stackshot::GlobalMode mode);
+  // The same on a unit powered up for it and off again: the next power-on
+  // starts in `mode` (how the registry starts a unit in DfMoco mode).
+  void SetPowerOnMode(stackshot::GlobalMode mode);
 
   // Which link the host's bytes arrive on (default kSerial); the serving
   // layer sets it before PowerOn().
-  void SetHostLink(HostLink link);
+  void SetHostLink(HostLink link) override;
   HostLink host_link() const { return host_link_; }
 
   // Test-only: makes the device misbehave as `faults` says, from now on.
@@ -199,6 +202,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
   bool InDfmocoMode() const;
   // The host's bytes are read as DfMoco lines: DfMoco mode on the serial link.
   bool SpeaksDfmoco() const;
+  // The protocol the line speaks: wire::Protocol::kStackshot, or
+  // kStackshotDfmoco when SpeaksDfmoco().
+  wire::Protocol Speaking() const;
   bool Ready() const { return ready_; }
   // Rail position of `axis` (0..2) in steps: motor steps less the backlash
   // take-up (the first steps after a compensated reversal move only the
@@ -371,6 +377,9 @@ class Stackshot3x : public Device, private sim::RigObserver {
   void SendLine(const dfmoco::DeviceReply& reply);
   void ArmDfmocoReport(int axis);
   void EnterMode(stackshot::GlobalMode mode);
+  // Announces the line's protocol when it is not the one last announced
+  // (Device::AnnounceLineSwitch).
+  void AnnounceSpeaking();
 
   sim::Scheduler& scheduler_;
   ByteSink& sink_;
@@ -378,6 +387,7 @@ class Stackshot3x : public Device, private sim::RigObserver {
   std::unique_ptr<MemoryStateStore> own_store_;  // the NVM when no store is given
   StateStore* store_;
   HostLink host_link_ = HostLink::kSerial;
+  wire::Protocol announced_ = wire::Protocol::kStackshot;  // the last line switch announced
   sim::Rig rig_;
   std::array<sim::StackshotPlanner*, 3> planners_{};
   stackshot::PacketDecoder decoder_;

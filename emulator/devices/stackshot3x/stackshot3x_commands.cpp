@@ -333,6 +333,18 @@ void Stackshot3x::SetGlobalModeFromPanel(stackshot::GlobalMode mode) {
   SaveNvm();
 }
 
+void Stackshot3x::SetPowerOnMode(stackshot::GlobalMode mode) {
+  const bool was_powered = powered_;
+  const wire::Protocol announced = announced_;
+  if (!was_powered) PowerOn();
+  SetGlobalModeFromPanel(mode);
+  if (was_powered) return;
+  PowerOff();
+  // Nobody heard this power cycle: the next power-on announces the line it
+  // starts in.
+  announced_ = announced;
+}
+
 void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {
   const bool was = SpeaksDfmoco();
   const bool was_mode = InDfmocoMode();
@@ -357,6 +369,7 @@ void Stackshot3x::EnterMode(stackshot::GlobalMode mode) {
   }
   AddLog(std::string("serial dialect: ") + (now ? "DfMoco, " : "binary, ") +
          std::to_string(Line().serial.baud) + " baud");
+  AnnounceSpeaking();
 }
 
 void Stackshot3x::SendLine(const dfmoco::DeviceReply& reply) {

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include "devices/registry.h"
 #include "devices/stackshot3x/stackshot3x_test_support.h"
 
 namespace moco::devices {
@@ -854,6 +855,73 @@ std::string Text(SsBench& b) {
 void Line(SsBench& b, std::string_view l) {
   const std::string s = std::string(l) + "\r\n";
   b.Feed(wire::Bytes(s.begin(), s.end()));
+}
+
+// Every switch of the line is announced (Device::SetLineSwitchListener):
+// the binary mode write after its acknowledgement, a power-on in a mode the
+// NVM keeps, the panel, and the way back.
+TEST(Stackshot3xTest, EverySwitchOfTheLineIsAnnouncedAfterTheBytesBeforeIt) {
+  SsBench b;
+  std::vector<std::pair<wire::Protocol, uint32_t>> heard;
+  size_t bytes_before = 0;
+  b.dev->SetLineSwitchListener([&](const LineSwitch& s) {
+    heard.emplace_back(s.protocol, s.line.serial.baud);
+    bytes_before = b.sink.bytes().size();
+  });
+  b.Send(Write(Command::kRailConfigGlobalMode, 0,
+               stackshot::EnumValue<stackshot::GlobalMode>{stackshot::GlobalMode::kMotionDfMoco}));
+  b.RunFor(sim::kNsPerMs);
+  ASSERT_EQ(heard.size(), 1u);
+  EXPECT_EQ(heard[0], std::make_pair(wire::Protocol::kStackshotDfmoco, 57600u));
+  EXPECT_EQ(bytes_before, b.sink.bytes().size()) << "announced after the acknowledgement";
+  EXPECT_GT(bytes_before, 0u);
+  // Not saved: the power-on speaks binary again, and says so.
+  b.dev->PowerOff();
+  b.dev->PowerOn();
+  ASSERT_EQ(heard.size(), 2u);
+  EXPECT_EQ(heard[1], std::make_pair(wire::Protocol::kStackshot, 38400u));
+  // The panel's mode is the power-on mode: announced when set, and not again
+  // at a power-on that speaks as before.
+  b.dev->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
+  b.dev->PowerOff();
+  b.dev->PowerOn();
+  ASSERT_EQ(heard.size(), 3u);
+  EXPECT_EQ(heard[2].first, wire::Protocol::kStackshotDfmoco);
+}
+
+TEST(Stackshot3xTest, TheRegistryStartsAUnitInDfmocoModeAndItAnnouncesItAtPowerOn) {
+  const DeviceModel* m = FindDeviceModel("stackshot3x");
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(LineFor(*m, wire::Protocol::kDfmoco), wire::Protocol::kStackshotDfmoco);
+  EXPECT_EQ(LineFor(*m, wire::Protocol::kStackshot), wire::Protocol::kStackshot);
+  EXPECT_EQ(LineFor(*m, wire::Protocol::kDmc), std::nullopt);
+  sim::Scheduler sched;
+  testing::RecordingSink sink(sched);
+  MemoryStateStore nvm;
+  auto dev = CreateDevice("stackshot3x", "", sched, sink, &nvm,
+                          DeviceStart{wire::Protocol::kStackshotDfmoco});
+  std::vector<wire::Protocol> heard;
+  dev->SetLineSwitchListener([&](const LineSwitch& s) { heard.push_back(s.protocol); });
+  dev->PowerOn();
+  ASSERT_EQ(heard.size(), 1u);
+  EXPECT_EQ(heard[0], wire::Protocol::kStackshotDfmoco);
+  EXPECT_EQ(dev->Line().serial.baud, 57600u);
+  EXPECT_THROW(
+      CreateDevice("dmc16", "", sched, sink, nullptr, DeviceStart{wire::Protocol::kDfmoco}),
+      std::invalid_argument);
+}
+
+TEST(Stackshot3xTest, OverWifiTheLineNeverSwitchesSoNothingIsAnnounced) {
+  SsBench b;
+  b.dev->PowerOff();
+  Device& device = *b.dev;
+  device.SetHostLink(HostLink::kWifi);  // through the device interface, as serve does
+  b.dev->PowerOn();
+  int heard = 0;
+  b.dev->SetLineSwitchListener([&](const LineSwitch&) { ++heard; });
+  b.dev->SetGlobalModeFromPanel(stackshot::GlobalMode::kMotionDfMoco);
+  EXPECT_TRUE(b.dev->InDfmocoMode());
+  EXPECT_EQ(heard, 0);
 }
 
 TEST(Stackshot3xTest, DfmocoModeSpeaksTheStackshotDialect) {
