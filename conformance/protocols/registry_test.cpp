@@ -7,6 +7,7 @@
 
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace moco::conformance {
@@ -49,6 +50,25 @@ TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
   }
   for (const Protocol p : kAllProtocols) EXPECT_TRUE(seen.contains(p)) << ProtocolName(p);
   EXPECT_EQ(FindRunner(Protocol::kStackshotDfmoco), nullptr);
+}
+
+// A case needs what its own protocol declares (rules/<p>_needs.h) or what
+// every protocol shares; `mococheck cases` prints the need's text, which
+// names one need (the catalogue test keeps the texts distinct).
+TEST(Registry, EveryCaseNeedsOnlyItsOwnProtocolsOrSharedNeeds) {
+  for (const RuleSet& set : kRuleSets) {
+    const ProtocolRunner* runner = FindRunner(set.protocol);
+    ASSERT_NE(runner, nullptr) << ProtocolName(set.protocol);
+    std::set<std::string_view> texts;
+    for (const Need& n : set.needs) texts.insert(n.text);
+    for (const Need& n : SharedNeeds::kShared) texts.insert(n.text);
+    for (const CaseInfo& k : runner->cases()) {
+      if (k.needs.empty()) continue;  // needs nothing
+      EXPECT_TRUE(texts.contains(k.needs))
+          << k.suite << "/" << k.name << " needs \"" << k.needs << "\", which "
+          << ProtocolName(set.protocol) << " does not declare";
+    }
+  }
 }
 
 // Every protocol on the wire can be mutated and replayed, by exactly one
@@ -168,7 +188,7 @@ TEST(Registry, ADeviceThatNeverIntroducesItselfFailsUnderEveryProtocolAlike) {
     for (const auto& [id, s] : report.rules) {
       const Rule* rule = FindRule(id);
       ASSERT_NE(rule, nullptr);
-      if (rule->needs != Needs::kNothing) {
+      if (rule->needs != SharedNeeds::kNothing) {
         EXPECT_EQ(s.status, Status::kNotApplicable) << id;
       }
     }
