@@ -19,6 +19,11 @@
 //     static std::optional<Device> Discover(Host& probe);
 //     // Optional: the rule a missed first introduction fails ("DMC-HI-016").
 //     static constexpr std::string_view kIntroductionRule;
+//     // Optional, for a protocol whose devices speak several dialects: the
+//     // ones HostOptions::dialect may name besides kAutoDialect, and which
+//     // of them kAutoDialect picks ("sketch unless `hi` says otherwise").
+//     static constexpr DialectChoice kDialects[];
+//     static constexpr std::string_view kAutoPicks;
 //     // The console line and JSON fields of report.device / device_info.
 //     static void Describe(const Device& device, RunReport& report);
 //     // Whether a rule or case with `needs` applies to the device: decides

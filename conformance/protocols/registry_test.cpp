@@ -71,6 +71,32 @@ TEST(Registry, EveryCaseNeedsOnlyItsOwnProtocolsOrSharedNeeds) {
   }
 }
 
+// The dialects a protocol's devices are judged in (mococheck run --dialect):
+// named apart from each other and from auto, each described, and auto's
+// choice named among them; a protocol without dialects says nothing of auto.
+TEST(Registry, EveryProtocolsDialectsAreNamedAndAutoPicksOneOfThem) {
+  size_t with_dialects = 0;
+  for (const ProtocolRunner& r : Runners()) {
+    if (r.dialects.empty()) {
+      EXPECT_TRUE(r.auto_picks.empty()) << ProtocolName(r.protocol);
+      continue;
+    }
+    ++with_dialects;
+    std::set<std::string_view> names;
+    for (const DialectChoice& d : r.dialects) {
+      EXPECT_FALSE(d.name.empty()) << ProtocolName(r.protocol);
+      EXPECT_NE(d.name, kAutoDialect) << ProtocolName(r.protocol);
+      EXPECT_FALSE(d.description.empty()) << d.name;
+      EXPECT_TRUE(names.insert(d.name).second) << ProtocolName(r.protocol) << " has two " << d.name;
+    }
+    bool named = false;
+    for (std::string_view n : names)
+      named = named || r.auto_picks.find(n) != std::string_view::npos;
+    EXPECT_TRUE(named) << ProtocolName(r.protocol) << ": auto picks \"" << r.auto_picks << "\"";
+  }
+  EXPECT_GE(with_dialects, 1u) << "DFMoco judges the sketch's and the StackShot 3X's dialects";
+}
+
 // Every protocol on the wire can be mutated and replayed, by exactly one
 // runner's hooks, and every protocol with a runner can be fuzzed.
 TEST(Registry, EveryWireProtocolHasExactlyOneSetOfFuzzHooks) {

@@ -109,7 +109,7 @@ std::optional<DfmDevice> DfmocoProtocol::Discover(DfmHost& probe) {
 void DfmocoProtocol::Describe(const DfmDevice& device, RunReport& report) {
   const dfmoco::HelloReply& hello = device;
   const std::string line = dfmoco::FormatDevice(hello);
-  const char* dialect = device.stackshot ? "stackshot3x" : "sketch";
+  const std::string dialect(device.stackshot ? kStackshotDialect : kSketchDialect);
   report.device = "\"" + line.substr(0, line.size() - 2) +
                   "\": " + (device.stackshot ? "StackShot 3X DfMoco " : "DFMoco ") + hello.version +
                   ", protocol " + std::to_string(hello.protocol_major) + ", " +

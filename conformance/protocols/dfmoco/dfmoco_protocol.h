@@ -63,6 +63,16 @@ struct DfmocoProtocol {
   static std::span<const FuzzHooks> Fuzz();
   // The longest line a fuzz mutant carries (its line end aside).
   static constexpr size_t kMaxFuzzLine = 96;
+  // The dialects a device is judged in (HostOptions::dialect), and which one
+  // kAutoDialect picks (DfmHost::stackshot()).
+  static constexpr DialectChoice kDialects[] = {
+      {kSketchDialect, "Dragonframe's Arduino sketch"},
+      {kStackshotDialect,
+       "a StackShot 3X in DfMoco mode, stackshot-protocol.txt section 3, as "
+       "in-process:stackshot3x runs with --protocol dfmoco"},
+  };
+  static constexpr std::string_view kAutoPicks =
+      "stackshot3x when `hi` is exactly `hi 1 3 1.2.6`, else sketch";
 };
 
 // The runner over DfmocoProtocol (registry.cpp runs it the same way).
