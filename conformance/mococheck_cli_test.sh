@@ -361,6 +361,7 @@ mococheck_cli_stackshot_dfmoco_in_process)
   grep -q 'applies to --protocol dfmoco only' err.txt || fail "--dialect on DMC not refused"
   expect_rc 0 "$m" run --help
   grep -q -- '--dialect' out.txt || fail "--help does not list --dialect"
+  grep -q -- '--protocol dfmoco: auto' out.txt || fail "--help does not list the DFMoco dialects"
   ;;
 # `mocosim stackshot3x` on a PTY, switched to DfMoco mode by the binary
 # protocol's CC_RAIL_CONFIG_GLOBAL_MODE write (0x109E, GLOBAL_MODE_MOTION_DFMOCO

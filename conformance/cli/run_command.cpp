@@ -157,6 +157,58 @@ std::optional<std::string> SelectCases(const RunArgs& a, const ProtocolRunner& r
   return std::nullopt;
 }
 
+// "auto (default: ...), sketch (...) or stackshot3x (...)": what --dialect
+// may name for `runner`'s protocol.
+std::string DialectChoices(const ProtocolRunner& runner) {
+  std::string s = std::string(kAutoDialect) + " (default" +
+                  (runner.auto_picks.empty() ? "" : ": " + std::string(runner.auto_picks)) + ")";
+  for (size_t i = 0; i < runner.dialects.size(); ++i) {
+    const DialectChoice& d = runner.dialects[i];
+    s += (i + 1 == runner.dialects.size() ? " or " : ", ") + std::string(d.name) + " (" +
+         std::string(d.description) + ")";
+  }
+  return s;
+}
+
+// The protocols whose devices speak several dialects (from the registry).
+std::vector<Protocol> ProtocolsWithDialects() {
+  std::vector<Protocol> out;
+  for (const ProtocolRunner& r : Runners()) {
+    if (!r.dialects.empty()) out.push_back(r.protocol);
+  }
+  return out;
+}
+
+// --dialect's help: the dialects of every protocol that has some.
+std::string DialectHelp() {
+  std::string s =
+      "Dialect the device is judged in, for a protocol whose devices speak several (the others "
+      "take auto only)";
+  for (const ProtocolRunner& r : Runners()) {
+    if (r.dialects.empty()) continue;
+    s += "; --protocol " + std::string(ProtocolName(r.protocol)) + ": " + DialectChoices(r);
+  }
+  return s;
+}
+
+// --dialect checked against the dialects `runner`'s protocol names: an error
+// message, or nullopt.
+std::optional<std::string> CheckDialect(const std::string& dialect, const ProtocolRunner& runner) {
+  if (dialect == kAutoDialect) return std::nullopt;
+  for (const DialectChoice& d : runner.dialects) {
+    if (d.name == dialect) return std::nullopt;
+  }
+  const std::string name(ProtocolName(runner.protocol));
+  if (!runner.dialects.empty()) {
+    return "--dialect " + dialect + ": give " + DialectChoices(runner) + " for --protocol " + name;
+  }
+  const std::vector<Protocol> with = ProtocolsWithDialects();
+  return "--dialect " + dialect + ": this target speaks " + name +
+         ", which has no dialects (give auto, the default, or leave --dialect out)" +
+         (with.empty() ? std::string()
+                       : "; --dialect applies to --protocol " + wire::NameList(with) + " only");
+}
+
 // The host's deadlines and timeouts and the random suite's settings, set in
 // `options`. An error message (a bad --deadline), or nullopt.
 std::optional<std::string> SetHostOptions(const RunArgs& a, RunOptions& options) {
@@ -178,7 +230,7 @@ std::optional<std::string> SetHostOptions(const RunArgs& a, RunOptions& options)
     }
     options.host.deadline_by_kind_ns[kind] = ms * sim::kNsPerMs;
   }
-  options.host.dfmoco_dialect = a.dialect;
+  options.host.dialect = a.dialect;
   options.host.answer_timeout_ns = a.answer_timeout_ms * sim::kNsPerMs;
   if (a.wait_every_answer) options.host.give_up_after_unanswered = 0;
   options.host.position_gap_ns = a.position_gap_ms * sim::kNsPerMs;
@@ -347,25 +399,16 @@ int Run(const RunArgs& a) {
   request.profile = a.profile;
   request.baud = a.baud;
   request.protocol_option = a.protocol;
-  if (a.dialect != "auto" && a.dialect != "sketch" && a.dialect != "stackshot3x") {
-    return Fail("--dialect " + a.dialect +
-                ": give auto (detect from the `hi` reply), sketch (Dragonframe's Arduino "
-                "sketch) or stackshot3x (a StackShot 3X in DfMoco mode)");
-  }
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
   ResolvedTarget& rt = std::get<ResolvedTarget>(resolved);
   const Protocol proto = rt.protocol;
   const std::string title(wire::Info(proto).title);
-  if (a.dialect != "auto" && proto != Protocol::kDfmoco) {
-    return Fail("--dialect " + a.dialect +
-                " applies to --protocol dfmoco only; this target speaks " +
-                std::string(ProtocolName(proto)));
-  }
   const ProtocolRunner* runner = FindRunner(proto);
   if (runner == nullptr) {
     return Fail(title + " has no conformance suites in this build; use a DMC v2 target");
   }
+  if (auto err = CheckDialect(a.dialect, *runner)) return Fail(*err);
   RunOptions options;
   std::optional<Board> board;
   if (auto err = SelectCases(a, *runner, proto, options)) return Fail(*err);
@@ -410,12 +453,7 @@ Runner AddRunCommand(CLI::App& app, CLI::App*& sub) {
   run->add_option("--protocol", a->protocol,
                   "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "
                   "in-process model's protocol, else dmc");
-  run->add_option("--dialect", a->dialect,
-                  "DFMoco dialect the device is judged in: auto (default: stackshot3x when `hi` "
-                  "is exactly `hi 1 3 1.2.6`, else sketch), sketch (Dragonframe's Arduino "
-                  "sketch) or stackshot3x (a StackShot 3X in DfMoco mode, stackshot-protocol.txt "
-                  "section 3). in-process:stackshot3x with --protocol dfmoco runs in DfMoco mode")
-      ->capture_default_str();
+  run->add_option("--dialect", a->dialect, DialectHelp())->capture_default_str();
   run->add_option("--profile", a->profile, "Device profile (JSON) for an in-process target")
       ->check(CLI::ExistingFile);
   run->add_option("--rules", a->rules_glob,

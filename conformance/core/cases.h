@@ -13,6 +13,7 @@
 #include "conformance/core/host_link.h"
 #include "conformance/core/verdicts.h"
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/needs.h"
 #include "conformance/targets/target.h"
 
 namespace moco::conformance {
@@ -40,9 +41,9 @@ struct CaseContextOf {
 template <typename ContextT>
 struct CaseOf {
   using Context = ContextT;
-  std::string suite;  // "connect", "motor", ..., "random"
-  std::string name;   // unique within the suite
-  Needs needs = Needs::kNothing;
+  std::string suite;                   // "connect", "motor", ..., "random"
+  std::string name;                    // unique within the suite
+  Need needs = SharedNeeds::kNothing;  // the protocol's own (rules/<p>_needs.h) or shared
   std::string summary;
   std::function<void(ContextT&)> run;
 };
@@ -60,7 +61,7 @@ std::vector<CaseInfo> CaseInfos(const std::vector<CaseT>& cases) {
   std::vector<CaseInfo> out;
   for (const CaseT& k : cases) {
     out.push_back({k.suite, k.name, k.summary,
-                   k.needs == Needs::kNothing ? std::string() : std::string(NeedsText(k.needs))});
+                   k.needs == SharedNeeds::kNothing ? std::string() : std::string(k.needs.text)});
   }
   return out;
 }

@@ -19,6 +19,16 @@
 
 namespace moco::conformance {
 
+// HostOptions::dialect when the protocol picks the dialect itself.
+inline constexpr std::string_view kAutoDialect = "auto";
+
+// A dialect a protocol's devices may speak, as mococheck run --dialect names
+// it: "sketch", "Dragonframe's Arduino sketch".
+struct DialectChoice {
+  std::string_view name;
+  std::string_view description;
+};
+
 // Timing options of the checks, in the target's clock.
 struct HostOptions {
   TimeNs deadline_ns = 250 * sim::kNsPerMs;  // DMC-DL-*: an answer within this
@@ -40,9 +50,11 @@ struct HostOptions {
   // What the hosts of one run learned of the device's unanswered requests
   // (the runner shares one per run); null: each host keeps its own.
   std::shared_ptr<struct UnansweredRequests> unanswered;
-  // DFMoco only (--dialect): "auto" (the StackShot 3X dialect when `hi` is
-  // exactly the StackShot's, else the sketch's), "sketch" or "stackshot3x".
-  std::string dfmoco_dialect = "auto";
+  // The dialect the device is judged in (mococheck run --dialect):
+  // kAutoDialect (the protocol tells it from the device's introduction) or
+  // one of the protocol's dialects (its traits' kDialects, core/run.h). A
+  // protocol without dialects takes kAutoDialect only.
+  std::string dialect = std::string(kAutoDialect);
 };
 
 // The request kinds of HostOptions::deadline_by_kind_ns.

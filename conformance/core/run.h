@@ -19,10 +19,17 @@
 //     static std::optional<Device> Discover(Host& probe);
 //     // Optional: the rule a missed first introduction fails ("DMC-HI-016").
 //     static constexpr std::string_view kIntroductionRule;
+//     // Optional, for a protocol whose devices speak several dialects: the
+//     // ones HostOptions::dialect may name besides kAutoDialect, and which
+//     // of them kAutoDialect picks ("sketch unless `hi` says otherwise").
+//     static constexpr DialectChoice kDialects[];
+//     static constexpr std::string_view kAutoPicks;
 //     // The console line and JSON fields of report.device / device_info.
 //     static void Describe(const Device& device, RunReport& report);
-//     // Whether a rule or case with `needs` applies to the device.
-//     static bool Applies(Needs needs, const Device& device);
+//     // Whether a rule or case with `needs` applies to the device: decides
+//     // the protocol's own needs (rules/<p>_needs.h) and SharedNeeds::kNothing
+//     // (SharedNeeds::kPins is the target's to meet, never asked here).
+//     static bool Applies(const Need& needs, const Device& device);
 //     // Greets the device at the start of a case; what it answered, or
 //     // nullopt (the host has judged the silence).
 //     static std::optional<Device> Greet(Host& host, Target& target, const Device& discovered);
@@ -64,18 +71,19 @@
 #include "conformance/core/run_report.h"
 #include "conformance/core/transcript.h"
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/needs.h"
 #include "conformance/targets/target.h"
 
 namespace moco::conformance {
 
 // Why a case or rule with `needs` cannot run on `device` ("" when it can).
 template <typename Traits>
-std::string NotApplicableBecause(Needs needs,
+std::string NotApplicableBecause(const Need& needs,
                                  const std::optional<typename Traits::Device>& device) {
-  if (needs == Needs::kNothing) return "";
+  if (needs == SharedNeeds::kNothing) return "";
   if (!device) return "the device did not introduce itself";
   if (Traits::Applies(needs, *device)) return "";
-  return std::string(Traits::kLacking) + std::string(NeedsText(needs));
+  return std::string(Traits::kLacking) + std::string(needs.text);
 }
 
 // How many cases a device that never introduced itself may spend without
@@ -97,11 +105,11 @@ inline bool DeviceSpoke(const std::vector<Chunk>& traffic) {
                      [](const Chunk& c) { return !c.from_host && !c.bytes.empty(); });
 }
 
-// The same, where Needs::kPins asks the target: it must watch pins.
+// The same, where SharedNeeds::kPins asks the target: it must watch pins.
 template <typename Traits>
-std::string NotApplicableOn(const Target& target, Needs needs,
+std::string NotApplicableOn(const Target& target, const Need& needs,
                             const std::optional<typename Traits::Device>& device) {
-  if (needs != Needs::kPins) return NotApplicableBecause<Traits>(needs, device);
+  if (needs != SharedNeeds::kPins) return NotApplicableBecause<Traits>(needs, device);
   if (!device) return "the device did not introduce itself";
   if (target.Pins() == nullptr) {
     return "the target watches no pins (give --board with a simavr: target)";
@@ -259,7 +267,7 @@ RunReport Run(Target& target, const RunOptions& options) {
     }
     if (options.on_progress) options.on_progress(report);
     SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
-      return !(rule.needs == Needs::kPins && !options.pins);
+      return !(rule.needs == SharedNeeds::kPins && !options.pins);
     });
     report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     return report;
@@ -311,7 +319,7 @@ RunReport Run(Target& target, const RunOptions& options) {
   }
 
   SummarizeRules(report, Traits::Rules(), [&](const Rule& rule) {
-    if (rule.needs == Needs::kPins && !options.pins) return false;
+    if (rule.needs == SharedNeeds::kPins && !options.pins) return false;
     return NotApplicableOn<Traits>(target, rule.needs, device).empty() &&
            RuleNotApplicable<Traits>(rule, device).empty();
   });

@@ -10,8 +10,18 @@ namespace {
 
 template <typename Traits>
 constexpr ProtocolRunner RunnerOf() {
-  return {Traits::kProtocol, &Traits::Rules, &Run<Traits>,
-          [] { return CaseInfos(Traits::Cases()); }, &Traits::Fuzz};
+  ProtocolRunner r{Traits::kProtocol,
+                   &Traits::Rules,
+                   &Run<Traits>,
+                   [] { return CaseInfos(Traits::Cases()); },
+                   &Traits::Fuzz,
+                   {},
+                   {}};
+  if constexpr (requires { Traits::kDialects; }) {
+    r.dialects = Traits::kDialects;
+    r.auto_picks = Traits::kAutoPicks;
+  }
+  return r;
 }
 
 const ProtocolRunner kRunners[] = {

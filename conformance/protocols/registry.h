@@ -5,6 +5,7 @@
 #define MOCO_CONFORMANCE_PROTOCOLS_REGISTRY_H_
 
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "conformance/core/cases.h"
@@ -24,6 +25,11 @@ struct ProtocolRunner {
   // How the fuzzer and replay treat each protocol this folder speaks (its
   // own, and a dialect another device switches to).
   std::span<const FuzzHooks> (*fuzz)();
+  // The dialects mococheck run --dialect may name besides kAutoDialect
+  // (empty: the protocol has none and takes kAutoDialect only), and which of
+  // them kAutoDialect picks.
+  std::span<const DialectChoice> dialects;
+  std::string_view auto_picks;
 };
 
 // Every protocol with suites, in the catalogue's order.

@@ -7,6 +7,7 @@
 
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace moco::conformance {
@@ -49,6 +50,51 @@ TEST(Registry, EveryProtocolWithRulesHasARunnerAndOnlyItsOwnRules) {
   }
   for (const Protocol p : kAllProtocols) EXPECT_TRUE(seen.contains(p)) << ProtocolName(p);
   EXPECT_EQ(FindRunner(Protocol::kStackshotDfmoco), nullptr);
+}
+
+// A case needs what its own protocol declares (rules/<p>_needs.h) or what
+// every protocol shares; `mococheck cases` prints the need's text, which
+// names one need (the catalogue test keeps the texts distinct).
+TEST(Registry, EveryCaseNeedsOnlyItsOwnProtocolsOrSharedNeeds) {
+  for (const RuleSet& set : kRuleSets) {
+    const ProtocolRunner* runner = FindRunner(set.protocol);
+    ASSERT_NE(runner, nullptr) << ProtocolName(set.protocol);
+    std::set<std::string_view> texts;
+    for (const Need& n : set.needs) texts.insert(n.text);
+    for (const Need& n : SharedNeeds::kShared) texts.insert(n.text);
+    for (const CaseInfo& k : runner->cases()) {
+      if (k.needs.empty()) continue;  // needs nothing
+      EXPECT_TRUE(texts.contains(k.needs))
+          << k.suite << "/" << k.name << " needs \"" << k.needs << "\", which "
+          << ProtocolName(set.protocol) << " does not declare";
+    }
+  }
+}
+
+// The dialects a protocol's devices are judged in (mococheck run --dialect):
+// named apart from each other and from auto, each described, and auto's
+// choice named among them; a protocol without dialects says nothing of auto.
+TEST(Registry, EveryProtocolsDialectsAreNamedAndAutoPicksOneOfThem) {
+  size_t with_dialects = 0;
+  for (const ProtocolRunner& r : Runners()) {
+    if (r.dialects.empty()) {
+      EXPECT_TRUE(r.auto_picks.empty()) << ProtocolName(r.protocol);
+      continue;
+    }
+    ++with_dialects;
+    std::set<std::string_view> names;
+    for (const DialectChoice& d : r.dialects) {
+      EXPECT_FALSE(d.name.empty()) << ProtocolName(r.protocol);
+      EXPECT_NE(d.name, kAutoDialect) << ProtocolName(r.protocol);
+      EXPECT_FALSE(d.description.empty()) << d.name;
+      EXPECT_TRUE(names.insert(d.name).second) << ProtocolName(r.protocol) << " has two " << d.name;
+    }
+    bool named = false;
+    for (std::string_view n : names)
+      named = named || r.auto_picks.find(n) != std::string_view::npos;
+    EXPECT_TRUE(named) << ProtocolName(r.protocol) << ": auto picks \"" << r.auto_picks << "\"";
+  }
+  EXPECT_GE(with_dialects, 1u) << "DFMoco judges the sketch's and the StackShot 3X's dialects";
 }
 
 // Every protocol on the wire can be mutated and replayed, by exactly one
@@ -168,7 +214,7 @@ TEST(Registry, ADeviceThatNeverIntroducesItselfFailsUnderEveryProtocolAlike) {
     for (const auto& [id, s] : report.rules) {
       const Rule* rule = FindRule(id);
       ASSERT_NE(rule, nullptr);
-      if (rule->needs != Needs::kNothing) {
+      if (rule->needs != SharedNeeds::kNothing) {
         EXPECT_EQ(s.status, Status::kNotApplicable) << id;
       }
     }

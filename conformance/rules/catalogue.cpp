@@ -1,4 +1,4 @@
-// The rule catalogue across protocols: levels, needs, lookups, filters and
+// The rule catalogue across protocols: levels, lookups, filters and
 // the catalogue's exports. Each protocol's rules are its own file
 // (dmc_rules.cpp, dfmoco_rules.cpp, stackshot_rules.cpp, pin_rules.cpp).
 #include "conformance/rules/catalogue.h"
@@ -18,64 +18,6 @@ std::string_view LevelName(Level level) {
       return "SHOULD";
     case Level::kNote:
       return "NOTE";
-  }
-  return "?";
-}
-
-std::string_view NeedsText(Needs needs) {
-  switch (needs) {
-    case Needs::kNothing:
-      return "-";
-    case Needs::kMotors:
-      return "MOTOR COUNT >= 1";
-    case Needs::kTwoMotors:
-      return "MOTOR COUNT >= 2";
-    case Needs::kDmx:
-      return "DMX COUNT >= 1";
-    case Needs::kGioOut:
-      return "GIO OUT COUNT >= 1";
-    case Needs::kGioIn:
-      return "GIO INPUT COUNT >= 1";
-    case Needs::kHwLimits:
-      return "HW LIMIT COUNT >= 1, MOTOR COUNT >= 1";
-    case Needs::kRealTime:
-      return "capability 0x0001 (real-time)";
-    case Needs::kGoMotion:
-      return "capability 0x0002 (go-motion)";
-    case Needs::kGoMotion2:
-      return "capability 0x0080 (go-motion 2)";
-    case Needs::kLooping:
-      return "capability 0x0200 (looping)";
-    case Needs::kVirtual:
-      return "a virtual capability (0x0004-0x0020)";
-    case Needs::kNoVirtual:
-      return "no virtual capability";
-    case Needs::kVirtualBoomRig:
-      return "capability 0x0004 (boom-swing-track), MOTOR COUNT >= 6";
-    case Needs::kAimPoint:
-      return "capability 0x0040 (aim point)";
-    case Needs::kCoupleMotors:
-      return "capability 0x0100 (couple motors), MOTOR COUNT >= 2";
-    case Needs::kRtDmx:
-      return "capability 0x0001 (real-time), DMX COUNT >= 1";
-    case Needs::kRtTriggers:
-      return "capability 0x0001 (real-time), GIO OUT COUNT >= 1";
-    case Needs::kRtCamera:
-      return "capabilities 0x0001 (real-time) and 0x0400 (camera trigger)";
-    case Needs::kSsThreeAxes:
-      return "axes X, Y and Z (StackShot 3X)";
-    case Needs::kDfmMotors:
-      return "hi: axes >= 1";
-    case Needs::kDfmTwoMotors:
-      return "hi: axes >= 2";
-    case Needs::kDfmJogVelocity:
-      return "hi: major version >= 2 (jm velocity)";
-    case Needs::kDfmGoMotion:
-      return "hi: version >= 1.2.7 (go-motion)";
-    case Needs::kDfmBlurRefusal:
-      return "hi: version >= 1.3.1 (bf -1)";
-    case Needs::kPins:
-      return "watched pins (a simavr: target with --board)";
   }
   return "?";
 }
@@ -289,9 +231,9 @@ std::string RulesMarkdown() {
         proofs += (proofs.empty() ? "`" : ", `") + std::string(t) + "`";
       }
       s += "| " + std::string(r.id) + " | " + std::string(LevelName(r.level)) + " | " +
-           (why.empty() ? std::string("-") : Escape(why)) + " | " + Escape(NeedsText(r.needs)) +
-           " | " + Escape(r.title) + " | \"" + Escape(r.clause) + "\" | " + Escape(r.source) +
-           " | " + (proofs.empty() ? std::string("-") : proofs) + " |\n";
+           (why.empty() ? std::string("-") : Escape(why)) + " | " + Escape(r.needs.text) + " | " +
+           Escape(r.title) + " | \"" + Escape(r.clause) + "\" | " + Escape(r.source) + " | " +
+           (proofs.empty() ? std::string("-") : proofs) + " |\n";
     }
   }
   return s;
@@ -323,7 +265,7 @@ std::string RulesJson() {
       out.push_back({{"id", std::string(r.id)},
                      {"protocol", std::string(wire::Info(p).name)},
                      {"level", std::string(LevelName(r.level))},
-                     {"needs", std::string(NeedsText(r.needs))},
+                     {"needs", std::string(r.needs.text)},
                      {"title", std::string(r.title)},
                      {"clause", std::string(r.clause)},
                      {"source", std::string(r.source)},

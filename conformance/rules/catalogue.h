@@ -14,6 +14,10 @@
 #include <string_view>
 #include <vector>
 
+#include "conformance/rules/dfmoco_needs.h"
+#include "conformance/rules/dmc_needs.h"
+#include "conformance/rules/needs.h"
+#include "conformance/rules/stackshot_needs.h"
 #include "wire/dmc.h"
 #include "wire/protocol.h"
 
@@ -27,45 +31,11 @@ using wire::ProtocolName;
 enum class Level { kMust, kShould, kNote };
 std::string_view LevelName(Level level);  // "MUST", "SHOULD", "NOTE"
 
-// What the device's MSG_HI must advertise for a rule to apply.
-enum class Needs {
-  kNothing,
-  kMotors,          // MOTOR COUNT >= 1
-  kTwoMotors,       // MOTOR COUNT >= 2
-  kDmx,             // DMX COUNT >= 1
-  kGioOut,          // GIO OUT COUNT >= 1
-  kGioIn,           // GIO INPUT COUNT >= 1
-  kHwLimits,        // HW LIMIT COUNT >= 1 and MOTOR COUNT >= 1
-  kRealTime,        // capability 0x0001
-  kGoMotion,        // capability 0x0002
-  kGoMotion2,       // capability 0x0080
-  kLooping,         // capability 0x0200
-  kVirtual,         // any of 0x0004, 0x0008, 0x0010, 0x0020
-  kNoVirtual,       // none of the virtual capabilities
-  kVirtualBoomRig,  // capability 0x0004 (boom-swing-track) and MOTOR COUNT >= 6
-  kAimPoint,        // capability 0x0040
-  kCoupleMotors,    // capability 0x0100 and MOTOR COUNT >= 2
-  kRtDmx,           // capability 0x0001, MOTOR COUNT >= 1 and DMX COUNT >= 1
-  kRtTriggers,      // capability 0x0001, MOTOR COUNT >= 1 and GIO OUT COUNT >= 1
-  kRtCamera,        // capabilities 0x0001 and 0x0400 (camera trigger), MOTOR COUNT >= 1
-  // DFMoco: what the `hi` reply advertises (dfmoco_rules.cpp).
-  kDfmMotors,       // `hi` number of axes >= 1
-  kDfmTwoMotors,    // `hi` number of axes >= 2
-  kDfmJogVelocity,  // `hi` major version >= 2 (the jm velocity argument)
-  kDfmGoMotion,     // `hi` version 1.2.7 or later (bf / go)
-  kDfmBlurRefusal,  // `hi` version 1.3.1 or later (`bf -1`)
-  // StackShot 3X: what the device reports (stackshot_rules.cpp).
-  kSsThreeAxes,  // answers CC_RAIL_STATUS for axes X, Y and Z (a StackShot 3X)
-  // Any protocol: the target watches the firmware's pins (simavr with --board).
-  kPins,
-};
-std::string_view NeedsText(Needs needs);
-
 struct Rule {
   std::string_view id;  // "DMC-ACK-003"
   Level level = Level::kMust;
-  Needs needs = Needs::kNothing;
-  std::string_view title;   // one line: what the device must do
+  Need needs = SharedNeeds::kNothing;  // the protocol's own (rules/<p>_needs.h) or shared
+  std::string_view title;              // one line: what the device must do
   std::string_view clause;  // the spec text enforced, quoted (or the ERRATA/FACTS reading)
   std::string_view source;  // where the clause is: "MSG_FLAG_ACK", "ERRATA 1.4", ...
 };
@@ -81,15 +51,17 @@ const std::vector<Rule>& DfmocoPinRules();
 const std::vector<Rule>& StackshotRules();
 
 // The rules layer's registry: each protocol with rules, in the catalogue's
-// order, and its rule table. A new protocol is one line here.
+// order, its rule table and its own needs (a rule needs one of those or one
+// of SharedNeeds). A new protocol is one line here.
 struct RuleSet {
   Protocol protocol;
   const std::vector<Rule>& (*rules)();
+  std::span<const Need> needs;
 };
 inline constexpr RuleSet kRuleSets[] = {
-    {Protocol::kDmc, &DmcRules},
-    {Protocol::kDfmoco, &DfmocoRules},
-    {Protocol::kStackshot, &StackshotRules},
+    {Protocol::kDmc, &DmcRules, DmcNeeds::kOwn},
+    {Protocol::kDfmoco, &DfmocoRules, DfmocoNeeds::kOwn},
+    {Protocol::kStackshot, &StackshotRules, StackshotNeeds::kOwn},
 };
 // The protocols with rules, in the catalogue's order (from kRuleSets).
 inline constexpr auto kAllProtocols = [] {

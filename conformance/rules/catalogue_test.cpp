@@ -6,10 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <set>
+#include <span>
 #include <sstream>
+#include <string_view>
 
 namespace moco::conformance {
 namespace {
@@ -227,6 +230,50 @@ TEST(Catalogue, ProvingTestsAreShownByTheCatalogue) {
     }
   }
   EXPECT_FALSE(ProofsOf("DMC-CSUM-001").empty()) << "the corrupted-checksum test proves it";
+}
+
+// Each protocol declares its own needs (rules/<p>_needs.h) beside the shared
+// ones (rules/needs.h): every need has an id no other need has, named after
+// its protocol, and a text the catalogue and the reports print, which no
+// other need reads alike (so a text names one need).
+TEST(Catalogue, EachProtocolsNeedsHaveDistinctIdsAndText) {
+  std::set<std::string_view> ids, texts;
+  for (const Need& n : SharedNeeds::kShared) {
+    EXPECT_FALSE(n.id.empty());
+    EXPECT_FALSE(n.text.empty()) << n.id;
+    EXPECT_TRUE(ids.insert(n.id).second) << "two needs are " << n.id;
+    EXPECT_TRUE(texts.insert(n.text).second) << "two needs read " << n.text;
+  }
+  for (const RuleSet& set : kRuleSets) {
+    const std::string prefix = std::string(ProtocolName(set.protocol)) + ".";
+    EXPECT_FALSE(set.needs.empty()) << ProtocolName(set.protocol);
+    for (const Need& n : set.needs) {
+      EXPECT_TRUE(n.id.starts_with(prefix)) << n.id << " is a need of " << prefix;
+      EXPECT_GT(n.id.size(), prefix.size()) << n.id;
+      EXPECT_FALSE(n.text.empty()) << n.id;
+      EXPECT_TRUE(ids.insert(n.id).second) << "two needs are " << n.id;
+      EXPECT_TRUE(texts.insert(n.text).second) << "two needs read " << n.text;
+    }
+  }
+}
+
+// A rule needs what its own protocol declares or what every protocol shares,
+// never another protocol's need (which that protocol's traits would never meet).
+TEST(Catalogue, EveryRuleNeedsOnlyItsOwnProtocolsOrSharedNeeds) {
+  const auto holds = [](std::span<const Need> needs, const Need& need) {
+    return std::any_of(needs.begin(), needs.end(),
+                       [&](const Need& n) { return n.id == need.id && n.text == need.text; });
+  };
+  size_t checked = 0;
+  for (const RuleSet& set : kRuleSets) {
+    for (const Rule& r : set.rules()) {
+      ++checked;
+      EXPECT_TRUE(holds(set.needs, r.needs) || holds(SharedNeeds::kShared, r.needs))
+          << r.id << " needs " << r.needs.id << ", which " << ProtocolName(set.protocol)
+          << " does not declare";
+    }
+  }
+  EXPECT_EQ(checked, RuleCount());
 }
 
 }  // namespace

@@ -2,12 +2,13 @@
 // Clauses are quoted from the spec; where the spec is silent or garbled the
 // ERRATA reading is quoted instead and the rule says so.
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/dmc_needs.h"
 
 namespace moco::conformance {
 namespace {
 
 using L = Level;
-using N = Needs;
+using N = DmcNeeds;
 
 const std::vector<Rule> kRules = {
     // --- Framing and checksum ("Message Format", "Computing and Validating the Checksum") ---

@@ -2,15 +2,16 @@
 // camera see of a firmware run under simavr, judged against the position the
 // protocol reports, the driver's datasheet timing (FACTS "Step drivers") and
 // the sketch's motion (FACTS "DFMoco"). One table per protocol whose firmware
-// can run under simavr; each rule needs a watched board (Needs::kPins) and is
+// can run under simavr; each rule needs a watched board (SharedNeeds::kPins) and is
 // "not applicable" on every other target. The judge is conformance/core/pin_judge.
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/dfmoco_needs.h"
 
 namespace moco::conformance {
 namespace {
 
 using L = Level;
-using N = Needs;
+using N = DfmocoNeeds;
 
 const std::vector<Rule> kDfmocoPinRules = {
     {"DFM-PIN-001", L::kMust, N::kPins,

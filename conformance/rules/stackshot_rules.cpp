@@ -5,12 +5,13 @@
 // Clauses are quoted from the spec; where it is silent, garbled or
 // self-contradictory the ERRATA or FACTS reading is quoted and named.
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/stackshot_needs.h"
 
 namespace moco::conformance {
 namespace {
 
 using L = Level;
-using N = Needs;
+using N = StackshotNeeds;
 
 const std::vector<Rule> kStackshotRules = {
     // --- Packets (section 2; ERRATA 1, 3, 6) ---
@@ -276,7 +277,7 @@ const std::vector<Rule> kStackshotRules = {
      "1.1.5 StackShot_ShutterFire"},
 
     // --- Stacks (CC_RAIL_STACK, StackShot 3X) ---
-    {"SS-STACK-001", L::kMust, N::kSsThreeAxes,
+    {"SS-STACK-001", L::kMust, N::kThreeAxes,
      "CC_RAIL_STACK at rest is accepted, STACK_STATUS shows it running, STACK_POSITION counts up "
      "to the number of steps and the stack ends; the shutter fires (CC_RAIL_STATUS SHUTTER) in "
      "each frame and the rail ends on the end position (auto-return off)",
@@ -284,7 +285,7 @@ const std::vector<Rule> kStackshotRules = {
      "stack; Get the current position of a stack / Time in seconds the rail should pause before "
      "activating the shutter. / Number of pulses (pictures to be taken) applied at each step.",
      "1.2 comm_cmd_t; 2 CC_RAIL_STACK, CC_RAIL_CONFIG_SETTLE_TIME, CC_RAIL_CONFIG_NUM_PULSES"},
-    {"SS-STACK-002", L::kMust, N::kSsThreeAxes, "CC_RAIL_STACK while an axis moves is refused BUSY",
+    {"SS-STACK-002", L::kMust, N::kThreeAxes, "CC_RAIL_STACK while an axis moves is refused BUSY",
      "COMM_ACTION_BUSY, // The controller is already performing the specified action",
      "2 CC_RAIL_STACK; 1.2 comm_action_t"},
 
@@ -333,7 +334,7 @@ const std::vector<Rule> kStackshotRules = {
      "2 CC_RAIL_CONFIG_LOAD; CC_RESET"},
 
     // --- Bezier curves (CC_MOTION_CONFIG / CC_MOTION_START, StackShot 3X; ERRATA 5) ---
-    {"SS-CURVE-001", L::kMust, N::kSsThreeAxes,
+    {"SS-CURVE-001", L::kMust, N::kThreeAxes,
      "A CC_MOTION_CONFIG meeting every listed requirement is accepted, a position jump between "
      "curves and a speed beyond the axis's maximum included (the list requires neither), and "
      "taken: CC_MOTION_START plays it to its last keyframe",
@@ -342,20 +343,20 @@ const std::vector<Rule> kStackshotRules = {
      "match the previous curves P3.x to provide continuity. ... Limits should be applied to "
      "prevent sudden velocity changes which may result in loss of steps.",
      "2 CC_MOTION_CONFIG; ERRATA 5"},
-    {"SS-CURVE-002", L::kMust, N::kSsThreeAxes,
+    {"SS-CURVE-002", L::kMust, N::kThreeAxes,
      "A curve 0 whose P0.x is not zero is refused BAD_PARAM",
      "Curve 0's starting time (P0.x) must be set to zero since it starts at time 0.",
      "2 CC_MOTION_CONFIG"},
-    {"SS-CURVE-003", L::kMust, N::kSsThreeAxes,
+    {"SS-CURVE-003", L::kMust, N::kThreeAxes,
      "A used curve whose P0.x differs from the previous curve's P3.x is refused BAD_PARAM",
      "A curve's initial P0.x must match the previous curves P3.x to provide continuity.",
      "2 CC_MOTION_CONFIG"},
-    {"SS-CURVE-004", L::kMust, N::kSsThreeAxes,
+    {"SS-CURVE-004", L::kMust, N::kThreeAxes,
      "P1.x below P0.x or P2.x above P3.x is refused BAD_PARAM",
      "Control point P1.x must not be less than P0.x. Likewise, control point P2.x must not be more "
      "than P3.x.",
      "2 CC_MOTION_CONFIG"},
-    {"SS-CURVE-005", L::kMust, N::kSsThreeAxes,
+    {"SS-CURVE-005", L::kMust, N::kThreeAxes,
      "CC_MOTION_START plays the configured spline: each position read while it plays lies on the "
      "curve (x the time in s, y the position in mm) and the axis rests on the last keyframe's "
      "position",

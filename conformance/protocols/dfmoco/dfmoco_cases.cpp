@@ -19,6 +19,7 @@
 #include "conformance/core/run_report.h"
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/rules/dfmoco_needs.h"
 
 namespace moco::conformance {
 namespace dfmoco_cases {
@@ -228,7 +229,7 @@ void TooMany(DfmCaseContext& c) {
   // `bf` is a command word only where the sketch has go-motion; elsewhere it
   // is unknown, and unknown words are never answered (their arguments are
   // not counted), so the second line is sent only to a go-motion sketch.
-  if (!DfmocoApplies(Needs::kDfmGoMotion, c.device)) {
+  if (!DfmocoApplies(DfmocoNeeds::kGoMotion, c.device)) {
     Refused(c, {forty});
     return;
   }
@@ -254,7 +255,7 @@ void Unknown(DfmCaseContext& c) {
 }
 
 std::vector<DfmCase> MakeCases() {
-  using N = Needs;
+  using N = DfmocoNeeds;
   return {
       {"connect", "boot-hi", N::kNothing, "unprompted hi at power-on", BootHi},
       {"connect", "hi", N::kNothing, "hi twice: fields, stable answer", HiAgain},
@@ -262,43 +263,41 @@ std::vector<DfmCase> MakeCases() {
       {"connect", "line-end", N::kNothing, "a command ended by a bare \\n", LineEnd},
       {"connect", "pipelined", N::kNothing, "12 commands in one write: all answered, in order",
        Pipelined},
-      {"motor", "move", N::kDfmMotors, "mm with ms, mp reports, rest and the already-there answer",
+      {"motor", "move", N::kMotors, "mm with ms, mp reports, rest and the already-there answer",
        Move},
-      {"motor", "pulse-rate", N::kDfmMotors, "pr echo, clamps and the speed limit", PulseRate},
-      {"motor", "stop", N::kDfmMotors, "sm during a long move (other motor keeps going)", Stop},
-      {"motor", "stop-all", N::kDfmMotors, "sa during moves of every motor (up to 4)", StopAll},
-      {"motor", "np-zm", N::kDfmMotors, "np and zm: answers, no motion, new positions",
+      {"motor", "pulse-rate", N::kMotors, "pr echo, clamps and the speed limit", PulseRate},
+      {"motor", "stop", N::kMotors, "sm during a long move (other motor keeps going)", Stop},
+      {"motor", "stop-all", N::kMotors, "sa during moves of every motor (up to 4)", StopAll},
+      {"motor", "np-zm", N::kMotors, "np and zm: answers, no motion, new positions",
        NewPositionZero},
-      {"motor", "jog", N::kDfmMotors, "jm repeated towards a far and a near destination", Jog},
-      {"motor", "inch", N::kDfmMotors, "im from rest: a few steps, at most one past", Inch},
+      {"motor", "jog", N::kMotors, "jm repeated towards a far and a near destination", Jog},
+      {"motor", "inch", N::kMotors, "im from rest: a few steps, at most one past", Inch},
       {"pins", "fast-reversal", N::kPins,
        "pr 20000, a long move sent back at full speed (for the pin rules)", FastReversal},
       {"errors", "arguments", N::kNothing, "wrong argument counts and malformed numbers",
        BadArguments},
-      {"errors", "bad-motor", N::kDfmMotors, "motor 0 and axes + 1 for every motor command",
-       BadMotor},
+      {"errors", "bad-motor", N::kMotors, "motor 0 and axes + 1 for every motor command", BadMotor},
       {"errors", "too-many-args", N::kNothing, "40 and more arguments", TooMany},
       {"errors", "unknown", N::kNothing, "unknown words get no reply", Unknown},
-      {"gomotion", "blur", N::kDfmGoMotion,
-       "bf, pre-position, go, exposure timing, bf while moving", Blur},
-      {"gomotion", "go-at-once", N::kDfmGoMotion,
+      {"gomotion", "blur", N::kGoMotion, "bf, pre-position, go, exposure timing, bf while moving",
+       Blur},
+      {"gomotion", "go-at-once", N::kGoMotion,
        "bf, ms polled back to back, go the moment it shows rest", GoAtOnce},
-      {"gomotion", "too-fast", N::kDfmBlurRefusal, "bf faster than 20000 steps/s: bf -1",
-       BlurTooFast},
-      {"shoot", "frames", N::kDfmMotors, "a shoot of 6 frames on up to 2 motors", Shoot},
-      {"stackshot", "mp-all", N::kDfmMotors, "hi axes 1-3; mp * answers every motor's position",
+      {"gomotion", "too-fast", N::kBlurRefusal, "bf faster than 20000 steps/s: bf -1", BlurTooFast},
+      {"shoot", "frames", N::kMotors, "a shoot of 6 frames on up to 2 motors", Shoot},
+      {"stackshot", "mp-all", N::kMotors, "hi axes 1-3; mp * answers every motor's position",
        SsPositionsAll},
-      {"stackshot", "move-reports", N::kDfmMotors,
+      {"stackshot", "move-reports", N::kMotors,
        "mm answered and reported periodically as mm <motor> <current position>", SsMoveReports},
-      {"stackshot", "np-zm", N::kDfmMotors,
-       "zm and np answer mp; np to a moving motor retargets it", SsNewPosition},
-      {"stackshot", "stop-all-motor", N::kDfmMotors, "sa <motor> answered sa, every motor stops",
+      {"stackshot", "np-zm", N::kMotors, "zm and np answer mp; np to a moving motor retargets it",
+       SsNewPosition},
+      {"stackshot", "stop-all-motor", N::kMotors, "sa <motor> answered sa, every motor stops",
        SsStopAllMotor},
-      {"stackshot", "pulse-rate", N::kDfmMotors, "pr echoed up to the maximum, else the maximum",
+      {"stackshot", "pulse-rate", N::kMotors, "pr echoed up to the maximum, else the maximum",
        SsPulseRate},
-      {"stackshot", "no-go-motion", N::kDfmMotors, "bf and go: no go-motion answer, no motion",
+      {"stackshot", "no-go-motion", N::kMotors, "bf and go: no go-motion answer, no motion",
        SsNoGoMotion},
-      {"random", "sequence", N::kDfmMotors, "a seeded sequence of valid commands (--seed)",
+      {"random", "sequence", N::kMotors, "a seeded sequence of valid commands (--seed)",
        DfmRandomSequence},
   };
 }

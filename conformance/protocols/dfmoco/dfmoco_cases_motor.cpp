@@ -12,6 +12,7 @@
 
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/rules/dfmoco_needs.h"
 
 namespace moco::conformance::dfmoco_cases {
 
@@ -329,7 +330,7 @@ void Jog(DfmCaseContext& c) {
     Expect(c, "DFM-JM-002", *at > *end && *at <= near,
            "motor 1 towards " + Str(near) + ", not past it", "rests on " + Str(*at));
   }
-  if (DfmocoApplies(Needs::kDfmJogVelocity, c.device) && at) {
+  if (DfmocoApplies(DfmocoNeeds::kJogVelocity, c.device) && at) {
     const int32_t back = *at - 100000;
     h.Call(Cmd("jm", {1, back, 5000}));
     h.Idle(300 * kMs);

@@ -125,9 +125,9 @@ bool IsStackShotHello(const dfmoco::HelloReply& hello) {
 }
 
 bool DfmHost::stackshot() const {
-  const std::string& d = options().dfmoco_dialect;
-  if (d == "stackshot3x") return true;
-  if (d == "sketch") return false;
+  const std::string& d = options().dialect;
+  if (d == kStackshotDialect) return true;
+  if (d == kSketchDialect) return false;
   return hello_ && IsStackShotHello(*hello_);
 }
 

@@ -32,6 +32,12 @@ struct DfmLine {
   int command = -1;  // index of the command it answers; -1: unprompted (or stray)
 };
 
+// The dialects a DFMoco device is judged in (HostOptions::dialect, mococheck
+// run --dialect; the JSON report's device "dialect"): the Arduino sketch's,
+// and a StackShot 3X's DfMoco mode (stackshot-protocol.txt section 3).
+inline constexpr std::string_view kSketchDialect = "sketch";
+inline constexpr std::string_view kStackshotDialect = "stackshot3x";
+
 // What a DFMoco device said of itself: its `hi`, and the dialect it is
 // judged in (stackshot: the StackShot 3X's DfMoco mode, stackshot-protocol.txt
 // section 3; else the Arduino sketch's).
@@ -99,11 +105,11 @@ class DfmHost : public HostBase {
   // The last `hi` the device sent (answer or unprompted), if any.
   const std::optional<dfmoco::HelloReply>& hello() const { return hello_; }
   // The dialect learnt from `hi` (the 2.0.0 sketch with 4 motors before it),
-  // the StackShot 3X's as HostOptions::dfmoco_dialect says.
+  // the StackShot 3X's as HostOptions::dialect says.
   dfmoco::Dialect dialect() const;
   // Whether the device is judged in the StackShot 3X DfMoco dialect
-  // (stackshot-protocol.txt section 3; ERRATA 3.9): --dialect stackshot3x, or
-  // auto and a `hi` that is exactly `hi 1 3 1.2.6`.
+  // (stackshot-protocol.txt section 3; ERRATA 3.9): HostOptions::dialect
+  // kStackshotDialect, or kAutoDialect and a `hi` that is exactly `hi 1 3 1.2.6`.
   bool stackshot() const;
   // Axes from `hi` (0 before it).
   int32_t axes() const { return hello_ ? hello_->motor_count : 0; }

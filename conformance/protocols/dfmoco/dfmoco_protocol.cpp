@@ -24,24 +24,19 @@ std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text) {
   return v;
 }
 
-bool DfmocoApplies(Needs needs, const dfmoco::HelloReply& hello) {
+bool DfmocoApplies(const Need& needs, const dfmoco::HelloReply& hello) {
+  using N = DfmocoNeeds;
   const auto version = ParseDfmocoVersion(hello.version);
-  switch (needs) {
-    case Needs::kNothing:
-      return true;
-    case Needs::kDfmMotors:
-      return hello.motor_count >= 1;
-    case Needs::kDfmTwoMotors:
-      return hello.motor_count >= 2;
-    case Needs::kDfmJogVelocity:
-      return hello.motor_count >= 1 && hello.protocol_major >= 2;
-    case Needs::kDfmGoMotion:
-      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 2, 7};
-    case Needs::kDfmBlurRefusal:
-      return hello.motor_count >= 1 && version && *version >= std::array<int, 3>{1, 3, 1};
-    default:  // another protocol's needs
-      return false;
-  }
+  const auto since = [&](std::array<int, 3> first) {
+    return hello.motor_count >= 1 && version && *version >= first;
+  };
+  if (needs == N::kNothing) return true;
+  if (needs == N::kMotors) return hello.motor_count >= 1;
+  if (needs == N::kTwoMotors) return hello.motor_count >= 2;
+  if (needs == N::kJogVelocity) return hello.motor_count >= 1 && hello.protocol_major >= 2;
+  if (needs == N::kGoMotion) return since({1, 2, 7});
+  if (needs == N::kBlurRefusal) return since({1, 3, 1});
+  return false;  // another protocol's need
 }
 
 bool DfmocoApplies(const Rule& rule, const dfmoco::HelloReply& hello) {
@@ -113,7 +108,7 @@ std::optional<DfmDevice> DfmocoProtocol::Discover(DfmHost& probe) {
 void DfmocoProtocol::Describe(const DfmDevice& device, RunReport& report) {
   const dfmoco::HelloReply& hello = device;
   const std::string line = dfmoco::FormatDevice(hello);
-  const char* dialect = device.stackshot ? "stackshot3x" : "sketch";
+  const std::string dialect(device.stackshot ? kStackshotDialect : kSketchDialect);
   report.device = "\"" + line.substr(0, line.size() - 2) +
                   "\": " + (device.stackshot ? "StackShot 3X DfMoco " : "DFMoco ") + hello.version +
                   ", protocol " + std::to_string(hello.protocol_major) + ", " +

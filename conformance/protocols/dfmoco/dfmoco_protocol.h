@@ -15,6 +15,7 @@
 #include "conformance/protocols/dfmoco/dfmoco_host.h"
 #include "conformance/protocols/dfmoco/dfmoco_suites.h"
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/dfmoco_needs.h"
 #include "wire/dfmoco.h"
 
 namespace moco::conformance {
@@ -24,10 +25,10 @@ namespace moco::conformance {
 std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text);
 
 // Whether DFMoco `rule` (or a case gated like one) applies to a device that
-// answered `hi` with `hello`. Needs outside the DFMoco ones apply only when
-// kNothing.
+// answered `hi` with `hello`: it decides DfmocoNeeds (rules/dfmoco_needs.h);
+// of the other needs only kNothing applies.
 bool DfmocoApplies(const Rule& rule, const dfmoco::HelloReply& hello);
-bool DfmocoApplies(Needs needs, const dfmoco::HelloReply& hello);
+bool DfmocoApplies(const Need& needs, const dfmoco::HelloReply& hello);
 
 // Why DFMoco `rule` (or case `k`) does not apply to `device`'s dialect, ""
 // when it does: the sketch's own behaviour (FACTS DFMoco) is not judged on a
@@ -46,7 +47,7 @@ struct DfmocoProtocol {
   static const std::vector<Rule>& Rules() { return DfmocoRules(); }
   static std::optional<DfmDevice> Discover(DfmHost& probe);
   static void Describe(const DfmDevice& device, RunReport& report);
-  static bool Applies(Needs needs, const dfmoco::HelloReply& hello) {
+  static bool Applies(const Need& needs, const dfmoco::HelloReply& hello) {
     return DfmocoApplies(needs, hello);
   }
   static std::optional<DfmDevice> Greet(DfmHost& host, Target& target, const DfmDevice& discovered);
@@ -67,6 +68,16 @@ struct DfmocoProtocol {
   static std::span<const FuzzHooks> Fuzz();
   // The longest line a fuzz mutant carries (its line end aside).
   static constexpr size_t kMaxFuzzLine = 96;
+  // The dialects a device is judged in (HostOptions::dialect), and which one
+  // kAutoDialect picks (DfmHost::stackshot()).
+  static constexpr DialectChoice kDialects[] = {
+      {kSketchDialect, "Dragonframe's Arduino sketch"},
+      {kStackshotDialect,
+       "a StackShot 3X in DfMoco mode, stackshot-protocol.txt section 3, as "
+       "in-process:stackshot3x runs with --protocol dfmoco"},
+  };
+  static constexpr std::string_view kAutoPicks =
+      "stackshot3x when `hi` is exactly `hi 1 3 1.2.6`, else sketch";
 };
 
 // The runner over DfmocoProtocol (registry.cpp runs it the same way).

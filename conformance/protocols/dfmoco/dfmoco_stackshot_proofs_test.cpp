@@ -93,7 +93,7 @@ RunReport RunStackshot(LineBreakage b, const char* cases, SsInput in = {},
   });
   EXPECT_FALSE(target.Open().has_value());
   RunOptions options = Only(cases);
-  options.host.dfmoco_dialect = dialect;
+  options.host.dialect = dialect;
   return RunDfmoco(target, options);
 }
 

@@ -10,6 +10,7 @@
 #include "conformance/protocols/dmc/dmc_suites.h"
 
 #include "conformance/protocols/dmc/dmc_cases_internal.h"
+#include "conformance/rules/dmc_needs.h"
 
 #include <algorithm>
 #include <cmath>
@@ -188,7 +189,7 @@ void Queries(DmcCaseContext& c) {
 }
 
 std::vector<DmcCase> MakeCases() {
-  using N = Needs;
+  using N = DmcNeeds;
   return {
       {"connect", "boot-hi", N::kNothing, "unsolicited HI at power-on", BootHi},
       {"connect", "hi", N::kNothing, "HI twice: layout, ranges, stable answer", HiAgain},

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iterator>
 #include <string>
 
 #include "base/format.h"
@@ -10,54 +11,57 @@
 
 namespace moco::conformance {
 
-bool Applies(Needs needs, const dmc::HiResponse& hi) {
-  constexpr uint32_t kVirtualCaps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
-                                    dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
-  switch (needs) {
-    case Needs::kNothing:
-      return true;
-    case Needs::kMotors:
-      return hi.motor_count >= 1;
-    case Needs::kTwoMotors:
-      return hi.motor_count >= 2;
-    case Needs::kDmx:
-      return hi.dmx_count >= 1;
-    case Needs::kGioOut:
-      return hi.gio_out_count >= 1;
-    case Needs::kGioIn:
-      return hi.gio_in_count >= 1;
-    case Needs::kHwLimits:
-      return hi.hw_limit_count >= 1 && hi.motor_count >= 1;
-    case Needs::kRealTime:
-      return (hi.capabilities & dmc::kCapRealTime) != 0 && hi.motor_count >= 1;
-    case Needs::kGoMotion:
-      return (hi.capabilities & dmc::kCapGoMotion) != 0 && hi.motor_count >= 1;
-    case Needs::kGoMotion2:
-      return (hi.capabilities & dmc::kCapGoMotion2) != 0 && hi.motor_count >= 1;
-    case Needs::kLooping:
-      return (hi.capabilities & dmc::kCapRtLooping) != 0;
-    case Needs::kVirtual:
-      return (hi.capabilities & kVirtualCaps) != 0;
-    case Needs::kNoVirtual:
-      return (hi.capabilities & kVirtualCaps) == 0;
-    case Needs::kVirtualBoomRig:
-      return (hi.capabilities & dmc::kCapVirtBoomSwingTrack) != 0 && hi.motor_count >= 6;
-    case Needs::kAimPoint:
-      return (hi.capabilities & dmc::kCapAimPoint) != 0;
-    case Needs::kCoupleMotors:
-      return (hi.capabilities & dmc::kCapCoupleMotors) != 0 && hi.motor_count >= 2;
-    case Needs::kRtDmx:
-      return Applies(Needs::kRealTime, hi) && hi.dmx_count >= 1;
-    case Needs::kRtTriggers:
-      return Applies(Needs::kRealTime, hi) && hi.gio_out_count >= 1;
-    case Needs::kRtCamera:
-      return Applies(Needs::kRealTime, hi) && (hi.capabilities & dmc::kCapRtCameraTrigger) != 0;
-    case Needs::kSsThreeAxes:
-      return false;  // a StackShot need: no DMC v2 device has it
-    default:         // another protocol's needs
-      return false;
+namespace {
+
+using Hi = dmc::HiResponse;
+
+constexpr uint32_t kVirtualCaps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                                  dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz;
+
+constexpr bool Has(const Hi& hi, uint32_t capability) {
+  return (hi.capabilities & capability) != 0;
+}
+constexpr bool RealTime(const Hi& hi) { return Has(hi, dmc::kCapRealTime) && hi.motor_count >= 1; }
+
+// What HI must say for each of DmcNeeds.
+struct NeedTest {
+  Need need;
+  bool (*met)(const Hi& hi);
+};
+using N = DmcNeeds;
+constexpr NeedTest kNeedTests[] = {
+    {N::kMotors, [](const Hi& hi) { return hi.motor_count >= 1; }},
+    {N::kTwoMotors, [](const Hi& hi) { return hi.motor_count >= 2; }},
+    {N::kDmx, [](const Hi& hi) { return hi.dmx_count >= 1; }},
+    {N::kGioOut, [](const Hi& hi) { return hi.gio_out_count >= 1; }},
+    {N::kGioIn, [](const Hi& hi) { return hi.gio_in_count >= 1; }},
+    {N::kHwLimits, [](const Hi& hi) { return hi.hw_limit_count >= 1 && hi.motor_count >= 1; }},
+    {N::kRealTime, [](const Hi& hi) { return RealTime(hi); }},
+    {N::kGoMotion, [](const Hi& hi) { return Has(hi, dmc::kCapGoMotion) && hi.motor_count >= 1; }},
+    {N::kGoMotion2,
+     [](const Hi& hi) { return Has(hi, dmc::kCapGoMotion2) && hi.motor_count >= 1; }},
+    {N::kLooping, [](const Hi& hi) { return Has(hi, dmc::kCapRtLooping); }},
+    {N::kVirtual, [](const Hi& hi) { return Has(hi, kVirtualCaps); }},
+    {N::kNoVirtual, [](const Hi& hi) { return !Has(hi, kVirtualCaps); }},
+    {N::kVirtualBoomRig,
+     [](const Hi& hi) { return Has(hi, dmc::kCapVirtBoomSwingTrack) && hi.motor_count >= 6; }},
+    {N::kAimPoint, [](const Hi& hi) { return Has(hi, dmc::kCapAimPoint); }},
+    {N::kCoupleMotors,
+     [](const Hi& hi) { return Has(hi, dmc::kCapCoupleMotors) && hi.motor_count >= 2; }},
+    {N::kRtDmx, [](const Hi& hi) { return RealTime(hi) && hi.dmx_count >= 1; }},
+    {N::kRtTriggers, [](const Hi& hi) { return RealTime(hi) && hi.gio_out_count >= 1; }},
+    {N::kRtCamera, [](const Hi& hi) { return RealTime(hi) && Has(hi, dmc::kCapRtCameraTrigger); }},
+};
+static_assert(std::size(kNeedTests) == std::size(N::kOwn), "a DMC need without its test");
+
+}  // namespace
+
+bool Applies(const Need& needs, const dmc::HiResponse& hi) {
+  if (needs == N::kNothing) return true;
+  for (const NeedTest& t : kNeedTests) {
+    if (t.need == needs) return t.met(hi);
   }
-  return false;
+  return false;  // another protocol's need
 }
 
 std::optional<dmc::HiResponse> DmcProtocol::Discover(DmcHost& probe) {

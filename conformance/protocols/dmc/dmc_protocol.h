@@ -10,13 +10,15 @@
 #include "conformance/core/run.h"
 #include "conformance/protocols/dmc/dmc_host.h"
 #include "conformance/protocols/dmc/dmc_suites.h"
+#include "conformance/rules/dmc_needs.h"
 #include "wire/dmc.h"
 
 namespace moco::conformance {
 
-// Whether a DMC rule or case with `needs` applies to a device that answered HI
-// with `hi`. Needs of the other protocols never apply.
-bool Applies(Needs needs, const dmc::HiResponse& hi);
+// Whether a DMC rule or case with `needs` (DmcNeeds, rules/dmc_needs.h)
+// applies to a device that answered HI with `hi`. Needs of the other
+// protocols never apply.
+bool Applies(const Need& needs, const dmc::HiResponse& hi);
 inline bool Applies(const Rule& rule, const dmc::HiResponse& hi) { return Applies(rule.needs, hi); }
 
 struct DmcProtocol {
@@ -30,7 +32,7 @@ struct DmcProtocol {
   static const std::vector<Rule>& Rules() { return DmcRules(); }
   static std::optional<dmc::HiResponse> Discover(DmcHost& probe);
   static void Describe(const dmc::HiResponse& hi, RunReport& report);
-  static bool Applies(Needs needs, const dmc::HiResponse& hi) {
+  static bool Applies(const Need& needs, const dmc::HiResponse& hi) {
     return conformance::Applies(needs, hi);
   }
   static std::optional<dmc::HiResponse> Greet(DmcHost& host, Target& target,

@@ -502,7 +502,7 @@ void UserAbortCase(SsCaseContext& c) {
 }
 
 std::vector<SsCase> MakeCases() {
-  using N = Needs;
+  using N = StackshotNeeds;
   return {
       {"connect", "ping", N::kNothing, "CC_PING values, and at its table id 0x110A", PingCase},
       {"connect", "identity", N::kNothing, "software string and ids twice, checksum, serial",
@@ -545,11 +545,9 @@ std::vector<SsCase> MakeCases() {
       {"nvm", "serial", N::kNothing, "the write-once serial number", SerialCase},
       {"nvm", "persist", N::kNothing, "NVM and serial across CC_RESET and a power cycle",
        NvmPersistCase},
-      {"stack", "run", N::kSsThreeAxes, "a three-frame CC_RAIL_STACK, BUSY while moving",
-       StackCase},
-      {"curve", "play", N::kSsThreeAxes, "CC_MOTION_CONFIG and CC_MOTION_START", CurveCase},
-      {"curve", "invalid", N::kSsThreeAxes, "curves breaking each listed requirement",
-       BadCurveCase},
+      {"stack", "run", N::kThreeAxes, "a three-frame CC_RAIL_STACK, BUSY while moving", StackCase},
+      {"curve", "play", N::kThreeAxes, "CC_MOTION_CONFIG and CC_MOTION_START", CurveCase},
+      {"curve", "invalid", N::kThreeAxes, "curves breaking each listed requirement", BadCurveCase},
       {"random", "sequence", N::kNothing, "a seeded sequence of valid rail requests (--seed)",
        SsRandomSequence},
   };
@@ -562,9 +560,9 @@ const std::vector<SsCase>& StackshotCases() {
   return cases;
 }
 
-bool SsApplies(Needs needs, const SsDeviceInfo& device) {
-  if (needs == Needs::kSsThreeAxes) return device.three_axes;
-  return needs == Needs::kNothing;
+bool SsApplies(const Need& needs, const SsDeviceInfo& device) {
+  if (needs == StackshotNeeds::kThreeAxes) return device.three_axes;
+  return needs == StackshotNeeds::kNothing;  // of the others, only kNothing applies
 }
 
 SsDeviceInfo DiscoverStackshot(SsHost& host) {

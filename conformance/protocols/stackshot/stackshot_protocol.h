@@ -25,7 +25,9 @@ struct StackshotProtocol {
   // nullopt when PING went unanswered.
   static std::optional<SsDeviceInfo> Discover(SsHost& probe);
   static void Describe(const SsDeviceInfo& device, RunReport& report);
-  static bool Applies(Needs needs, const SsDeviceInfo& device) { return SsApplies(needs, device); }
+  static bool Applies(const Need& needs, const SsDeviceInfo& device) {
+    return SsApplies(needs, device);
+  }
   // The discovered device when the case's PING is answered RSP_OK.
   static std::optional<SsDeviceInfo> Greet(SsHost& host, Target& target,
                                            const SsDeviceInfo& discovered);

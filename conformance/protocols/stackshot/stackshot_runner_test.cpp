@@ -52,7 +52,7 @@ TEST(StackshotCatalogue, IdsAreUniqueWellFormedAndEveryRuleQuotesItsClause) {
   EXPECT_EQ(FindRule("SS-SERIAL-002")->level, Level::kNote);
   EXPECT_EQ(FindRule("SS-SERIAL-001")->level, Level::kMust);
   EXPECT_EQ(FindRule("SS-ANS-002")->level, Level::kMust);
-  EXPECT_EQ(NeedsText(Needs::kSsThreeAxes), "axes X, Y and Z (StackShot 3X)");
+  EXPECT_EQ(StackshotNeeds::kThreeAxes.text, "axes X, Y and Z (StackShot 3X)");
 }
 
 TEST(StackshotRunner, EveryRuleHoldsForTheEmulatedStackshot3x) {

@@ -13,6 +13,8 @@
 #include "conformance/core/cases.h"
 #include "conformance/protocols/stackshot/stackshot_host.h"
 #include "conformance/rules/catalogue.h"
+#include "conformance/rules/needs.h"
+#include "conformance/rules/stackshot_needs.h"
 #include "conformance/targets/target.h"
 
 namespace moco::conformance {
@@ -30,8 +32,9 @@ struct SsDeviceInfo {
 
 // Reads the identity with `host` (its checks land in the host's verdicts).
 SsDeviceInfo DiscoverStackshot(SsHost& host);
-// Whether a StackShot rule or case with `needs` applies to `device`.
-bool SsApplies(Needs needs, const SsDeviceInfo& device);
+// Whether a StackShot rule or case with `needs` (StackshotNeeds,
+// rules/stackshot_needs.h) applies to `device`.
+bool SsApplies(const Need& needs, const SsDeviceInfo& device);
 
 // What a StackShot case works with: the host has had a PING answered, and
 // `device` is what discovery read of the device.
