@@ -582,18 +582,20 @@ struct TapCli {
 
   // --protocol, checked against the protocols a device starts in.
   void AddProtocol() {
+    // A device is tapped from its power-on protocol: one with rules of its
+    // own (wire/protocol.h), by name or alias.
+    std::vector<moco::wire::Protocol> tappable;
+    for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
+      if (!info.rule_prefix.empty()) tappable.push_back(info.id);
+    }
     cmd->add_option("--protocol", protocol,
-                    "What the device speaks: dmc, dfmoco or stackshot. Sets the header's "
-                    "protocol, the decoding and the default baud. Example: --protocol stackshot")
+                    "What the device speaks: " + moco::wire::NameList(tappable) +
+                        ". Sets the header's protocol, the decoding and the default baud. "
+                        "Example: --protocol " +
+                        std::string(moco::wire::ProtocolName(tappable.back())))
         ->required()
         ->check(CLI::Validator(
-            [](std::string& text) -> std::string {
-              // A device is tapped from its power-on protocol: one with rules
-              // of its own (wire/protocol.h), by name or alias.
-              std::vector<moco::wire::Protocol> tappable;
-              for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
-                if (!info.rule_prefix.empty()) tappable.push_back(info.id);
-              }
+            [tappable](std::string& text) -> std::string {
               const auto p = moco::wire::ParseProtocolOrAlias(text);
               if (p && std::find(tappable.begin(), tappable.end(), *p) != tappable.end()) {
                 return "";

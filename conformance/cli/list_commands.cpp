@@ -31,7 +31,7 @@ Runner AddRulesCommand(CLI::App& app, CLI::App*& sub) {
 Runner AddCasesCommand(CLI::App& app, CLI::App*& sub) {
   auto protocol = std::make_shared<std::string>("dmc");
   sub = app.add_subcommand("cases", "List the scenario cases (suite/name) and what they need");
-  sub->add_option("--protocol", *protocol, "dmc, dfmoco or stackshot")->capture_default_str();
+  sub->add_option("--protocol", *protocol, wire::NameList(kAllProtocols))->capture_default_str();
   return [protocol] {
     const auto p = wire::ParseProtocolOrAlias(*protocol);
     if (!p) return Fail("--protocol " + *protocol + ": give " + wire::NameList(kAllProtocols));

@@ -25,18 +25,18 @@ using dmc::AckCode;
 using dmc::MsgType;
 using dmc::ToWire;
 
-Evidence EvOf(const DmcHost& h, const DeviceRecord* r, std::string expected, std::string observed) {
+Evidence EvOf(const DmcHost& h, const DmcRecord* r, std::string expected, std::string observed) {
   return Evidence{std::move(expected), std::move(observed), r != nullptr ? wire::ToHex(r->raw) : "",
                   r != nullptr ? r->t_ns : h.Now()};
 }
 
-std::string CodeText(const DeviceRecord* r) {
+std::string CodeText(const DmcRecord* r) {
   if (auto code = AckCodeOf(r)) return "ACK " + dmc::AckCodeName(*code);
   return Show(r);
 }
 
 // `rule` passes when `r` is an ACK with `want`.
-bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r, AckCode want) {
+bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DmcRecord* r, AckCode want) {
   const std::optional<uint32_t> code = AckCodeOf(r);
   return c.v.Check(rule, code && *code == ToWire(want), [&] {
     return EvOf(c.host, r, "ACK " + dmc::AckCodeName(ToWire(want)), CodeText(r));
@@ -44,13 +44,13 @@ bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r,
 }
 
 // `rule` and DMC-ACK-011 pass when `r` is ACK OK.
-bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r) {
+bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DmcRecord* r) {
   ExpectCode(c, "DMC-ACK-011", r, AckCode::kOk);
   return ExpectCode(c, rule, r, AckCode::kOk);
 }
 
 // `rule` passes when `r` is an ACK other than OK.
-bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r) {
+bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DmcRecord* r) {
   const std::optional<uint32_t> code = AckCodeOf(r);
   return c.v.Check(rule, code && *code != ToWire(AckCode::kOk),
                    [&] { return EvOf(c.host, r, "an ACK with an error code", CodeText(r)); });
@@ -65,7 +65,7 @@ bool Expect(DmcCaseContext& c, std::string_view rule, bool ok, std::string expec
 std::vector<Update> UpdatesSince(const DmcHost& h, size_t from) {
   std::vector<Update> out;
   for (size_t i = from; i < h.records().size(); ++i) {
-    const DeviceRecord& r = h.records()[i];
+    const DmcRecord& r = h.records()[i];
     if (r.request >= 0) continue;
     if (const auto* p = As<dmc::MotorPositionReport>(&r)) {
       out.push_back(Update{r.t_ns, p->move_time_x1000, p->positions_steps, &r});
@@ -82,7 +82,7 @@ int CountSince(const DmcHost& h, size_t from, MsgType type) {
   return n;
 }
 
-bool IsUnsolicited(const DeviceRecord& r, MsgType type) {
+bool IsUnsolicited(const DmcRecord& r, MsgType type) {
   return r.request < 0 && r.type == ToWire(type);
 }
 
@@ -101,14 +101,14 @@ bool ReportsAt(const DmcHost& h, size_t from, const std::optional<std::vector<in
   return !ups.empty() && ok(At(ups.back().positions, motor));
 }
 
-bool MoveAccepted(const DeviceRecord* r) {
+bool MoveAccepted(const DmcRecord* r) {
   return As<dmc::MotorMoveResponse>(r) != nullptr || AckCodeOf(r) == ToWire(AckCode::kOk);
 }
 
-const DeviceRecord* Go(DmcCaseContext& c) {
+const DmcRecord* Go(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const TimeNs t0 = h.Now();
-  const DeviceRecord* r = h.Call(dmc::RtGo{});
+  const DmcRecord* r = h.Call(dmc::RtGo{});
   int refusals = 0;
   while (AckCodeOf(r) == ToWire(AckCode::kErrNotInPosition) && h.Now() - t0 < kArmingLimit &&
          !h.link_lost()) {
@@ -149,24 +149,24 @@ void BootHi(DmcCaseContext& c) {
     return;
   }
   bool seen = false;
-  for (const DeviceRecord& r : c.host.records()) {
+  for (const DmcRecord& r : c.host.records()) {
     seen = seen || (IsUnsolicited(r, MsgType::kHi) && r.t_ns <= 1000 * kMs);
   }
   if (!seen) {
     c.host.WaitFor(0, 1000 * kMs,
-                   [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kHi); });
-    for (const DeviceRecord& r : c.host.records()) seen = seen || IsUnsolicited(r, MsgType::kHi);
+                   [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kHi); });
+    for (const DmcRecord& r : c.host.records()) seen = seen || IsUnsolicited(r, MsgType::kHi);
   }
   Expect(c, "DMC-HI-011", seen, "an unsolicited HI within 1 s of power-on", "none");
 }
 
 void HiAgain(DmcCaseContext& c) {
-  const DeviceRecord* r = c.host.Call(dmc::HiRequest{});
+  const DmcRecord* r = c.host.Call(dmc::HiRequest{});
   Expect(c, "DMC-HI-001", As<dmc::HiResponse>(r) != nullptr, "HI response", Show(r));
 }
 
 void Bytewise(DmcCaseContext& c) {
-  const DeviceRecord* r = c.host.Await(c.host.SendBytewise(dmc::HiRequest{}));
+  const DmcRecord* r = c.host.Await(c.host.SendBytewise(dmc::HiRequest{}));
   Expect(c, "DMC-ERR-009", As<dmc::HiResponse>(r) != nullptr, "HI response to a byte-wise HI",
          Show(r));
   r = c.host.Await(c.host.SendBytewise(dmc::MotorStatusRequest{}));
@@ -175,7 +175,7 @@ void Bytewise(DmcCaseContext& c) {
 }
 
 void Queries(DmcCaseContext& c) {
-  const DeviceRecord* r = c.host.Call(dmc::MotorStatusRequest{});
+  const DmcRecord* r = c.host.Call(dmc::MotorStatusRequest{});
   if (const auto* st = As<dmc::MotorStatusResponse>(r); st != nullptr && c.device.motor_count > 0) {
     c.v.Check("DMC-STAT-004", st->moving_bits == 0,
               [&] { return EvOf(c.host, r, "no motor moving at rest", Show(r)); });
@@ -277,7 +277,7 @@ const std::vector<DmcCase>& DmcCases() {
 
 std::optional<std::vector<int32_t>> GetPositions(DmcHost& host) {
   const size_t mark = host.records().size();
-  const DeviceRecord* r = host.Call(dmc::MotorGetPositionRequest{});
+  const DmcRecord* r = host.Call(dmc::MotorGetPositionRequest{});
   if (const auto* p = As<dmc::MotorPositionReport>(r)) return p->positions_steps;
   // A device that sends the positions as a message of its own (ID 0, as the
   // reference firmware does) and then ACKs the request OK: DMC-ACK-008 has
@@ -285,7 +285,7 @@ std::optional<std::vector<int32_t>> GetPositions(DmcHost& host) {
   if (r == nullptr || AckCodeOf(r) != ToWire(AckCode::kOk)) return std::nullopt;
   std::optional<std::vector<int32_t>> found;
   for (size_t i = mark; i < host.records().size() && &host.records()[i] != r; ++i) {
-    const DeviceRecord& u = host.records()[i];
+    const DmcRecord& u = host.records()[i];
     if (u.request >= 0) continue;
     if (const auto* p = As<dmc::MotorPositionReport>(&u)) found = p->positions_steps;
   }
@@ -322,7 +322,7 @@ TimeNs LastCommandSent(const DmcHost& h) {
 TimeNs LastActivity(const DmcHost& h, size_t end) {
   TimeNs t = 0;
   for (size_t i = end; i-- > 0;) {
-    const DeviceRecord& r = h.records()[i];
+    const DmcRecord& r = h.records()[i];
     if (r.request < 0 && As<dmc::MotorPositionReport>(&r) != nullptr) {
       t = r.t_ns;
       break;
@@ -351,7 +351,7 @@ const dmc::MotorPositionReport* LastPositions(const DmcHost& h, size_t end) {
 std::optional<size_t> MovedSince(const DmcHost& h, size_t from,
                                  const dmc::MotorPositionReport* base) {
   for (size_t i = from; i < h.records().size(); ++i) {
-    const DeviceRecord& r = h.records()[i];
+    const DmcRecord& r = h.records()[i];
     if (r.request >= 0) continue;
     const auto* p = As<dmc::MotorPositionReport>(&r);
     if (p != nullptr && (base == nullptr || p->positions_steps != base->positions_steps)) return i;
@@ -365,7 +365,7 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
   const TimeNs until = host.Now() + timeout_ns;
   RestWait w;
   for (;;) {
-    const DeviceRecord* r = host.Call(dmc::MotorStatusRequest{});
+    const DmcRecord* r = host.Call(dmc::MotorStatusRequest{});
     const auto* st = As<dmc::MotorStatusResponse>(r);
     if (st == nullptr) {
       // No status to go by (its answer is missing, already judged): the
@@ -390,7 +390,7 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       const std::optional<size_t> moved_at = MovedSince(host, mark, LastPositions(host, mark));
       if (!moved_at) return w.rested = true, w;
       // A deque's records stay where they are as more arrive.
-      const DeviceRecord* moved = &host.records()[*moved_at];
+      const DmcRecord* moved = &host.records()[*moved_at];
       // The status was stale only if the motor went on moving after it: the
       // updates after it change from one to the next. One last update that
       // carries the rest position is the end of the motion reported on the

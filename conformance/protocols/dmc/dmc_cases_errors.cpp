@@ -41,7 +41,7 @@ void BadMotor(DmcCaseContext& c) {
 void Checksum(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const uint32_t id = h.SendFrame(ToWire(MsgType::kHi), {}, true);
-  const DeviceRecord* r = h.Await(id);
+  const DmcRecord* r = h.Await(id);
   ExpectCode(c, "DMC-CSUM-002", r, AckCode::kErrChecksum);
   c.v.Check("DMC-CSUM-003",
             r != nullptr && r->id == id && r->type == (ToWire(MsgType::kHi) | dmc::kFlagAck),
@@ -85,7 +85,7 @@ void BadLength(DmcCaseContext& c) {
                {{MsgType::kMotorMove, 3}, {MsgType::kMotorSetSpeed, 5}, {MsgType::kMotorStop, 0}});
   }
   for (const Bad& b : bad) {
-    const DeviceRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
+    const DmcRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
     ExpectRefused(c, "DMC-ERR-005", r);
     const std::optional<uint32_t> code = AckCodeOf(r);
     if (code && *code != ToWire(AckCode::kOk)) {
@@ -99,7 +99,7 @@ void BadLength(DmcCaseContext& c) {
   std::vector<Bad> longer = {{MsgType::kMotorStatus, 1}, {MsgType::kHi, 2}};
   if (c.device.motor_count > 0) longer.push_back({MsgType::kMotorResetPosition, 6});
   for (const Bad& b : longer) {
-    const DeviceRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
+    const DmcRecord* r = h.Await(h.SendFrame(ToWire(b.type), wire::ByteView(junk, b.len)));
     if (r == nullptr) continue;
     const std::optional<uint32_t> code = AckCodeOf(r);
     c.v.Check("DMC-ERR-013", !code || *code == ToWire(AckCode::kOk), [&] {
@@ -112,7 +112,7 @@ void Noise(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const uint8_t noise[] = {'x', 'y', 0x00, 0xff, 'D', 0x01, 'F', 'D'};
   h.SendNoise(noise);
-  const DeviceRecord* r = h.Call(dmc::HiRequest{});
+  const DmcRecord* r = h.Call(dmc::HiRequest{});
   Expect(c, "DMC-ERR-007", As<dmc::HiResponse>(r) != nullptr, "HI answered after noise", Show(r));
   // A header declaring Length 65535, which no device buffer holds, and
   // nothing after it (a Length within a larger buffer than the spec's 1048
@@ -127,7 +127,7 @@ void Noise(DmcCaseContext& c) {
 void MaxFrame(DmcCaseContext& c) {
   DmcHost& h = c.host;
   const wire::Bytes data(dmc::kMaxDataLength, 0x11);
-  const DeviceRecord* r = h.Await(h.SendFrame(0x0077, data));
+  const DmcRecord* r = h.Await(h.SendFrame(0x0077, data));
   // ERR_UNSUPPORTED proves the frame was read whole and its checksum found
   // good; ERR_CHECKSUM or silence means the buffer did not hold it.
   ExpectCode(c, "DMC-ERR-012", r, AckCode::kErrUnsupported);

@@ -16,15 +16,15 @@
 namespace moco::conformance::dmc_cases {
 
 // Evidence at record `r` (or at the host's time when there is none).
-Evidence EvOf(const DmcHost& h, const DeviceRecord* r, std::string expected, std::string observed);
+Evidence EvOf(const DmcHost& h, const DmcRecord* r, std::string expected, std::string observed);
 // "ACK ERR_RANGE", or what the record is.
-std::string CodeText(const DeviceRecord* r);
+std::string CodeText(const DmcRecord* r);
 // `rule` passes when `r` is an ACK with `want`.
-bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r, dmc::AckCode want);
+bool ExpectCode(DmcCaseContext& c, std::string_view rule, const DmcRecord* r, dmc::AckCode want);
 // `rule` and DMC-ACK-011 pass when `r` is ACK OK.
-bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r);
+bool ExpectOk(DmcCaseContext& c, std::string_view rule, const DmcRecord* r);
 // `rule` passes when `r` is an ACK other than OK.
-bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DeviceRecord* r);
+bool ExpectRefused(DmcCaseContext& c, std::string_view rule, const DmcRecord* r);
 bool Expect(DmcCaseContext& c, std::string_view rule, bool ok, std::string expected,
             std::string observed);
 
@@ -32,13 +32,13 @@ struct Update {
   TimeNs t_ns;
   uint32_t move_time;
   std::vector<int32_t> positions;
-  const DeviceRecord* rec;
+  const DmcRecord* rec;
 };
 // Unsolicited MOTOR_GET_POSITION messages from record `from` on.
 std::vector<Update> UpdatesSince(const DmcHost& h, size_t from);
 // Unsolicited messages of `type` from record `from` on.
 int CountSince(const DmcHost& h, size_t from, dmc::MsgType type);
-bool IsUnsolicited(const DeviceRecord& r, dmc::MsgType type);
+bool IsUnsolicited(const DmcRecord& r, dmc::MsgType type);
 // "[1, 2, 3]".
 std::string Vec(const std::vector<int32_t>& v);
 // v[i], or 0 past its end.
@@ -54,13 +54,13 @@ bool ReportsAt(const DmcHost& h, size_t from, const std::optional<std::vector<in
 // Whether `r` accepts a MOTOR_MOVE: the MOTOR_MOVE response, or an ACK OK
 // from a device that answers moves that way (the reference firmware does;
 // DMC-ACK-008 judges that form once, the cases judge the motion).
-bool MoveAccepted(const DeviceRecord* r);
+bool MoveAccepted(const DmcRecord* r);
 // MSG_RT_GO for an armed run or shot ("When the device has stopped moving, a
 // MSG_RT_GO command will perform the run or shoot of the frame"). A device
 // still arming answers ERR_NOT_IN_POSITION: the host retries every 10 ms for
 // up to kArmingLimit, DMC-RT-015 judges the delay, and the last answer is
 // returned for the case's own rule.
-const DeviceRecord* Go(DmcCaseContext& c);
+const DmcRecord* Go(DmcCaseContext& c);
 
 inline constexpr TimeNs kMs = sim::kNsPerMs;
 inline constexpr TimeNs kArmingLimit = 1000 * kMs;

@@ -35,7 +35,7 @@ void Dmx(DmcCaseContext& c) {
   // rather than switching to it immediately"; MSG_MOTOR_STATUS "DMX STATUS
   // BYTE 1=DMX adjusting, 0=Not adjusting". Channel 1 ramps over its full range.
   ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{1, 1, {255}}));
-  const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+  const DmcRecord* r = h.Call(dmc::MotorStatusRequest{});
   const auto* st = As<dmc::MotorStatusResponse>(r);
   c.v.Check("DMC-DMX-002", st != nullptr && st->dmx_adjusting == 1, [&] {
     return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 1 right after a ramp to 255 began", Show(r));
@@ -74,9 +74,9 @@ void GioInputChange(DmcCaseContext& c) {
                        "the target has no input the runner can drive (in-process targets do)");
       return;
     }
-    const int i = h.WaitFor(
-        mark, 1000 * kMs, [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kGioIn); });
-    const DeviceRecord* g = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+    const int i = h.WaitFor(mark, 1000 * kMs,
+                            [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kGioIn); });
+    const DmcRecord* g = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
     const auto* in = As<dmc::GioInReport>(g);
     Expect(c, "DMC-GIO-005", in != nullptr && ((in->triggers & 1u) != 0) == level,
            std::string("an unsolicited GIO_IN with input 1 ") + (level ? "set" : "clear") +

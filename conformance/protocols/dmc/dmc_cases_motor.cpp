@@ -33,7 +33,7 @@ void Move(DmcCaseContext& c) {
   if (!p0) return;
   const int32_t start = At(*p0, 0), target = start + 2000;
   const size_t mark = h.records().size();
-  const DeviceRecord* r = h.Call(dmc::MotorMove{1, target});
+  const DmcRecord* r = h.Call(dmc::MotorMove{1, target});
   const TimeNs t0 = r != nullptr ? r->t_ns : h.Now();
   const auto* mv = As<dmc::MotorMoveResponse>(r);
   // An ACK OK has no MOVING byte: the clause fails; the motion itself is
@@ -151,7 +151,7 @@ void StopAll(DmcCaseContext& c) {
     h.Idle(400 * kMs);
     dmc::MotorStopAll stop;
     if (pass == 0) stop.flags = dmc::kStopAllSilent;
-    const DeviceRecord* r = h.Call(stop);
+    const DmcRecord* r = h.Call(stop);
     ExpectOk(c, "DMC-STOP-002", r);
     ExpectOk(c, "DMC-STOP-003", r);
     // Motor 1 was at about 1600 steps/s: decelerating at 4000 steps/s^2 it
@@ -212,7 +212,7 @@ void Reset(DmcCaseContext& c) {
   if (!p0) return;
   const int32_t value = At(*p0, 0) + 12345;
   const size_t mark = h.records().size();
-  const DeviceRecord* ack = h.Call(dmc::MotorResetPosition{1, value});
+  const DmcRecord* ack = h.Call(dmc::MotorResetPosition{1, value});
   ExpectOk(c, "DMC-RST-001", ack);
   // "After changing the internal position and responding to this message":
   // the update follows the answer, so only records after the ACK count.
@@ -220,10 +220,10 @@ void Reset(DmcCaseContext& c) {
   for (size_t k = mark; ack != nullptr && k < h.records().size(); ++k) {
     if (&h.records()[k] == ack) after = k + 1;
   }
-  const int i = h.WaitFor(after, 500 * kMs, [](const DeviceRecord& r) {
+  const int i = h.WaitFor(after, 500 * kMs, [](const DmcRecord& r) {
     return IsUnsolicited(r, MsgType::kMotorGetPosition);
   });
-  const DeviceRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+  const DmcRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
   const auto* rep = As<dmc::MotorPositionReport>(u);
   c.v.Check("DMC-RST-002", rep != nullptr && At(rep->positions_steps, 0) == value, [&] {
     const std::string want = "MOTOR_GET_POSITION with motor 1 = " + std::to_string(value) +
@@ -232,7 +232,7 @@ void Reset(DmcCaseContext& c) {
       // A confirming message sent before the answer is not "after ...
       // responding": say so, rather than "no answer".
       for (size_t k = mark; k < after && k < h.records().size(); ++k) {
-        const DeviceRecord& before = h.records()[k];
+        const DmcRecord& before = h.records()[k];
         const auto* early = As<dmc::MotorPositionReport>(&before);
         if (IsUnsolicited(before, MsgType::kMotorGetPosition) && early != nullptr &&
             At(early->positions_steps, 0) == value) {
@@ -245,7 +245,7 @@ void Reset(DmcCaseContext& c) {
     return EvOf(h, u, want, Show(u));
   });
   const auto p1 = GetPositions(h);
-  const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+  const DmcRecord* r = h.Call(dmc::MotorStatusRequest{});
   const auto* st = As<dmc::MotorStatusResponse>(r);
   const bool at_value = ReportsAt(h, mark, p1, 0, [&](int32_t v) { return v == value; });
   Expect(c, "DMC-RST-003", at_value && st != nullptr && (st->moving_bits & 1u) == 0,
@@ -346,7 +346,7 @@ void Couple(DmcCaseContext& c) {
   for (const auto& k : kinds) {
     const auto at = GetPositions(h);
     if (!at) return;
-    const DeviceRecord* r = h.Call(dmc::MotorConfigure{2, uint8_t(dmc::kMotorEnabled | k.flag)});
+    const DmcRecord* r = h.Call(dmc::MotorConfigure{2, uint8_t(dmc::kMotorEnabled | k.flag)});
     if (!ExpectOk(c, "DMC-CFG-007", r)) continue;
     follow(At(*at, 1) + k.sign * kTravel, k.how);
   }
@@ -367,7 +367,7 @@ void NoHostAck(DmcCaseContext& c) {
   h.Call(dmc::MotorMove{1, At(*p0, 0) + 1500});
   for (int i = 0; i < 4; ++i) {
     h.Idle(150 * kMs);
-    const DeviceRecord* r = h.Call(dmc::MotorStatusRequest{});
+    const DmcRecord* r = h.Call(dmc::MotorStatusRequest{});
     Expect(c, "DMC-UNS-002", As<dmc::MotorStatusResponse>(r) != nullptr,
            "MOTOR_STATUS answered while updates go un-ACKed", Show(r));
   }
@@ -397,10 +397,10 @@ void EStop(DmcCaseContext& c) {
     MoveAndRest(c, 1, At(*p0, 0));
     return;
   }
-  const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+  const int i = h.WaitFor(mark, 500 * kMs, [](const DmcRecord& r) {
     return IsUnsolicited(r, MsgType::kMotorHardStop);
   });
-  const DeviceRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+  const DmcRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
   const auto* m = As<dmc::MotorHardStop>(hs);
   Expect(c, "DMC-UNS-003", m != nullptr && m->reason == 0 && !m->motor,
          "MOTOR_HARD_STOP reason=0 (E-Stop) without MOTOR within 500 ms", Show(hs));
@@ -446,7 +446,7 @@ void SoftLimits(DmcCaseContext& c) {
     return [want](int32_t v) { return v >= want - 1 && v <= want + 1; };
   };
   size_t mark = h.records().size();
-  const DeviceRecord* r = h.Call(dmc::MotorMove{1, s + 500});
+  const DmcRecord* r = h.Call(dmc::MotorMove{1, s + 500});
   Expect(c, "DMC-LIM-004", MoveAccepted(r), "MOTOR_MOVE accepted", Show(r));
   WaitRest(c, kRestTimeout);
   p = GetPositions(h);
@@ -511,10 +511,10 @@ void HardLimit(DmcCaseContext& c) {
       WaitRest(c, kRestTimeout);
       break;
     }
-    const int i = h.WaitFor(mark, 500 * kMs, [](const DeviceRecord& r) {
+    const int i = h.WaitFor(mark, 500 * kMs, [](const DmcRecord& r) {
       return IsUnsolicited(r, MsgType::kMotorHardStop);
     });
-    const DeviceRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
+    const DmcRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
     const auto* m = As<dmc::MotorHardStop>(hs);
     Expect(c, "DMC-LIM-007", m != nullptr && m->reason == e.reason && m->motor == uint8_t{1},
            std::string("MOTOR_HARD_STOP reason=") + std::to_string(e.reason) + " motor=1 within " +

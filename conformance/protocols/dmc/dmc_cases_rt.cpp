@@ -103,7 +103,7 @@ void LiveRun(DmcCaseContext& c) {
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-RT-009", Go(c));
   const int e = h.WaitFor(mark, 20'000 * kMs,
-                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+                          [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-005", e >= 0, "RT_END after the run", "none within 20 s");
   h.Idle(500 * kMs);
   const int ends = CountSince(h, mark, MsgType::kRtEnd);
@@ -181,14 +181,14 @@ void StopRun(DmcCaseContext& c) {
   WaitRest(c, kRestTimeout);
   const size_t mark = h.records().size();
   Go(c);
-  h.WaitFor(mark, 10'000 * kMs, [](const DeviceRecord& r) {
+  h.WaitFor(mark, 10'000 * kMs, [](const DmcRecord& r) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
     return r.request < 0 && p != nullptr && p->move_time_x1000 >= 3000;
   });
   const size_t stop_mark = h.records().size();
   ExpectOk(c, "DMC-STOP-002", h.Call(dmc::MotorStopAll{}));
   const int e = h.WaitFor(stop_mark, 5000 * kMs,
-                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+                          [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-012", e >= 0, "RT_END after STOP_ALL ends the run", "none within 5 s");
   WaitRest(c, kRestTimeout);
 }
@@ -240,10 +240,10 @@ void Shoot(DmcCaseContext& c, bool second) {
   WaitRest(c, kRestTimeout);
   const auto before = GetPositions(h);
   const size_t mark = h.records().size();
-  const DeviceRecord* go = Go(c);
+  const DmcRecord* go = Go(c);
   ExpectOk(c, rule, go);
   const int e = h.WaitFor(mark, 10'000 * kMs,
-                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+                          [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, rule, e >= 0, "RT_END after the exposure", "none within 10 s");
   if (e >= 0 && go != nullptr) {
     // The exposure is 200 ms: an RT_END sooner than that ended no exposure.
@@ -283,17 +283,17 @@ void StopLoop(DmcCaseContext& c) {
   // An update of the run at frame k: MOVE TIME is "in thousandths of a
   // frame", and a device reporting on its own tick gives fractions (dmc-lite:
   // 10080, 10520); the nearest whole frame is the one it is at.
-  const auto frame_report = [](const DeviceRecord& r, auto pred) {
+  const auto frame_report = [](const DmcRecord& r, auto pred) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
     return r.request < 0 && p != nullptr && pred((p->move_time_x1000 + 500) / 1000);
   };
-  const int at_end = h.WaitFor(mark, 10'000 * kMs, [&](const DeviceRecord& r) {
+  const int at_end = h.WaitFor(mark, 10'000 * kMs, [&](const DmcRecord& r) {
     return frame_report(r, [&](uint32_t k) { return k == end; });
   });
   const int back =
       at_end < 0
           ? -1
-          : h.WaitFor(static_cast<size_t>(at_end) + 1, 10'000 * kMs, [&](const DeviceRecord& r) {
+          : h.WaitFor(static_cast<size_t>(at_end) + 1, 10'000 * kMs, [&](const DmcRecord& r) {
               return frame_report(r, [&](uint32_t k) { return k > 0 && k < end; });
             });
   if (!Expect(c, "DMC-LOOP-001", back >= 0, "a second, backward pass of the ping-pong run",
@@ -306,7 +306,7 @@ void StopLoop(DmcCaseContext& c) {
   const size_t stop_mark = h.records().size();
   ExpectOk(c, "DMC-LOOP-001", h.Call(dmc::RtStopLoop{}));
   const int e = h.WaitFor(stop_mark, 10'000 * kMs,
-                          [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+                          [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   if (!Expect(c, "DMC-LOOP-001", e >= 0, "RT_END once the run reaches frame 0",
               "no RT_END within 10 s of STOP_LOOP (the loop went on)")) {
     h.Call(dmc::MotorStopAll{});
@@ -342,7 +342,7 @@ void StopLoop(DmcCaseContext& c) {
 }
 
 void VirtPosition(DmcCaseContext& c) {
-  const DeviceRecord* r = c.host.Call(dmc::VirtGetPositionRequest{});
+  const DmcRecord* r = c.host.Call(dmc::VirtGetPositionRequest{});
   Expect(c, "DMC-VIRT-001", As<dmc::VirtPositionReport>(r) != nullptr, "VIRT_GET_POSITION response",
          Show(r));
 }
@@ -420,7 +420,7 @@ void VirtConfigForms(DmcCaseContext& c) {
     dmc::VirtRigRaw raw;
     raw.type = static_cast<uint8_t>(dmc::RigType::kXyzFlag);
     raw.data.assign(data.begin() + 1, data.end());
-    const DeviceRecord* r = h.Call(dmc::VirtConfig{raw});
+    const DmcRecord* r = h.Call(dmc::VirtConfig{raw});
     const std::optional<uint32_t> code = AckCodeOf(r);
     c.v.Check("DMC-VIRT-012", code && *code != ToWire(AckCode::kOk), [&] {
       return EvOf(h, r, "TYPE 8 refused (the spec numbers the rigs 0..4)",
@@ -449,7 +449,7 @@ void VirtMoveReadBack(DmcCaseContext& c) {
   ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p2->track_x100000, p1->track_x100000);
   // 6 units above a boom of 2: out of reach.
   const auto steps = GetPositions(h);
-  const DeviceRecord* r = h.Call(dmc::VirtMove{3, p2->ns_x100000 + 600000});
+  const DmcRecord* r = h.Call(dmc::VirtMove{3, p2->ns_x100000 + 600000});
   ExpectRefused(c, "DMC-VIRT-004", r);
   ExpectCode(c, "DMC-VIRT-005", r, AckCode::kErrRange);
   h.Idle(100 * kMs);
@@ -512,7 +512,7 @@ void VirtAim(DmcCaseContext& c) {
   DmcHost& h = c.host;
   for (const dmc::VirtAimPoint& a :
        {dmc::VirtAimPoint{1, 1500, -250, 9000}, dmc::VirtAimPoint{0, 1500, -250, 9000}}) {
-    const DeviceRecord* r = h.Call(a);
+    const DmcRecord* r = h.Call(a);
     const auto* echo = As<dmc::VirtAimPoint>(r);
     c.v.Check("DMC-VIRT-009", echo != nullptr && *echo == a, [&] {
       return EvOf(h, r, "VIRT_AIM_POINT enable=" + std::to_string(a.enable) + " 1500,-250,9000",

@@ -103,7 +103,7 @@ void ExpectDmxAt(DmcCaseContext& c, std::string_view rule, const std::vector<Dmx
 
 // What the runner saw of a run it started with GO.
 struct Watched {
-  const DeviceRecord* go = nullptr;  // GO's ACK OK; null when GO was refused
+  const DmcRecord* go = nullptr;  // GO's ACK OK; null when GO was refused
   TimeNs go_ns = 0;
   int end = -1;  // the RT_END record, -1 when none came
   // Per frame index (frame - start): the first report carrying that frame's
@@ -164,7 +164,7 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
   Watched w;
   const size_t mark = h.records().size();
   w.go_ns = h.Now();
-  const DeviceRecord* go = Go(c);
+  const DmcRecord* go = Go(c);
   if (!ExpectOk(c, go_rule, go)) return w;  // nothing runs: w.go stays null
   w.go = go;
   const DeviceOutputs out = c.target.Outputs();
@@ -178,10 +178,10 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
       h.Idle(2 * kMs);
     } else {
       h.WaitFor(next, until - h.Now(),
-                [](const DeviceRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
+                [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
     }
     for (; next < h.records().size(); ++next) {
-      const DeviceRecord& r = h.records()[next];
+      const DmcRecord& r = h.records()[next];
       if (IsUnsolicited(r, MsgType::kRtEnd) && w.end < 0) w.end = static_cast<int>(next);
       const auto* p = As<dmc::MotorPositionReport>(&r);
       if (r.request >= 0 || p == nullptr) continue;
@@ -474,7 +474,7 @@ void CameraStills(DmcCaseContext& c) {
   AtFrame(c, *u, 0, "DMC-RT-002");
   bool armed = false;
   for (const auto& [open, close] : {std::pair<uint16_t, uint16_t>{0, 400}, {361, 360}}) {
-    const DeviceRecord* r = h.Call(CameraRun(end, dmc::kPlayCameraStills, open, close));
+    const DmcRecord* r = h.Call(CameraRun(end, dmc::kPlayCameraStills, open, close));
     ExpectCode(c, "DMC-RT-024", r, AckCode::kErrRange);
     armed = armed || AckCodeOf(r) == static_cast<uint32_t>(AckCode::kOk);
   }
@@ -588,7 +588,7 @@ void RollLimits(DmcCaseContext& c) {
     run.preroll_ms = pre_ms;
     run.postroll_ms = post_ms;
     const auto before = GetPositions(h);
-    const DeviceRecord* r = h.Call(run);
+    const DmcRecord* r = h.Call(run);
     ExpectCode(c, rule, r, want);
     h.Idle(300 * kMs);
     WaitRest(c, kRestTimeout);

@@ -128,7 +128,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
     for (uint32_t id : ids) host.Await(id);
   }
   const uint32_t hi_id = host.Send(dmc::HiRequest{});
-  const DeviceRecord* hi = host.Await(hi_id);
+  const DmcRecord* hi = host.Await(hi_id);
   host.Close();
   const size_t replies = host.records().size();
   if (hi == nullptr || As<dmc::HiResponse>(hi) == nullptr) {

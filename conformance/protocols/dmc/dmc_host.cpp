@@ -95,12 +95,12 @@ using base::Ms;
 
 }  // namespace
 
-std::optional<uint32_t> AckCodeOf(const DeviceRecord* rec) {
+std::optional<uint32_t> AckCodeOf(const DmcRecord* rec) {
   if (const auto* a = As<dmc::Ack>(rec)) return a->code;
   return std::nullopt;
 }
 
-std::string Show(const DeviceRecord* rec) {
+std::string Show(const DmcRecord* rec) {
   if (rec == nullptr) return "no answer";
   if (!rec->msg) return dmc::TypeName(rec->type) + " (data fits no layout)";
   return dmc::Describe(*rec->msg);
@@ -110,12 +110,12 @@ DmcHost::DmcHost(Target& target, Verdicts& verdicts, HostOptions options)
     : HostBase(target, verdicts, std::move(options),
                [this](wire::ByteView bytes) { OnBytes(bytes); }) {}
 
-Evidence DmcHost::Ev(const DeviceRecord& rec, std::string expected, std::string observed) const {
+Evidence DmcHost::Ev(const DmcRecord& rec, std::string expected, std::string observed) const {
   return Evidence{std::move(expected), std::move(observed), wire::ToHex(rec.raw), rec.t_ns};
 }
 
 uint32_t DmcHost::SendRaw(uint32_t id, uint16_t type, wire::Bytes bytes, bool bad_checksum) {
-  Request r;
+  DmcRequest r;
   r.id = id;
   r.type = type;
   r.sent_ns = Now();
@@ -148,7 +148,7 @@ void DmcHost::SendNoise(wire::ByteView bytes) { link_.Write(bytes); }
 uint32_t DmcHost::SendBytewise(const dmc::HostMessage& m) {
   const uint32_t id = next_id_++;
   const wire::Bytes bytes = dmc::Encode(id, m);
-  Request r;
+  DmcRequest r;
   r.id = id;
   r.type = dmc::TypeOf(m);
   r.sent_ns = Now();
@@ -168,7 +168,7 @@ void DmcHost::OnBytes(wire::ByteView bytes) {
       if (const auto* f = std::get_if<dmc::FrameRef>(&e)) {
         OnFrame(*f);
       } else if (const auto* c = std::get_if<dmc::ChecksumError>(&e)) {
-        for (Request& r : requests_) {
+        for (DmcRequest& r : requests_) {
           if (r.id == c->id && r.answer < 0) r.garbled_answer = true;
         }
         const size_t n = std::min(history_.size(), dmc::kHeaderSize + c->length + dmc::kCheckSize);
@@ -206,7 +206,7 @@ void DmcHost::OnBytes(wire::ByteView bytes) {
 
 void DmcHost::OnFrame(const dmc::FrameRef& f) {
   verdicts_.Pass("DMC-CSUM-001");
-  DeviceRecord rec;
+  DmcRecord rec;
   rec.t_ns = Now();
   rec.id = f.id;
   rec.type = f.type;
@@ -231,14 +231,14 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
   const size_t rec_index = records_.size();
   if (req_index >= 0) rec.request = req_index;
   records_.push_back(std::move(rec));
-  const DeviceRecord& r = records_.back();
+  const DmcRecord& r = records_.back();
   if (const auto* hi = As<dmc::HiResponse>(&r)) {
     previous_hi_ = hi_;
     hi_ = *hi;
   }
 
   if (req_index >= 0) {
-    Request& req = requests_[static_cast<size_t>(req_index)];
+    DmcRequest& req = requests_[static_cast<size_t>(req_index)];
     verdicts_.Pass("DMC-ACK-003");
     ++req.answers;
     if (verdicts_.Check("DMC-ACK-002", req.answers == 1, [&] {
@@ -275,7 +275,7 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
       if (requests_[i].answers == 0 && requests_[i].type == plain) waiting = static_cast<int>(i);
     }
     if (waiting >= 0) {
-      Request& req = requests_[static_cast<size_t>(waiting)];
+      DmcRequest& req = requests_[static_cast<size_t>(waiting)];
       verdicts_.Fail("DMC-ACK-003", Ev(r,
                                        "the answer to " + dmc::TypeName(req.type) +
                                            " id=" + std::to_string(req.id) + " carrying that ID",
@@ -303,7 +303,7 @@ void DmcHost::OnFrame(const dmc::FrameRef& f) {
   }
 }
 
-void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
+void DmcHost::CheckAnswer(DmcRequest& req, const DmcRecord& rec) {
   const uint16_t plain = static_cast<uint16_t>(rec.type & ~dmc::kFlagAck);
   const bool is_ack = (rec.type & dmc::kFlagAck) != 0;
   verdicts_.Check("DMC-ACK-004", plain == req.type, [&] {
@@ -384,7 +384,7 @@ void DmcHost::CheckAnswer(Request& req, const DeviceRecord& rec) {
   CheckSpecific(req, rec);
 }
 
-void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
+void DmcHost::CheckSpecific(const DmcRequest& req, const DmcRecord& rec) {
   const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;
   switch (static_cast<MsgType>(req.type)) {
     case MsgType::kHi:
@@ -439,7 +439,7 @@ void DmcHost::CheckSpecific(const Request& req, const DeviceRecord& rec) {
 // MSG_GIO_IN, answered or sent on an input change (ERRATA 1.6: the same
 // layout both ways): TRIGGERS is a DWORD with bits only for the inputs the
 // device advertises.
-void DmcHost::CheckGioIn(const DeviceRecord& rec) {
+void DmcHost::CheckGioIn(const DmcRecord& rec) {
   const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;
   const auto* g = As<dmc::GioInReport>(&rec);
   verdicts_.Check("DMC-GIO-001", g != nullptr && len == 4,
@@ -454,7 +454,7 @@ void DmcHost::CheckGioIn(const DeviceRecord& rec) {
   }
 }
 
-void DmcHost::CheckUnsolicited(const DeviceRecord& rec) {
+void DmcHost::CheckUnsolicited(const DmcRecord& rec) {
   const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;
   if (const auto* hi = As<dmc::HiResponse>(&rec)) {
     CheckHi(rec, *hi);
@@ -487,7 +487,7 @@ void DmcHost::CheckUnsolicited(const DeviceRecord& rec) {
   }
 }
 
-void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
+void DmcHost::CheckHi(const DmcRecord& rec, const dmc::HiResponse& hi) {
   const size_t len = rec.raw.size() - dmc::kHeaderSize - dmc::kCheckSize;
   verdicts_.Check("DMC-HI-002", len == 51 || len == 49,
                   [&] { return Ev(rec, "51 data bytes", std::to_string(len) + " data bytes"); });
@@ -554,7 +554,7 @@ void DmcHost::CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi) {
   }
 }
 
-const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns) {
+const DmcRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns) {
   int index = -1;
   for (size_t i = requests_.size(); i-- > 0;) {
     if (requests_[i].id == id) {
@@ -576,7 +576,7 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
     return first_hi ? "DMC-HI-016" : "DMC-ACK-001";
   };
   const auto fail = [&](std::string observed) {
-    const Request& req = requests_[at];
+    const DmcRequest& req = requests_[at];
     verdicts_.Fail(unanswered_rule(),
                    Evidence{"an answer to " + dmc::TypeName(req.type) + " id=" + std::to_string(id),
                             std::move(observed), wire::ToHex(req.raw), req.sent_ns});
@@ -603,7 +603,7 @@ const DeviceRecord* DmcHost::Await(uint32_t id, std::optional<TimeNs> timeout_ns
 }
 
 int DmcHost::WaitFor(size_t from, TimeNs timeout_ns,
-                     const std::function<bool(const DeviceRecord&)>& pred) {
+                     const std::function<bool(const DmcRecord&)>& pred) {
   return link_.WaitFor(records_, from, timeout_ns, pred);
 }
 

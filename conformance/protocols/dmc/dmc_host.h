@@ -23,7 +23,7 @@
 namespace moco::conformance {
 
 // One frame the device sent (checksum good).
-struct DeviceRecord {
+struct DmcRecord {
   TimeNs t_ns = 0;
   uint32_t id = 0;
   uint16_t type = 0;
@@ -32,7 +32,7 @@ struct DeviceRecord {
   int request = -1;                       // index of the request it answers; -1: unsolicited
 };
 
-struct Request {
+struct DmcRequest {
   uint32_t id = 0;
   uint16_t type = 0;
   TimeNs sent_ns = 0;
@@ -67,19 +67,19 @@ class DmcHost : public HostBase {
 
   // Waits for the answer to request `id` (DMC-ACK-001 fails after the answer
   // timeout, or after `timeout_ns` when given); returns it or nullptr.
-  const DeviceRecord* Await(uint32_t id, std::optional<TimeNs> timeout_ns = std::nullopt);
-  const DeviceRecord* Call(const dmc::HostMessage& m) { return Await(Send(m)); }
+  const DmcRecord* Await(uint32_t id, std::optional<TimeNs> timeout_ns = std::nullopt);
+  const DmcRecord* Call(const dmc::HostMessage& m) { return Await(Send(m)); }
 
   // Reads until a record with index >= `from` satisfies `pred` or `timeout_ns`
   // passes; returns its index or -1.
-  int WaitFor(size_t from, TimeNs timeout_ns, const std::function<bool(const DeviceRecord&)>& pred);
+  int WaitFor(size_t from, TimeNs timeout_ns, const std::function<bool(const DmcRecord&)>& pred);
   // Ends the case: listens for the quiet time, gives up on any partial device
   // frame, and settles the stream rules. Call once.
   void Close();
 
   // A deque: pointers to records stay valid while more arrive.
-  const std::deque<DeviceRecord>& records() const { return records_; }
-  const std::vector<Request>& requests() const { return requests_; }
+  const std::deque<DmcRecord>& records() const { return records_; }
+  const std::vector<DmcRequest>& requests() const { return requests_; }
 
   // The last HI the device sent (answer or unsolicited), if any.
   const std::optional<dmc::HiResponse>& hi() const { return hi_; }
@@ -90,17 +90,17 @@ class DmcHost : public HostBase {
   uint32_t SendRaw(uint32_t id, uint16_t type, wire::Bytes bytes, bool bad_checksum);
   void OnBytes(wire::ByteView bytes);
   void OnFrame(const dmc::FrameRef& f);
-  void CheckAnswer(Request& req, const DeviceRecord& rec);
-  void CheckGioIn(const DeviceRecord& rec);
-  void CheckUnsolicited(const DeviceRecord& rec);
-  void CheckHi(const DeviceRecord& rec, const dmc::HiResponse& hi);
-  void CheckSpecific(const Request& req, const DeviceRecord& rec);
-  Evidence Ev(const DeviceRecord& rec, std::string expected, std::string observed) const;
+  void CheckAnswer(DmcRequest& req, const DmcRecord& rec);
+  void CheckGioIn(const DmcRecord& rec);
+  void CheckUnsolicited(const DmcRecord& rec);
+  void CheckHi(const DmcRecord& rec, const dmc::HiResponse& hi);
+  void CheckSpecific(const DmcRequest& req, const DmcRecord& rec);
+  Evidence Ev(const DmcRecord& rec, std::string expected, std::string observed) const;
 
   dmc::FrameDecoder decoder_;
   wire::Bytes history_;  // the device stream (for the bytes of bad frames)
-  std::deque<DeviceRecord> records_;
-  std::vector<Request> requests_;
+  std::deque<DmcRecord> records_;
+  std::vector<DmcRequest> requests_;
   std::optional<dmc::HiResponse> hi_;
   std::optional<dmc::HiResponse> previous_hi_;  // the one before hi_ (DMC-HI-012)
   std::set<uint32_t> acked_ids_;                // device IDs the host ACKed
@@ -112,14 +112,14 @@ class DmcHost : public HostBase {
 
 // The message of `rec` as T, or nullptr.
 template <typename T>
-const T* As(const DeviceRecord* rec) {
+const T* As(const DmcRecord* rec) {
   if (rec == nullptr || !rec->msg) return nullptr;
   return std::get_if<T>(&*rec->msg);
 }
 // The response code when `rec` is an ACK.
-std::optional<uint32_t> AckCodeOf(const DeviceRecord* rec);
+std::optional<uint32_t> AckCodeOf(const DmcRecord* rec);
 // "ACK ERR_RANGE", "MOTOR_MOVE moving=1", "no answer".
-std::string Show(const DeviceRecord* rec);
+std::string Show(const DmcRecord* rec);
 
 }  // namespace moco::conformance
 

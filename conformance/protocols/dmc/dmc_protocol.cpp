@@ -129,7 +129,7 @@ void Settle(DmcHost& host, const dmc::HiResponse& device) {
   for (uint8_t m = 1; m <= motors; ++m) {
     for (;;) {
       // Enabled, with the blur flag go-motion needs (a DMC-16's power-on flags).
-      const DeviceRecord* r =
+      const DmcRecord* r =
           host.Call(dmc::MotorConfigure{m, dmc::kMotorEnabled | dmc::kMotorBlurEnabled});
       const std::optional<uint32_t> code = AckCodeOf(r);
       const bool busy = code && (*code == dmc::ToWire(dmc::AckCode::kErrHardLow) ||

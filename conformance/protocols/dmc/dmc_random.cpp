@@ -72,7 +72,7 @@ void Execute(DmcHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t mo
   if (!initial) return;
   for (size_t m = 0; m < model.size() && m < initial->size(); ++m) model[m] = (*initial)[m];
   for (const Step& s : steps) {
-    const DeviceRecord* r = nullptr;
+    const DmcRecord* r = nullptr;
     const size_t mi = s.motor - 1u;
     switch (s.op) {
       case Step::Op::kStatus:

@@ -227,14 +227,14 @@ TEST(Runner, DmcLiteAnswersAndItsLargerBufferAreJudgedWithoutCrashing) {
     Verdicts v;
     DmcHost h(*target, v, HostOptions{});
     const wire::Bytes big(2036, 0x11);  // a 2048-byte frame of an unknown type
-    const DeviceRecord* r = h.Await(h.SendFrame(0x0077, big));
+    const DmcRecord* r = h.Await(h.SendFrame(0x0077, big));
     ASSERT_NE(r, nullptr);
     EXPECT_EQ(AckCodeOf(r), dmc::ToWire(dmc::AckCode::kErrUnsupported));
     const size_t before = h.records().size();
-    const DeviceRecord* p = h.Call(dmc::MotorGetPositionRequest{});
+    const DmcRecord* p = h.Call(dmc::MotorGetPositionRequest{});
     ASSERT_NE(p, nullptr);
     EXPECT_EQ(AckCodeOf(p), dmc::ToWire(dmc::AckCode::kOk));
-    const DeviceRecord* id0 = nullptr;
+    const DmcRecord* id0 = nullptr;
     for (size_t i = before; i < h.records().size(); ++i) {
       if (h.records()[i].id == 0) id0 = &h.records()[i];
     }

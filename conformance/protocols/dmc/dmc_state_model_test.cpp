@@ -81,7 +81,7 @@ struct Reset : Cmd {
   void checkPreconditions(const Model& m) const override { RC_PRE(m.settled[motor - 1u]); }
   void apply(Model& m) const override { m.rest_steps[motor - 1u] = value; }
   void run(const Model&, Sut& s) const override {
-    const DeviceRecord* r = s.host->Call(dmc::MotorResetPosition{motor, value});
+    const DmcRecord* r = s.host->Call(dmc::MotorResetPosition{motor, value});
     RC_ASSERT(AckCodeOf(r) == dmc::ToWire(dmc::AckCode::kOk));
     AssertStreamRulesHold(s);
   }

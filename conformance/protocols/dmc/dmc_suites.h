@@ -37,8 +37,8 @@ std::optional<std::vector<int32_t>> GetPositions(DmcHost& host);
 // host goes on waiting until the updates stop changing too).
 struct RestWait {
   bool rested = false;
-  const DeviceRecord* stale_status = nullptr;  // the first status of rest while moving
-  const DeviceRecord* moved_after = nullptr;   // the update that showed it
+  const DmcRecord* stale_status = nullptr;  // the first status of rest while moving
+  const DmcRecord* moved_after = nullptr;   // the update that showed it
 };
 RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns);
 bool WaitRest(DmcHost& host, TimeNs timeout_ns);
