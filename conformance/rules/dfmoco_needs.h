@@ -9,15 +9,10 @@
 namespace moco::conformance {
 
 struct DfmocoNeeds : SharedNeeds {
-  // number of axes >= 1
   static constexpr Need kMotors{"dfmoco.motors", "hi: axes >= 1"};
-  // number of axes >= 2
   static constexpr Need kTwoMotors{"dfmoco.two-motors", "hi: axes >= 2"};
-  // major version >= 2 (the jm velocity argument)
   static constexpr Need kJogVelocity{"dfmoco.jog-velocity", "hi: major version >= 2 (jm velocity)"};
-  // version 1.2.7 or later (bf / go)
   static constexpr Need kGoMotion{"dfmoco.go-motion", "hi: version >= 1.2.7 (go-motion)"};
-  // version 1.3.1 or later (`bf -1`)
   static constexpr Need kBlurRefusal{"dfmoco.blur-refusal", "hi: version >= 1.3.1 (bf -1)"};
 
   static constexpr Need kOwn[] = {kMotors, kTwoMotors, kJogVelocity, kGoMotion, kBlurRefusal};

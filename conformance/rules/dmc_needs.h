@@ -9,44 +9,26 @@
 namespace moco::conformance {
 
 struct DmcNeeds : SharedNeeds {
-  // MOTOR COUNT >= 1
   static constexpr Need kMotors{"dmc.motors", "MOTOR COUNT >= 1"};
-  // MOTOR COUNT >= 2
   static constexpr Need kTwoMotors{"dmc.two-motors", "MOTOR COUNT >= 2"};
-  // DMX COUNT >= 1
   static constexpr Need kDmx{"dmc.dmx", "DMX COUNT >= 1"};
-  // GIO OUT COUNT >= 1
   static constexpr Need kGioOut{"dmc.gio-out", "GIO OUT COUNT >= 1"};
-  // GIO INPUT COUNT >= 1
   static constexpr Need kGioIn{"dmc.gio-in", "GIO INPUT COUNT >= 1"};
-  // HW LIMIT COUNT >= 1 and MOTOR COUNT >= 1
   static constexpr Need kHwLimits{"dmc.hw-limits", "HW LIMIT COUNT >= 1, MOTOR COUNT >= 1"};
-  // capability 0x0001
   static constexpr Need kRealTime{"dmc.real-time", "capability 0x0001 (real-time)"};
-  // capability 0x0002
   static constexpr Need kGoMotion{"dmc.go-motion", "capability 0x0002 (go-motion)"};
-  // capability 0x0080
   static constexpr Need kGoMotion2{"dmc.go-motion-2", "capability 0x0080 (go-motion 2)"};
-  // capability 0x0200
   static constexpr Need kLooping{"dmc.looping", "capability 0x0200 (looping)"};
-  // any of 0x0004, 0x0008, 0x0010, 0x0020
   static constexpr Need kVirtual{"dmc.virtual", "a virtual capability (0x0004-0x0020)"};
-  // none of the virtual capabilities
   static constexpr Need kNoVirtual{"dmc.no-virtual", "no virtual capability"};
-  // capability 0x0004 (boom-swing-track) and MOTOR COUNT >= 6
   static constexpr Need kVirtualBoomRig{"dmc.virtual-boom-rig",
                                         "capability 0x0004 (boom-swing-track), MOTOR COUNT >= 6"};
-  // capability 0x0040
   static constexpr Need kAimPoint{"dmc.aim-point", "capability 0x0040 (aim point)"};
-  // capability 0x0100 and MOTOR COUNT >= 2
   static constexpr Need kCoupleMotors{"dmc.couple-motors",
                                       "capability 0x0100 (couple motors), MOTOR COUNT >= 2"};
-  // capability 0x0001, MOTOR COUNT >= 1 and DMX COUNT >= 1
   static constexpr Need kRtDmx{"dmc.rt-dmx", "capability 0x0001 (real-time), DMX COUNT >= 1"};
-  // capability 0x0001, MOTOR COUNT >= 1 and GIO OUT COUNT >= 1
   static constexpr Need kRtTriggers{"dmc.rt-triggers",
                                     "capability 0x0001 (real-time), GIO OUT COUNT >= 1"};
-  // capabilities 0x0001 and 0x0400 (camera trigger), MOTOR COUNT >= 1
   static constexpr Need kRtCamera{"dmc.rt-camera",
                                   "capabilities 0x0001 (real-time) and 0x0400 (camera trigger)"};
 

@@ -9,7 +9,6 @@
 namespace moco::conformance {
 
 struct StackshotNeeds : SharedNeeds {
-  // answers CC_RAIL_STATUS for axes X, Y and Z (a StackShot 3X)
   static constexpr Need kThreeAxes{"stackshot.three-axes", "axes X, Y and Z (StackShot 3X)"};
 
   static constexpr Need kOwn[] = {kThreeAxes};
