@@ -96,7 +96,22 @@ int Decode(const std::string& path, bool show_time, bool strict) {
       std::printf("%12.6f  event        %s\n", static_cast<double>(e.t_ns) / 1e9,
                   e.event.dump().c_str());
       // The traffic after a recorded switch of the line speaks its protocol.
-      if (const auto p = moco::session::LineSwitchOf(e)) decoder.SwitchTo(*p);
+      if (const auto p = moco::session::LineSwitchOf(e)) {
+        decoder.SwitchTo(*p);
+      } else if (e.event.is_object() && e.event.value("event", "") == "line_switch") {
+        // A switch this build cannot follow: the traffic after it is read
+        // as before, and says so.
+        std::vector<moco::wire::Protocol> known;
+        for (const moco::wire::ProtocolInfo& info : moco::wire::Protocols()) {
+          known.push_back(info.id);
+        }
+        std::printf(
+            "!! the line_switch names no protocol this mocosim knows (give \"protocol\": "
+            "one of %s); the traffic after it is read as %s\n",
+            moco::wire::NameList(known).c_str(),
+            std::string(ProtocolName(decoder.protocol())).c_str());
+        ++problems;
+      }
       continue;
     }
     PrintLines(e.t_ns,

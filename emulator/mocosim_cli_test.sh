@@ -83,6 +83,24 @@ mocosim_cli_closed_log_pipe_does_not_kill_it)
   test ! -L "$work/dev" || fail "PTY link left behind"
   ;;
 
+# decode follows a recorded line_switch (the DFMoco lines after it read as
+# DFMoco), and one naming no protocol it knows is a problem (--strict: 1)
+# that says which protocols it knows, not a silent misreading.
+mocosim_cli_decode_follows_a_line_switch_and_flags_an_unknown_one)
+  t=$src/tools/wireshark/testdata/stackshot-panel-dfmoco.jsonl
+  expect_rc 1 "$sim" decode --strict "$t"
+  grep -q "hello: protocol 1, 3 motors" out.txt || fail "the DFMoco hi after the switch not decoded"
+  grep -q "1 problem(s)" out.txt || fail "the switch itself counted as a problem"
+  head -3 "$t" >bad.jsonl
+  echo '{"t_ns": 5, "event": "line_switch", "protocol": "nope", "baud": 0}' >>bad.jsonl
+  echo '{"t_ns": 6, "from": "host", "hex": "5510050000eb"}' >>bad.jsonl
+  expect_rc 1 "$sim" decode --strict bad.jsonl
+  grep -q "names no protocol this mocosim knows" out.txt || fail "unknown switch not flagged"
+  grep -q "stackshot-dfmoco" out.txt || fail "the known protocols not named"
+  [ "$(grep -c "CC_RAIL_STATUS read axis=X" out.txt)" = 2 ] || fail "traffic after it not read as before"
+  expect_rc 0 "$sim" decode bad.jsonl
+  ;;
+
 # Every parse error is 2, never CLI11's own codes (105 for a missing or
 # directory file); --help and --version are 0.
 mocosim_cli_parse_errors_exit_2_and_help_exits_0)
