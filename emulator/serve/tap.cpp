@@ -269,25 +269,6 @@ class Tap::Recorder final : public transport::TrafficObserver {
   std::vector<session::SessionEntry> lines_;
 };
 
-namespace {
-
-// "38400, 57600 or 115200": the protocols' default line rates (wire/protocol.h),
-// slowest first, for a --baud that is not a standard rate.
-std::string UsualBauds() {
-  std::vector<uint32_t> bauds;
-  for (const wire::ProtocolInfo& info : wire::Protocols()) bauds.push_back(info.line.baud);
-  std::sort(bauds.begin(), bauds.end());
-  bauds.erase(std::unique(bauds.begin(), bauds.end()), bauds.end());
-  std::string s;
-  for (size_t i = 0; i < bauds.size(); ++i) {
-    if (i > 0) s += i + 1 == bauds.size() ? " or " : ", ";
-    s += std::to_string(bauds[i]);
-  }
-  return s;
-}
-
-}  // namespace
-
 std::variant<DeviceSpec, std::string> ParseDeviceSpec(std::string_view spec) {
   const std::string forms =
       "give the device side as serial:PATH (e.g. serial:/dev/ttyUSB0) or tcp:HOST:PORT (e.g. "
@@ -359,7 +340,8 @@ Tap::Tap(transport::RealtimeDriver& driver, TapConfig config, transport::LogFn l
   baud_ = config_.baud != 0 ? config_.baud : wire::Info(config_.protocol).line.baud;
   if (!spec_.tcp && !transport::IsStandardBaud(baud_)) {
     throw std::runtime_error("--baud " + std::to_string(baud_) +
-                             " is not a standard rate; use e.g. " + UsualBauds());
+                             " is not a standard rate; use e.g. one of the protocols' lines: " +
+                             wire::DefaultBaudList());
   }
   // The paths the tap writes (the recording, the host's PTY link) against
   // each other and what it reads, by any spelling (base::SamePath): a
