@@ -202,7 +202,9 @@ class MuteStatusDmc16 final : public devices::Device {
                   if (type == dmc::ToWire(dmc::MsgType::kMotorStatus)) return;  // dropped
                   to.Write(f.raw);
                 }),
-        inner_(devices::CreateDevice("dmc16", "", s, filter_)) {}
+        inner_(devices::CreateDevice("dmc16", "", s, filter_)) {
+    RelayLineSwitchesOf(*inner_);
+  }
   std::string_view Model() const override { return "dmc16-mute-status"; }
   devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }

@@ -137,6 +137,16 @@ bool InProcessTarget::SetGioInput(int bit, bool level) {
   return true;
 }
 
+bool InProcessTarget::CanPressButton(std::string_view button) const {
+  return device_ != nullptr && device_->HasButton(button);
+}
+
+bool InProcessTarget::PressButton(std::string_view button) {
+  if (!CanPressButton(button)) return false;
+  device_->PressButton(button);
+  return true;
+}
+
 DeviceOutputs InProcessTarget::Outputs() const {
   if (!device_) return {};
   return DeviceOutputs{device_->dmx_out(), device_->gio(), device_->camera_out()};

@@ -73,6 +73,11 @@ class Target {
   // Drives general I/O input `bit` (0-based) to `level`, as a wired trigger
   // would (in-process only). False when it cannot.
   virtual bool SetGioInput(int /*bit*/, bool /*level*/) { return false; }
+  // Whether the runner can press the device's front-panel button `button`
+  // (its model's name for it, devices::Device::HasButton; in-process only),
+  // and pressing it once. PressButton is false when it cannot.
+  virtual bool CanPressButton(std::string_view /*button*/) const { return false; }
+  virtual bool PressButton(std::string_view /*button*/) { return false; }
   // What the runner can read of the device's outputs now (in-process only);
   // all null when it cannot observe them (an external device).
   virtual DeviceOutputs Outputs() const { return {}; }
@@ -138,6 +143,8 @@ class InProcessTarget final : public Target {
   bool SetEStop(bool engaged) override;
   bool SetLimitInput(int set, bool high, bool active) override;
   bool SetGioInput(int bit, bool level) override;
+  bool CanPressButton(std::string_view button) const override;
+  bool PressButton(std::string_view button) override;
   DeviceOutputs Outputs() const override;
 
   // The device under test (null before Open()).

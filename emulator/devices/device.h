@@ -109,6 +109,11 @@ class Device {
   // when the device has none.
   virtual const sim::DmxUniverse* dmx_out() const { return nullptr; }
   virtual const sim::CameraPort* camera_out() const { return nullptr; }
+  // The device's front-panel buttons, by the names its model gives them
+  // (docs/devices/<model>.md): whether it has `button`, and pressing it once
+  // (pressed and released). A device without that button ignores the press.
+  virtual bool HasButton(std::string_view /*button*/) const { return false; }
+  virtual void PressButton(std::string_view /*button*/) {}
   // A snapshot of the device's state (positions, motion, I/O, mode) for the
   // control channel's "state" query and for logs. An object; {} when none.
   virtual nlohmann::json State() const { return nlohmann::json::object(); }
@@ -138,6 +143,13 @@ class Device {
   // already the new line).
   void AnnounceLineSwitch(wire::Protocol protocol) const {
     if (line_switch_listener_) line_switch_listener_({protocol, Line()});
+  }
+  // For a device that wraps `inner` (its Line() is the inner one's): the
+  // inner device's switches are announced as this device's. `inner` must not
+  // outlive this device's use of it.
+  void RelayLineSwitchesOf(Device& inner) {
+    inner.SetLineSwitchListener(
+        [this](const LineSwitch& change) { AnnounceLineSwitch(change.protocol); });
   }
 
  private:

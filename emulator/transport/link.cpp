@@ -89,22 +89,16 @@ void Link::ApplyLine(bool always) {
 
 void Link::OnLineSwitch(const devices::LineSwitch& change) {
   if (stopped_ || device_ == nullptr) return;
-  FollowLineRate();
+  // The pacers follow the new line from the next byte on (a StackShot
+  // switching to its DfMoco dialect's rate).
+  if (options_.pacing) ApplyLine(/*always=*/false);
   if (options_.observer != nullptr) {
     options_.observer->OnLineSwitch(scheduler_.Now(), change.protocol, change.line.serial);
   }
 }
 
-void Link::FollowLineRate() {
-  // A device may change its line (a StackShot switching to its DfMoco
-  // dialect's rate): the pacers follow from the next byte on.
-  if (!options_.pacing || device_ == nullptr) return;
-  ApplyLine(/*always=*/false);
-}
-
 void Link::Write(wire::ByteView bytes) {
   if (stopped_ || bytes.empty()) return;
-  FollowLineRate();
   const sim::TimeNs now = scheduler_.Now();
   stats_.bytes_from_device += bytes.size();
   if (options_.observer != nullptr) options_.observer->OnTraffic(now, Direction::kToHost, bytes);
@@ -303,7 +297,6 @@ void Link::OnRead(const ErrorCode& ec, size_t n) {
   if (now < cut_until_ns_) {
     stats_.cut_dropped += n;
   } else {
-    FollowLineRate();
     if (Straight(Direction::kToDevice) && in_.empty()) {
       // Unpaced, no faults, nothing waiting: due now, as DeliverInbound
       // would find them, and handed on without the per-byte queue.

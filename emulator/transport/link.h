@@ -234,7 +234,6 @@ class Link final : public devices::ByteSink {
   // in the PTY's flip buffer during the first.
   static constexpr sim::TimeNs kReclaimRetryNs = 20 * sim::kNsPerMs;
 
-  void FollowLineRate();
   // The device announced a switch of its line: pace at its rate, tell the
   // observer.
   void OnLineSwitch(const devices::LineSwitch& change);

@@ -7,6 +7,7 @@
 
 #include "transport/test_support.h"
 #include "transport/usb_bridge_pacer.h"
+#include "wire/protocol.h"
 
 namespace moco::transport {
 namespace {
@@ -87,6 +88,11 @@ class Recorder final : public TrafficObserver {
   }
   void OnLinkEvent(sim::TimeNs t, std::string_view kind, std::string_view detail) override {
     log.push_back({t, "E:" + std::string(kind) + " " + std::string(detail)});
+  }
+  void OnLineSwitch(sim::TimeNs t, wire::Protocol protocol,
+                    const wire::LineSettings& line) override {
+    log.push_back(
+        {t, "S:" + std::string(wire::ProtocolName(protocol)) + " " + std::to_string(line.baud)});
   }
   std::vector<Recorded> log;
 };
@@ -178,6 +184,70 @@ TEST_F(LinkTest, PacedHostBytesReachTheDeviceOneCharacterTimeApart) {
   ASSERT_EQ(times.size(), 3u);
   EXPECT_EQ(times[1] - times[0], 173612 - 86806);
   EXPECT_EQ(times[2] - times[1], 260417 - 173612);
+}
+
+// The times the device was handed each host byte, in order.
+std::vector<sim::TimeNs> HostByteTimes(const std::vector<Recorded>& log) {
+  std::vector<sim::TimeNs> times;
+  for (const auto& r : log) {
+    if (r.what.starts_with("H:")) times.insert(times.end(), r.what.size() - 2, r.t_ns);
+  }
+  return times;
+}
+
+// A device's line changes when it says so (Device::AnnounceLineSwitch): the
+// link paces at the announced line from the next byte on and tells its
+// observer; it does not poll the device's line between announcements.
+TEST_F(LinkTest, PacingFollowsTheLineADeviceAnnouncesFromTheNextByteOn) {
+  Build(LinkOptions{});  // 115200 baud: 86806 ns a byte
+  auto end = AttachFake();
+  device_->echo = false;
+  // Changed without an announcement: not followed.
+  device_->SetLine({{.baud = 9600}, {}});
+  end->HostSends("ab");
+  ASSERT_TRUE(RunUntil(io_, [&] { return device_->received == "ab"; }));
+  std::vector<sim::TimeNs> t = HostByteTimes(recorder_.log);
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_NEAR(static_cast<double>(t[1] - t[0]), 86806.0, 1.0);
+
+  device_->SwitchLine(wire::Protocol::kDfmoco, {{.baud = 9600}, {}});  // 1041667 ns a byte
+  ASSERT_FALSE(recorder_.log.empty());
+  EXPECT_EQ(recorder_.log.back().what,
+            "S:" + std::string(wire::ProtocolName(wire::Protocol::kDfmoco)) + " 9600");
+  end->HostSends("cd");
+  ASSERT_TRUE(RunUntil(io_, [&] { return device_->received == "abcd"; }));
+  t = HostByteTimes(recorder_.log);
+  ASSERT_EQ(t.size(), 4u);
+  EXPECT_NEAR(static_cast<double>(t[3] - t[2]), 1041667.0, 1.0);
+}
+
+// A device that wraps another (a fault-planting wrapper) announces the inner
+// device's switches as its own, so the link follows them too.
+TEST_F(LinkTest, AWrappingDeviceRelaysTheInnerDevicesLineSwitches) {
+  class Wrapper final : public devices::Device {
+   public:
+    explicit Wrapper(EchoDevice& inner) : inner_(inner) { RelayLineSwitchesOf(inner_); }
+    std::string_view Model() const override { return "wrapper"; }
+    devices::DeviceLine Line() const override { return inner_.Line(); }
+    void PowerOn() override { inner_.PowerOn(); }
+    void PowerOff() override { inner_.PowerOff(); }
+    bool Powered() const override { return inner_.Powered(); }
+    void OnHostBytes(wire::ByteView bytes) override { inner_.OnHostBytes(bytes); }
+
+   private:
+    EchoDevice& inner_;
+  };
+  Build(LinkOptions{});
+  AttachFake();
+  EchoDevice inner(*link_);
+  inner.PowerOn();
+  Wrapper wrapper(inner);
+  link_->SetDevice(&wrapper);
+  inner.SwitchLine(wire::Protocol::kStackshot, {{.baud = 38400}, {}});
+  ASSERT_FALSE(recorder_.log.empty());
+  EXPECT_EQ(recorder_.log.back().what,
+            "S:" + std::string(wire::ProtocolName(wire::Protocol::kStackshot)) + " 38400");
+  link_->SetDevice(device_.get());
 }
 
 TEST_F(LinkTest, QueueIsCappedAndOverflowIsCountedAndLogged) {

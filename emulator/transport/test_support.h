@@ -40,6 +40,12 @@ class EchoDevice final : public devices::Device {
   void OnHostLink(bool open) override { link_events.push_back(open); }
   // Before the link reads it (Link::SetDevice).
   void SetLine(const devices::DeviceLine& line) { line_ = line; }
+  // The line changes to `protocol` on `line` from the next byte on, announced
+  // as a device announces it.
+  void SwitchLine(wire::Protocol protocol, const devices::DeviceLine& line) {
+    line_ = line;
+    AnnounceLineSwitch(protocol);
+  }
   // Writes as the device (from the io thread).
   void Send(std::string_view text) {
     sink_.Write(wire::ByteView(reinterpret_cast<const uint8_t*>(text.data()), text.size()));

@@ -64,7 +64,9 @@ class BrokenDfmoco final : public devices::Device, private devices::ByteSink {
         b_(std::move(b)),
         in_(std::move(in)),
         late_(std::move(late)),
-        inner_(s, *this, std::move(profile)) {}
+        inner_(s, *this, std::move(profile)) {
+    RelayLineSwitchesOf(inner_);
+  }
   std::string_view Model() const override { return "dfmoco-broken"; }
   devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override { inner_.PowerOn(); }

@@ -31,7 +31,9 @@ class TestDfmoco final : public devices::Device {
   TestDfmoco(sim::Scheduler& s, devices::ByteSink& out, devices::DfmocoProfile profile,
              devices::DfmocoFaults faults, std::vector<size_t> cuts)
       : sink_(out, devices::FaultySink::CutInto(std::move(cuts))),
-        inner_(s, sink_, std::move(profile), std::move(faults)) {}
+        inner_(s, sink_, std::move(profile), std::move(faults)) {
+    RelayLineSwitchesOf(inner_);
+  }
   std::string_view Model() const override { return "dfmoco-test"; }
   devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override { inner_.PowerOn(); }

@@ -25,7 +25,9 @@ using SsInput = std::function<std::string(const std::string& line, devices::Byte
 class BrokenStackshot final : public devices::Device, private devices::ByteSink {
  public:
   BrokenStackshot(sim::Scheduler& s, devices::ByteSink& out, LineBreakage b, SsInput in)
-      : s_(s), out_(out), b_(std::move(b)), in_(std::move(in)), inner_(s, *this) {}
+      : s_(s), out_(out), b_(std::move(b)), in_(std::move(in)), inner_(s, *this) {
+    RelayLineSwitchesOf(inner_);
+  }
   std::string_view Model() const override { return "stackshot3x-broken"; }
   devices::DeviceLine Line() const override { return inner_.Line(); }
   void PowerOn() override {

@@ -34,7 +34,9 @@ class BrokenDmc16 final : public devices::Device {
               [&s, b = std::move(b)](const dmc::FrameRef& f, devices::ByteSink& o) {
                 b(f, wire::Bytes(f.raw.begin(), f.raw.end()), s, o);
               }),
-        inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {}
+        inner_(devices::CreateDevice("dmc16", profile, s, sink_)) {
+    RelayLineSwitchesOf(*inner_);
+  }
   std::string_view Model() const override { return "dmc16-broken"; }
   devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }

@@ -97,7 +97,9 @@ class BrokenStackshot3x final : public devices::Device {
         in_(std::move(in)),
         replies_(*this),
         inner_(std::make_unique<devices::Stackshot3x>(s, replies_, devices::Stackshot3xProfile{},
-                                                      store)) {}
+                                                      store)) {
+    RelayLineSwitchesOf(*inner_);
+  }
   std::string_view Model() const override { return "stackshot3x-broken"; }
   devices::DeviceLine Line() const override { return inner_->Line(); }
   void PowerOn() override { inner_->PowerOn(); }
@@ -106,6 +108,8 @@ class BrokenStackshot3x final : public devices::Device {
   void OnHostLink(bool open) override { inner_->OnHostLink(open); }
   sim::Rig* rig() override { return inner_->rig(); }
   sim::GioPort* gio() override { return inner_->gio(); }
+  bool HasButton(std::string_view button) const override { return inner_->HasButton(button); }
+  void PressButton(std::string_view button) override { inner_->PressButton(button); }
 
   void OnHostBytes(wire::ByteView bytes) override {
     wire::Bytes changed;

@@ -474,13 +474,11 @@ void ShutterCase(SsCaseContext& c) {
 
 void UserAbortCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  auto* in_process = dynamic_cast<InProcessTarget*>(&c.target);
-  auto* device =
-      in_process != nullptr ? dynamic_cast<devices::Stackshot3x*>(in_process->device()) : nullptr;
+  constexpr std::string_view kButton = devices::Stackshot3x::kAbortButton;
   auto st = SsRailStatus(h, 0);
   Expect(c, "SS-STATUS-005", st && (*st & stackshot::kRailStatusUserAborted) == 0,
          "no USER_ABORTED without an abort", st ? std::to_string(*st) : "no status");
-  if (device == nullptr) {
+  if (!c.target.CanPressButton(kButton)) {
     c.log.push_back(
         "the runner cannot press this device's buttons: USER_ABORTED after an abort "
         "not exercised");
@@ -490,7 +488,7 @@ void UserAbortCase(SsCaseContext& c) {
   if (!p0) return;
   h.Call(Move(0, 100000));
   h.Idle(200 * kMs);
-  device->UserAbort();
+  c.target.PressButton(kButton);
   h.Idle(50 * kMs);
   st = SsRailStatus(h, 0);
   Expect(c, "SS-STATUS-005", st && (*st & stackshot::kRailStatusUserAborted) != 0,

@@ -179,6 +179,13 @@ class Stackshot3x : public Device, private sim::RigObserver {
   // A button pressed: every moving axis stops dead and gets the sticky
   // RAIL_STATUS_USER_ABORTED bit; a stack run is abandoned.
   void UserAbort();
+  // The panel's buttons as HasButton()/PressButton() name them: kAbortButton
+  // (any button pressed while the rail moves: UserAbort()).
+  static constexpr std::string_view kAbortButton = "abort";
+  bool HasButton(std::string_view button) const override { return button == kAbortButton; }
+  void PressButton(std::string_view button) override {
+    if (button == kAbortButton) UserAbort();
+  }
   // Settings->Mode on the panel: switches at once and, as the menu's settings
   // are the power-on settings, stores the mode in slot 0 (created from the
   // factory defaults when empty). The way out of DfMoco mode.
