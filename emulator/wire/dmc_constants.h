@@ -1,6 +1,7 @@
 // Wire constants of the DMC v2 protocol (dmc-v2-protocol.txt "Message Format",
 // "Message Types", "Capabilities"; ERRATA dmc 1-11; FACTS "DMC v2" and "Boom rig").
 // Names mirror the spec's MSG_* / ACK_* names; values are the on-wire values.
+// The line's speed and the protocol's timing are in dmc_timing.h (included).
 #ifndef MOCO_WIRE_DMC_CONSTANTS_H_
 #define MOCO_WIRE_DMC_CONSTANTS_H_
 
@@ -9,15 +10,9 @@
 #include <string>
 #include <string_view>
 
-namespace moco::dmc {
+#include "wire/dmc_timing.h"
 
-// --- The line ------------------------------------------------------------------
-// dmc-v2-protocol.txt names no line speed. 115200 baud 8N1 is the setting a
-// DMC v2 device is opened at (FACTS "DMC v2": dmc-lite's "port is USB CDC (the
-// 115200 baud setting does not pace it)"; docs/device-facts.md, DMC v2;
-// docs/profiles.md `baud`). The DMC-16 profile's default and the protocol table's
-// DMC line read it.
-inline constexpr uint32_t kBaudRate = 115200;
+namespace moco::dmc {
 
 // --- Frame layout ("Message Format"; ERRATA 1.1, 1.2) -------------------------
 inline constexpr uint8_t kMarker0 = 'D';
@@ -37,11 +32,6 @@ inline constexpr size_t kMaxFrameSize = kHeaderSize + kMaxDataLength + kCheckSiz
 // 2048) and then waits for a Length that a 1048-byte receiver drops. The
 // largest receive buffer a FrameDecoder (and a DMC-16 profile) models.
 inline constexpr size_t kLargestReceiveBuffer = 4096;
-// The spec has no inter-byte timeout; mocosim's reading (docs/protocol-notes.md
-// "Idle line"): a line idle this long ends any partial frame, which is given
-// up and its bytes rescanned. The DMC-16 does so, and the transcripts
-// (`mocosim decode`) and the Wireshark dissector follow it.
-inline constexpr int64_t kLineIdleGapNs = 50'000'000;  // 50 ms
 // Fletcher-16 is summed in blocks of this many bytes before reducing mod 255
 // ("Computing and Validating the Checksum").
 inline constexpr size_t kFletcherBlock = 20;

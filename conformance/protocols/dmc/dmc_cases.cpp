@@ -110,10 +110,10 @@ const DmcRecord* Go(DmcCaseContext& c) {
   const TimeNs t0 = h.Now();
   const DmcRecord* r = h.Call(dmc::RtGo{});
   int refusals = 0;
-  while (AckCodeOf(r) == ToWire(AckCode::kErrNotInPosition) && h.Now() - t0 < kArmingLimit &&
+  while (AckCodeOf(r) == ToWire(AckCode::kErrNotInPosition) && h.Now() - t0 < kArmingLimitNs &&
          !h.link_lost()) {
     ++refusals;
-    h.Idle(10 * kMs);
+    h.Idle(kArmingRetryNs);
     r = h.Call(dmc::RtGo{});
   }
   if (AckCodeOf(r) == ToWire(AckCode::kOk)) {
@@ -129,7 +129,7 @@ const DmcRecord* Go(DmcCaseContext& c) {
 
 void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to) {
   c.host.Call(dmc::MotorMove{motor, to});
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
 }
 
 }  // namespace dmc_cases
@@ -150,10 +150,10 @@ void BootHi(DmcCaseContext& c) {
   }
   bool seen = false;
   for (const DmcRecord& r : c.host.records()) {
-    seen = seen || (IsUnsolicited(r, MsgType::kHi) && r.t_ns <= 1000 * kMs);
+    seen = seen || (IsUnsolicited(r, MsgType::kHi) && r.t_ns <= kBootHiWithinNs);
   }
   if (!seen) {
-    c.host.WaitFor(0, 1000 * kMs,
+    c.host.WaitFor(0, kBootHiWithinNs,
                    [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kHi); });
     for (const DmcRecord& r : c.host.records()) seen = seen || IsUnsolicited(r, MsgType::kHi);
   }
@@ -294,20 +294,10 @@ std::optional<std::vector<int32_t>> GetPositions(DmcHost& host) {
 
 namespace {
 
-// A device "should send [position updates] about every 0.10 seconds, if any of
-// the motors are moving": a rest the updates have not contradicted for this
-// long (from the last update or the last command) is believed.
-constexpr TimeNs kQuietForRest = 150 * kMs;
-
 bool IsQuery(uint16_t type) {
   return type == ToWire(MsgType::kMotorStatus) || type == ToWire(MsgType::kMotorGetPosition) ||
          type == ToWire(MsgType::kHi) || (type & dmc::kFlagAck) != 0;
 }
-
-// How long after a command a device may take to start its motion (two of
-// dmc-lite's 20 ms motion ticks, and a margin): a MOTOR_STATUS of 0 asked
-// before then is not stale.
-constexpr TimeNs kStartLatency = 50 * kMs;
 
 // When the host last sent a request other than a query; 0 when none.
 TimeNs LastCommandSent(const DmcHost& h) {
@@ -373,7 +363,7 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       // next is then judged on a motion that ended, whether the host waited
       // out the answer timeout or not (HostOptions::give_up_after_unanswered).
       for (;;) {
-        const TimeNs quiet_at = LastActivity(host, host.records().size()) + kQuietForRest;
+        const TimeNs quiet_at = LastActivity(host, host.records().size()) + kRestQuietNs;
         if (host.Now() >= quiet_at || host.Now() >= until || host.link_lost()) return w;
         host.Idle(std::min(quiet_at, until) - host.Now());
       }
@@ -384,7 +374,7 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       // update, or a command just sent, may precede it, and a status gone stale
       // shows as an update that still moves.
       const size_t mark = host.records().size();
-      const TimeNs quiet_at = LastActivity(host, mark) + kQuietForRest;
+      const TimeNs quiet_at = LastActivity(host, mark) + kRestQuietNs;
       if (r->t_ns >= quiet_at) return w.rested = true, w;
       host.Idle(quiet_at - host.Now());
       const std::optional<size_t> moved_at = MovedSince(host, mark, LastPositions(host, mark));
@@ -396,14 +386,14 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       // carries the rest position is the end of the motion reported on the
       // device's own update tick, up to a period after it stopped (dmc-lite:
       // 15-113 ms after a correct status, calibration). A status asked
-      // within kStartLatency of a command that starts motion may rightly be
+      // within kStartLatencyNs of a command that starts motion may rightly be
       // 0: nothing moves before the device's next motion tick (dmc-lite: 20
       // ms). Either way the host asks again.
       // Whether another update follows within the quiet period after it.
-      if (const TimeNs wait = moved->t_ns + kQuietForRest - host.Now(); wait > 0) host.Idle(wait);
+      if (const TimeNs wait = moved->t_ns + kRestQuietNs - host.Now(); wait > 0) host.Idle(wait);
       const bool went_on =
           MovedSince(host, *moved_at + 1, As<dmc::MotorPositionReport>(moved)).has_value();
-      const bool just_commanded = r->t_ns - LastCommandSent(host) < kStartLatency;
+      const bool just_commanded = r->t_ns - LastCommandSent(host) < kStartLatencyNs;
       if (!went_on && !just_commanded) return w.rested = true, w;
       if (went_on && !just_commanded && w.stale_status == nullptr) {
         w.stale_status = r;
@@ -411,7 +401,7 @@ RestWait WaitRestSeen(DmcHost& host, TimeNs timeout_ns) {
       }
     }
     if (host.Now() >= until || host.link_lost()) return w;
-    host.Idle(50 * kMs);
+    host.Idle(kRestPollNs);
   }
 }
 

@@ -56,7 +56,7 @@ void Checksum(DmcCaseContext& c) {
   dmc::EncodeData(dmc::HostMessage{dmc::MotorMove{1, At(*p0, 0) + 1000}}, data);
   r = h.Await(h.SendFrame(ToWire(MsgType::kMotorMove), data, true));
   ExpectCode(c, "DMC-CSUM-002", r, AckCode::kErrChecksum);
-  h.Idle(200 * kMs);
+  h.Idle(kRefusedMoveShowNs);
   const auto p1 = GetPositions(h);
   Expect(c, "DMC-CSUM-005", p1 && *p1 == *p0, "a corrupted MOTOR_MOVE does not move: " + Vec(*p0),
          p1 ? Vec(*p1) : "no position");

@@ -1,6 +1,7 @@
 // What the DMC v2 case files share (dmc_cases.cpp and dmc_cases_*.cpp): the
 // checks every case makes and the cases of the other files that the case
-// table in dmc_cases.cpp lists. Internal to the DMC v2 suites.
+// table in dmc_cases.cpp lists (their waits are in dmc_timing.h). Internal to
+// the DMC v2 suites.
 #ifndef MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
 #define MOCO_CONFORMANCE_PROTOCOLS_DMC_DMC_CASES_INTERNAL_H_
 
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "conformance/protocols/dmc/dmc_suites.h"
+#include "conformance/protocols/dmc/dmc_timing.h"
 
 namespace moco::conformance::dmc_cases {
 
@@ -57,14 +59,10 @@ bool ReportsAt(const DmcHost& h, size_t from, const std::optional<std::vector<in
 bool MoveAccepted(const DmcRecord* r);
 // MSG_RT_GO for an armed run or shot ("When the device has stopped moving, a
 // MSG_RT_GO command will perform the run or shoot of the frame"). A device
-// still arming answers ERR_NOT_IN_POSITION: the host retries every 10 ms for
-// up to kArmingLimit, DMC-RT-015 judges the delay, and the last answer is
-// returned for the case's own rule.
+// still arming answers ERR_NOT_IN_POSITION: the host retries every
+// kArmingRetryNs (10 ms) for up to kArmingLimitNs (1 s), DMC-RT-015 judges
+// the delay, and the last answer is returned for the case's own rule.
 const DmcRecord* Go(DmcCaseContext& c);
-
-inline constexpr TimeNs kMs = sim::kNsPerMs;
-inline constexpr TimeNs kArmingLimit = 1000 * kMs;
-inline constexpr TimeNs kRestTimeout = 60'000 * kMs;
 
 // Moves `motor` to `to` and waits until nothing moves.
 void MoveAndRest(DmcCaseContext& c, uint8_t motor, int32_t to);

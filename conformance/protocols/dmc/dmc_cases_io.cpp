@@ -41,12 +41,12 @@ void Dmx(DmcCaseContext& c) {
     return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 1 right after a ramp to 255 began", Show(r));
   });
   // The ramp ends: polled as a host waiting for the rig to settle would.
-  const TimeNs until = h.Now() + 30'000 * kMs;
+  const TimeNs until = h.Now() + kDmxRampEndWithinNs;
   for (;;) {
     r = h.Call(dmc::MotorStatusRequest{});
     st = As<dmc::MotorStatusResponse>(r);
     if (st == nullptr || st->dmx_adjusting == 0 || h.Now() >= until) break;
-    h.Idle(100 * kMs);
+    h.Idle(kDmxRampPollNs);
   }
   c.v.Check("DMC-DMX-003", st != nullptr && st->dmx_adjusting == 0, [&] {
     return EvOf(h, r, "MOTOR_STATUS with DMX STATUS 0 within 30 s of the ramp", Show(r));
@@ -74,7 +74,7 @@ void GioInputChange(DmcCaseContext& c) {
                        "the target has no input the runner can drive (in-process targets do)");
       return;
     }
-    const int i = h.WaitFor(mark, 1000 * kMs,
+    const int i = h.WaitFor(mark, kGioInChangeWithinNs,
                             [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kGioIn); });
     const DmcRecord* g = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
     const auto* in = As<dmc::GioInReport>(g);

@@ -40,14 +40,14 @@ void Move(DmcCaseContext& c) {
   // judged below all the same.
   c.v.Check("DMC-MOVE-002", mv != nullptr && mv->moving == 1,
             [&] { return EvOf(h, r, "MOTOR_MOVE moving=1", Show(r)); });
-  h.Idle(250 * kMs);
+  h.Idle(kMoveUnderWayNs);
   r = h.Call(dmc::MotorStatusRequest{});
   const auto* st = As<dmc::MotorStatusResponse>(r);
   c.v.Check("DMC-STAT-004", st != nullptr && (st->moving_bits & 1u) != 0,
             [&] { return EvOf(h, r, "bit 0 set while motor 1 moves", Show(r)); });
-  const bool rested = WaitRest(c, kRestTimeout);
+  const bool rested = WaitRest(c, kRestWaitNs);
   Expect(c, "DMC-STAT-004", rested, "status at rest after the move", "still moving");
-  h.Idle(300 * kMs);
+  h.Idle(kMoveLastUpdateNs);
   const std::vector<Update> ups = UpdatesSince(h, mark);
   // Updates while moving: from the move until the first one on the target.
   TimeNs last = t0, worst = 0, sum = 0;
@@ -69,7 +69,7 @@ void Move(DmcCaseContext& c) {
   });
   if (n > 1) {
     const TimeNs mean = sum / static_cast<TimeNs>(n);
-    c.v.Check("DMC-POS-003", mean >= 75 * kMs, [&] {
+    c.v.Check("DMC-POS-003", mean >= kUpdateMeanFloorNs, [&] {
       return EvOf(h, nullptr, "about 100 ms between updates",
                   std::to_string(mean / kMs) + " ms mean");
     });
@@ -128,9 +128,9 @@ void Stop(DmcCaseContext& c) {
   if (!p0) return;
   const int32_t start = At(*p0, 0), far = start + 100000;
   h.Call(dmc::MotorMove{1, far});
-  h.Idle(500 * kMs);
+  h.Idle(kRunBeforeStopNs);
   ExpectOk(c, "DMC-STOP-001", h.Call(dmc::MotorStop{1}));
-  const bool rested = WaitRest(c, 10'000 * kMs);
+  const bool rested = WaitRest(c, kStopRestWaitNs);
   const auto p1 = GetPositions(h);
   Expect(c, "DMC-STOP-001", rested && p1 && At(*p1, 0) > start && At(*p1, 0) < far,
          "motor 1 at rest between " + std::to_string(start) + " and " + std::to_string(far),
@@ -148,7 +148,7 @@ void StopAll(DmcCaseContext& c) {
       SetSpeed(c, m, 2000, 4000);
       h.Call(dmc::MotorMove{m, At(*p0, m - 1u) + 100000});
     }
-    h.Idle(400 * kMs);
+    h.Idle(kRunBeforeStopAllNs);
     dmc::MotorStopAll stop;
     if (pass == 0) stop.flags = dmc::kStopAllSilent;
     const DmcRecord* r = h.Call(stop);
@@ -157,7 +157,7 @@ void StopAll(DmcCaseContext& c) {
     // Motor 1 was at about 1600 steps/s: decelerating at 4000 steps/s^2 it
     // travels about 300 steps after the STOP_ALL; a halt travels none.
     const auto at_stop = GetPositions(h);
-    Expect(c, "DMC-STOP-002", WaitRest(c, 10'000 * kMs), "every motor at rest after STOP_ALL",
+    Expect(c, "DMC-STOP-002", WaitRest(c, kStopRestWaitNs), "every motor at rest after STOP_ALL",
            "still moving");
     const auto at_rest = GetPositions(h);
     if (at_stop && at_rest) {
@@ -166,10 +166,10 @@ void StopAll(DmcCaseContext& c) {
              "motor 1 decelerating on after STOP_ALL (about 300 steps at 4000 steps/s^2)",
              std::to_string(travel) + " steps after the STOP_ALL was answered");
     }
-    h.Idle(1500 * kMs);  // past any "soon after" window
+    h.Idle(kPastHardStopWindowNs);
   }
   for (uint8_t m = 1; m <= motors; ++m) h.Call(dmc::MotorMove{m, At(*p0, m - 1u)});
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
 }
 
 namespace {
@@ -180,13 +180,13 @@ std::optional<int64_t> StopDistance(DmcCaseContext& c, bool twice) {
   const auto p0 = GetPositions(h);
   if (!p0) return std::nullopt;
   h.Call(dmc::MotorMove{1, At(*p0, 0) + 100000});
-  h.Idle(600 * kMs);
+  h.Idle(kRunBeforeHardStopNs);
   h.Call(dmc::MotorStopAll{});
   if (twice) h.Call(dmc::MotorStopAll{});
-  WaitRest(c, 10'000 * kMs);
+  WaitRest(c, kStopRestWaitNs);
   const auto p1 = GetPositions(h);
   MoveAndRest(c, 1, At(*p0, 0));
-  h.Idle(1500 * kMs);
+  h.Idle(kPastHardStopWindowNs);
   if (!p1) return std::nullopt;
   return static_cast<int64_t>(At(*p1, 0)) - At(*p0, 0);
 }
@@ -195,7 +195,7 @@ std::optional<int64_t> StopDistance(DmcCaseContext& c, bool twice) {
 
 void HardStop(DmcCaseContext& c) {
   SetSpeed(c, 1, 2000, 4000);
-  c.host.Idle(1500 * kMs);
+  c.host.Idle(kPastHardStopWindowNs);
   const auto single = StopDistance(c, false);
   const auto twice = StopDistance(c, true);
   if (!single || !twice) return;
@@ -220,7 +220,7 @@ void Reset(DmcCaseContext& c) {
   for (size_t k = mark; ack != nullptr && k < h.records().size(); ++k) {
     if (&h.records()[k] == ack) after = k + 1;
   }
-  const int i = h.WaitFor(after, 500 * kMs, [](const DmcRecord& r) {
+  const int i = h.WaitFor(after, kResetUpdateWithinNs, [](const DmcRecord& r) {
     return IsUnsolicited(r, MsgType::kMotorGetPosition);
   });
   const DmcRecord* u = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
@@ -265,7 +265,7 @@ void Configure(DmcCaseContext& c) {
   const int32_t start = At(*p0, 0);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-CFG-003", h.Call(dmc::MotorJog{1, dmc::kJogSpeedMax, start + 300}));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto p1 = GetPositions(h);
   Expect(c, "DMC-CFG-003",
          ReportsAt(h, mark, p1, 0, [&](int32_t v) { return v > start && v <= start + 300; }),
@@ -294,10 +294,10 @@ void JogSpeeds(DmcCaseContext& c) {
   std::vector<Leg> legs = {{dmc::kJogSpeedMax, {}}, {2500, {}}, {dmc::kJogSpeedInch, {}}};
   for (Leg& leg : legs) {
     if (!ExpectOk(c, "DMC-CFG-003", h.Call(dmc::MotorJog{1, leg.speed, start + 100000}))) break;
-    h.Idle(600 * kMs);
+    h.Idle(kJogLegNs);
     const auto p = GetPositions(h);
     h.Call(dmc::MotorStop{1});
-    WaitRest(c, 10'000 * kMs);
+    WaitRest(c, kStopRestWaitNs);
     if (p) leg.travel = static_cast<int64_t>(At(*p, 0)) - start;
     MoveAndRest(c, 1, start);
   }
@@ -366,7 +366,7 @@ void NoHostAck(DmcCaseContext& c) {
   const size_t mark = h.records().size();
   h.Call(dmc::MotorMove{1, At(*p0, 0) + 1500});
   for (int i = 0; i < 4; ++i) {
-    h.Idle(150 * kMs);
+    h.Idle(kNoAckPollNs);
     const DmcRecord* r = h.Call(dmc::MotorStatusRequest{});
     Expect(c, "DMC-UNS-002", As<dmc::MotorStatusResponse>(r) != nullptr,
            "MOTOR_STATUS answered while updates go un-ACKed", Show(r));
@@ -385,7 +385,7 @@ void EStop(DmcCaseContext& c) {
   const auto p0 = GetPositions(h);
   if (!p0) return;
   h.Call(dmc::MotorMove{1, At(*p0, 0) + 50000});
-  h.Idle(300 * kMs);
+  h.Idle(kRunBeforeSwitchNs);
   const size_t mark = h.records().size();
   if (!c.target.SetEStop(true)) {
     c.log.push_back("the target has no e-stop the runner can press: MOTOR_HARD_STOP not exercised");
@@ -393,11 +393,11 @@ void EStop(DmcCaseContext& c) {
                      "the target has no e-stop the runner can press (an external device: press it "
                      "by hand, or certify the emulation in-process)");
     h.Call(dmc::MotorStopAll{});
-    WaitRest(c, kRestTimeout);
+    WaitRest(c, kRestWaitNs);
     MoveAndRest(c, 1, At(*p0, 0));
     return;
   }
-  const int i = h.WaitFor(mark, 500 * kMs, [](const DmcRecord& r) {
+  const int i = h.WaitFor(mark, kHardStopReportWithinNs, [](const DmcRecord& r) {
     return IsUnsolicited(r, MsgType::kMotorHardStop);
   });
   const DmcRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
@@ -405,7 +405,7 @@ void EStop(DmcCaseContext& c) {
   Expect(c, "DMC-UNS-003", m != nullptr && m->reason == 0 && !m->motor,
          "MOTOR_HARD_STOP reason=0 (E-Stop) without MOTOR within 500 ms", Show(hs));
   c.target.SetEStop(false);
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   MoveAndRest(c, 1, At(*p0, 0));
 }
 
@@ -422,11 +422,11 @@ void SoftLimits(DmcCaseContext& c) {
                                       0}));
   const bool up =
       ExpectCode(c, "DMC-LIM-001", h.Call(dmc::MotorMove{1, s + 2000}), AckCode::kErrSoftUp);
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const bool low =
       ExpectCode(c, "DMC-LIM-002", h.Call(dmc::MotorMove{1, s - 2000}), AckCode::kErrSoftLow);
-  h.Idle(200 * kMs);
-  WaitRest(c, kRestTimeout);
+  h.Idle(kRefusedMoveShowNs);
+  WaitRest(c, kRestWaitNs);
   auto p = GetPositions(h);
   // Judged when both moves were refused: a device that leaves soft limits to
   // the host (LIM-001/002, SHOULD) has carried them out, rightly moving.
@@ -448,13 +448,13 @@ void SoftLimits(DmcCaseContext& c) {
   size_t mark = h.records().size();
   const DmcRecord* r = h.Call(dmc::MotorMove{1, s + 500});
   Expect(c, "DMC-LIM-004", MoveAccepted(r), "MOTOR_MOVE accepted", Show(r));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   p = GetPositions(h);
   Expect(c, "DMC-LIM-004", ReportsAt(h, mark, p, 0, near(s + 500)),
          "motor 1 at " + std::to_string(s + 500) + " (within a step)", p ? Vec(*p) : "no position");
   mark = h.records().size();
   h.Call(dmc::MotorJog{1, dmc::kJogSpeedMax, s + 5000});
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   p = GetPositions(h);
   int32_t highest = p ? At(*p, 0) : 0;
   for (const Update& u : UpdatesSince(h, mark)) highest = std::max(highest, At(u.positions, 0));
@@ -464,7 +464,7 @@ void SoftLimits(DmcCaseContext& c) {
   mark = h.records().size();
   r = h.Call(dmc::MotorMove{1, s + 2000});
   Expect(c, "DMC-LIM-005", MoveAccepted(r), "MOTOR_MOVE beyond a disabled limit accepted", Show(r));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   p = GetPositions(h);
   Expect(c, "DMC-LIM-005", ReportsAt(h, mark, p, 0, near(s + 2000)),
          "motor 1 at " + std::to_string(s + 2000) + " (within a step)",
@@ -503,15 +503,15 @@ void HardLimit(DmcCaseContext& c) {
   for (const End& e : ends) {
     if (!reachable) break;
     h.Call(dmc::MotorMove{1, e.towards});
-    h.Idle(300 * kMs);
+    h.Idle(kRunBeforeSwitchNs);
     const size_t mark = h.records().size();
     if (!c.target.SetLimitInput(1, e.high, true)) {
       // Reached a moment ago: the link went meanwhile.
       h.Call(dmc::MotorStopAll{});
-      WaitRest(c, kRestTimeout);
+      WaitRest(c, kRestWaitNs);
       break;
     }
-    const int i = h.WaitFor(mark, 500 * kMs, [](const DmcRecord& r) {
+    const int i = h.WaitFor(mark, kHardStopReportWithinNs, [](const DmcRecord& r) {
       return IsUnsolicited(r, MsgType::kMotorHardStop);
     });
     const DmcRecord* hs = i >= 0 ? &h.records()[static_cast<size_t>(i)] : nullptr;
@@ -520,14 +520,14 @@ void HardLimit(DmcCaseContext& c) {
            std::string("MOTOR_HARD_STOP reason=") + std::to_string(e.reason) + " motor=1 within " +
                "500 ms of the " + e.name + " switch closing",
            Show(hs));
-    const bool halted = WaitRest(c, 200 * kMs);
+    const bool halted = WaitRest(c, kLimitHaltWithinNs);
     Expect(c, "DMC-LIM-007", halted,
            std::string("motor 1 at rest within 200 ms of the ") + e.name + " switch closing",
            "still moving");
     c.target.SetLimitInput(1, e.high, false);
     if (!halted) {
       h.Call(dmc::MotorStopAll{});
-      WaitRest(c, kRestTimeout);
+      WaitRest(c, kRestWaitNs);
     }
   }
   ExpectOk(c, "DMC-CFG-005", h.Call(dmc::MotorSetLimits{1, 0, 0, 0, 0, 0}));

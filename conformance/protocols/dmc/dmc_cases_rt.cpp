@@ -66,7 +66,7 @@ bool OnFramePositions(DmcCaseContext& c, std::string_view rule,
 
 bool AtFrame(DmcCaseContext& c, const Uploaded& u, uint32_t frame, std::string_view rule) {
   ExpectOk(c, rule, c.host.Call(dmc::RtPositionFrame{frame}));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto p = GetPositions(c.host);
   std::vector<int32_t> want;
   for (const auto& path : u.path) want.push_back(path[frame]);
@@ -84,11 +84,11 @@ void UploadPosition(DmcCaseContext& c) {
 
 dmc::RtRunMove ShortRun(uint32_t end) {
   dmc::RtRunMove run;
-  run.fps_x1000 = 24000;
+  run.fps_x1000 = kRunFps * dmc::kFpsScale;
   run.start_frame = 0;
   run.end_frame = end;
-  run.preroll_ms = 500;
-  run.postroll_ms = 500;
+  run.preroll_ms = kShortRunRollMs;
+  run.postroll_ms = kShortRunRollMs;
   return run;  // FLAGS and the camera angles left out: 29 data bytes
 }
 
@@ -99,18 +99,18 @@ void LiveRun(DmcCaseContext& c) {
   AtFrame(c, *u, 0, "DMC-RT-002");
   const uint32_t end = std::min<uint32_t>(10, u->end);
   ExpectOk(c, "DMC-RT-009", h.Call(ShortRun(end)));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-RT-009", Go(c));
-  const int e = h.WaitFor(mark, 20'000 * kMs,
+  const int e = h.WaitFor(mark, kRunEndWaitNs,
                           [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-005", e >= 0, "RT_END after the run", "none within 20 s");
-  h.Idle(500 * kMs);
+  h.Idle(kSecondRtEndWatchNs);
   const int ends = CountSince(h, mark, MsgType::kRtEnd);
   Expect(c, "DMC-RT-006", ends <= 1, "one RT_END", std::to_string(ends) + " RT_END messages");
   const std::vector<Update> ups = UpdatesSince(h, mark);
-  const double interval_ns = 1e9 / 24.0;
-  const TimeNs slack = c.target.VirtualClock() ? 0 : 30 * kMs;
+  const double interval_ns = static_cast<double>(sim::kNsPerSecond) / kRunFps;
+  const TimeNs slack = c.target.VirtualClock() ? 0 : kFrameReportSlackNs;
   TimeNs prev_t = -1;  // none yet
   // Whether an update has every motor within frame k's interval of the path.
   auto on_frame = [&](const Update& up, uint32_t k) {
@@ -169,7 +169,7 @@ void LiveRun(DmcCaseContext& c) {
       });
     }
   }
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
 }
 
 void StopRun(DmcCaseContext& c) {
@@ -178,19 +178,19 @@ void StopRun(DmcCaseContext& c) {
   if (!u) return;
   AtFrame(c, *u, 0, "DMC-RT-002");
   h.Call(ShortRun(10));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const size_t mark = h.records().size();
   Go(c);
-  h.WaitFor(mark, 10'000 * kMs, [](const DmcRecord& r) {
+  h.WaitFor(mark, kRunFrameWaitNs, [](const DmcRecord& r) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
     return r.request < 0 && p != nullptr && p->move_time_x1000 >= 3000;
   });
   const size_t stop_mark = h.records().size();
   ExpectOk(c, "DMC-STOP-002", h.Call(dmc::MotorStopAll{}));
-  const int e = h.WaitFor(stop_mark, 5000 * kMs,
+  const int e = h.WaitFor(stop_mark, kStopRunEndWithinNs,
                           [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, "DMC-RT-012", e >= 0, "RT_END after STOP_ALL ends the run", "none within 5 s");
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
 }
 
 void GoUnarmed(DmcCaseContext& c) { ExpectRefused(c, "DMC-RT-011", c.host.Call(dmc::RtGo{})); }
@@ -203,8 +203,8 @@ void JogAll(DmcCaseContext& c) {
   const uint32_t to = std::min<uint32_t>(5, u->end);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-RT-013", h.Call(dmc::RtJogAll{24000, to}));
-  WaitRest(c, kRestTimeout);
-  h.Idle(200 * kMs);
+  WaitRest(c, kRestWaitNs);
+  h.Idle(kJogAllLateReportsNs);
   const std::vector<Update> ups = UpdatesSince(h, mark);
   for (uint32_t k = 1; k <= to; ++k) {
     bool seen = false;
@@ -233,25 +233,26 @@ void Shoot(DmcCaseContext& c, bool second) {
   const int32_t at = u->path[0][frame];
   const std::vector<dmc::BlurMotor> blur = {{1, at - 20, at + 20}};
   if (second) {
-    ExpectOk(c, rule, h.Call(dmc::RtShootFrame2{frame, 200, 90, 270, blur}));
+    ExpectOk(c, rule, h.Call(dmc::RtShootFrame2{frame, kShootExposureMs, 90, 270, blur}));
   } else {
-    ExpectOk(c, rule, h.Call(dmc::RtShootFrame{frame, dmc::kDirectionForward, 200, 500, blur}));
+    ExpectOk(c, rule,
+             h.Call(dmc::RtShootFrame{frame, dmc::kDirectionForward, kShootExposureMs, 500, blur}));
   }
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto before = GetPositions(h);
   const size_t mark = h.records().size();
   const DmcRecord* go = Go(c);
   ExpectOk(c, rule, go);
-  const int e = h.WaitFor(mark, 10'000 * kMs,
+  const int e = h.WaitFor(mark, kShootEndWaitNs,
                           [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   Expect(c, rule, e >= 0, "RT_END after the exposure", "none within 10 s");
   if (e >= 0 && go != nullptr) {
     // The exposure is 200 ms: an RT_END sooner than that ended no exposure.
     const TimeNs took = h.records()[static_cast<size_t>(e)].t_ns - go->t_ns;
-    Expect(c, rule, took >= 200 * kMs, "RT_END at least 200 ms (the exposure) after GO",
+    Expect(c, rule, took >= kShootExposureNs, "RT_END at least 200 ms (the exposure) after GO",
            "RT_END " + std::to_string(took / kMs) + " ms after GO");
   }
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   // The blurred motor sweeps its 40-step blur range while the shutter is open.
   const auto after = GetPositions(h);
   if (before && after) {
@@ -277,7 +278,7 @@ void StopLoop(DmcCaseContext& c) {
   dmc::RtRunMove run = ShortRun(end);
   run.flags = dmc::kPlayPingPong;
   ExpectOk(c, "DMC-LOOP-001", h.Call(run));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const size_t mark = h.records().size();
   ExpectOk(c, "DMC-LOOP-001", Go(c));
   // An update of the run at frame k: MOVE TIME is "in thousandths of a
@@ -287,30 +288,30 @@ void StopLoop(DmcCaseContext& c) {
     const auto* p = As<dmc::MotorPositionReport>(&r);
     return r.request < 0 && p != nullptr && pred((p->move_time_x1000 + 500) / 1000);
   };
-  const int at_end = h.WaitFor(mark, 10'000 * kMs, [&](const DmcRecord& r) {
+  const int at_end = h.WaitFor(mark, kLoopPassWaitNs, [&](const DmcRecord& r) {
     return frame_report(r, [&](uint32_t k) { return k == end; });
   });
   const int back =
       at_end < 0
           ? -1
-          : h.WaitFor(static_cast<size_t>(at_end) + 1, 10'000 * kMs, [&](const DmcRecord& r) {
+          : h.WaitFor(static_cast<size_t>(at_end) + 1, kLoopPassWaitNs, [&](const DmcRecord& r) {
               return frame_report(r, [&](uint32_t k) { return k > 0 && k < end; });
             });
   if (!Expect(c, "DMC-LOOP-001", back >= 0, "a second, backward pass of the ping-pong run",
               at_end < 0 ? "frame " + std::to_string(end) + " never reported"
                          : "no frame reported on the way back")) {
     h.Call(dmc::MotorStopAll{});
-    WaitRest(c, kRestTimeout);
+    WaitRest(c, kRestWaitNs);
     return;
   }
   const size_t stop_mark = h.records().size();
   ExpectOk(c, "DMC-LOOP-001", h.Call(dmc::RtStopLoop{}));
-  const int e = h.WaitFor(stop_mark, 10'000 * kMs,
+  const int e = h.WaitFor(stop_mark, kStopLoopEndWaitNs,
                           [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
   if (!Expect(c, "DMC-LOOP-001", e >= 0, "RT_END once the run reaches frame 0",
               "no RT_END within 10 s of STOP_LOOP (the loop went on)")) {
     h.Call(dmc::MotorStopAll{});
-    WaitRest(c, kRestTimeout);
+    WaitRest(c, kRestWaitNs);
     return;
   }
   // The end point it stopped at: the last update before RT_END, at frame 0
@@ -323,7 +324,7 @@ void StopLoop(DmcCaseContext& c) {
     const auto* p = As<dmc::MotorPositionReport>(&h.records()[i]);
     if (h.records()[i].request < 0 && p != nullptr) last = p;
   }
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto rest = GetPositions(h);
   bool at_start = rest.has_value();
   for (size_t m = 0; at_start && m < u->path.size(); ++m) {
@@ -437,12 +438,12 @@ void VirtMoveReadBack(DmcCaseContext& c) {
   if (!p0) return;
   // 0.1 units along the track, then 0.1 units up.
   ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{1, p0->track_x100000 + 10000}));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto p1 = VirtPositions(h);
   if (!p1) return;
   ExpectVirtAt(c, "DMC-VIRT-003", "vTrack", p1->track_x100000, p0->track_x100000 + 10000);
   ExpectOk(c, "DMC-VIRT-003", h.Call(dmc::VirtMove{3, p1->ns_x100000 + 10000}));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const auto p2 = VirtPositions(h);
   if (!p2) return;
   ExpectVirtAt(c, "DMC-VIRT-003", "vNS", p2->ns_x100000, p1->ns_x100000 + 10000);
@@ -452,7 +453,7 @@ void VirtMoveReadBack(DmcCaseContext& c) {
   const DmcRecord* r = h.Call(dmc::VirtMove{3, p2->ns_x100000 + 600000});
   ExpectRefused(c, "DMC-VIRT-004", r);
   ExpectCode(c, "DMC-VIRT-005", r, AckCode::kErrRange);
-  h.Idle(100 * kMs);
+  h.Idle(kRefusedVirtMoveShowNs);
   const auto after = GetPositions(h);
   Expect(c, "DMC-VIRT-004", steps && after && *steps == *after,
          "motor positions unchanged: " + (steps ? Vec(*steps) : std::string("?")),
@@ -469,18 +470,19 @@ void VirtStopShort(DmcCaseContext& c) {
   if (!ConfigureBoomRig(c)) return;
   const auto p0 = VirtPositions(h);
   if (!p0) return;
-  const int32_t far = p0->track_x100000 + 2'000'000;  // 20 units: far enough to stop short of
+  // 20 units: far enough to stop short of.
+  const int32_t far = p0->track_x100000 + 20 * dmc::kVirtPositionScale;
   ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtMove{1, far}));
-  h.Idle(200 * kMs);
+  h.Idle(kVirtRunBeforeStopNs);
   ExpectOk(c, "DMC-VIRT-007", h.Call(dmc::VirtStop{1}));
-  Expect(c, "DMC-VIRT-007", WaitRest(c, 10'000 * kMs), "the rig at rest within 10 s of VIRT_STOP",
-         "still moving");
+  Expect(c, "DMC-VIRT-007", WaitRest(c, kStopRestWaitNs),
+         "the rig at rest within 10 s of VIRT_STOP", "still moving");
   const auto p1 = VirtPositions(h);
   if (!p1) return;
   Expect(c, "DMC-VIRT-007", p1->track_x100000 < far - kVirtTolerance,
          "vTrack short of " + std::to_string(far), std::to_string(p1->track_x100000));
   h.Call(dmc::VirtMove{1, p0->track_x100000});
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   Unconfigure(c);
 }
 
@@ -490,20 +492,20 @@ void VirtJogs(DmcCaseContext& c) {
   const auto p0 = VirtPositions(h);
   if (!p0) return;
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJog{1, dmc::kJogSpeedMax, p0->track_x100000 + 5000}));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   if (const auto p1 = VirtPositions(h)) {
     ExpectVirtAt(c, "DMC-VIRT-008", "vTrack", p1->track_x100000, p0->track_x100000 + 5000);
   }
   // Along the camera line, then speed 0; the pan, then VIRT_STOP.
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 5000}));
-  h.Idle(300 * kMs);
+  h.Idle(kVirtJogBeforeStopNs);
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{2, 0}));
-  Expect(c, "DMC-VIRT-008", WaitRest(c, 10'000 * kMs), "at rest within 10 s of speed 0",
+  Expect(c, "DMC-VIRT-008", WaitRest(c, kStopRestWaitNs), "at rest within 10 s of speed 0",
          "still moving");
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtJogOnLine{3, -3000}));
-  h.Idle(300 * kMs);
+  h.Idle(kVirtJogBeforeStopNs);
   ExpectOk(c, "DMC-VIRT-008", h.Call(dmc::VirtStop{4}));
-  Expect(c, "DMC-VIRT-008", WaitRest(c, 10'000 * kMs), "at rest within 10 s of VIRT_STOP",
+  Expect(c, "DMC-VIRT-008", WaitRest(c, kStopRestWaitNs), "at rest within 10 s of VIRT_STOP",
          "still moving");
   Unconfigure(c);
 }

@@ -25,10 +25,6 @@ using dmc::ToWire;
 
 namespace {
 
-constexpr uint16_t kFps = 24;
-constexpr TimeNs kFrameNs = sim::kNsPerSecond / kFps;
-constexpr TimeNs kRunTimeout = 20'000 * kMs;
-
 // The uploaded DMX levels of the cases: channel 1 rises 10 a frame from 5
 // over frames 0..10 (two sections, the second the last set), channel 2 falls
 // 15 a frame from 200 over frames 0..7 (last set); both then hold.
@@ -136,7 +132,7 @@ void ReadFrameClock(Watched& w, const std::vector<std::pair<TimeNs, uint32_t>>& 
   std::vector<TimeNs> origins;
   for (const auto& [t, m] : clock) {
     const double frames = static_cast<double>(m) / 1000.0 - static_cast<double>(start);
-    origins.push_back(t - static_cast<TimeNs>(frames * static_cast<double>(kFrameNs)));
+    origins.push_back(t - static_cast<TimeNs>(frames * static_cast<double>(kRunFrameNs)));
   }
   if (origins.empty()) return;
   std::nth_element(origins.begin(),
@@ -144,10 +140,10 @@ void ReadFrameClock(Watched& w, const std::vector<std::pair<TimeNs, uint32_t>>& 
                    origins.end());
   w.clock_origin_ns = origins[origins.size() / 2];
   for (uint32_t k = 0; k <= end - start; ++k) {
-    const TimeNs from = *w.clock_origin_ns + static_cast<TimeNs>(k) * kFrameNs;
+    const TimeNs from = *w.clock_origin_ns + static_cast<TimeNs>(k) * kRunFrameNs;
     const Watched::Sample* last = nullptr;
     for (const Watched::Sample& s : w.samples) {
-      if (s.t_ns >= from && s.t_ns < from + kFrameNs) last = &s;
+      if (s.t_ns >= from && s.t_ns < from + kRunFrameNs) last = &s;
     }
     if (last == nullptr) continue;
     w.gio[k] = last->gio;
@@ -155,9 +151,10 @@ void ReadFrameClock(Watched& w, const std::vector<std::pair<TimeNs, uint32_t>>& 
   }
 }
 
-// GO (DMC-RT-015's retries included), then reads until RT_END or kRunTimeout.
-// Where the outputs are observable it samples them every 2 ms, and each time
-// a frame report (MOVE TIME frame x 1000, frames start..end) has come in.
+// GO (DMC-RT-015's retries included), then reads until RT_END or kRunEndWaitNs.
+// Where the outputs are observable it samples them every kOutputSampleNs (2 ms),
+// and each time a frame report (MOVE TIME frame x 1000, frames start..end) has
+// come in.
 Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, uint32_t end,
                    const std::vector<DmxTrack>& tracks, int sampled_channel) {
   DmcHost& h = c.host;
@@ -172,10 +169,10 @@ Watched GoAndWatch(DmcCaseContext& c, std::string_view go_rule, uint32_t start, 
   size_t next = mark;
   std::optional<uint32_t> reported;                // the frame index the last frame report named
   std::vector<std::pair<TimeNs, uint32_t>> clock;  // (time, MOVE TIME) inside the run
-  const TimeNs until = h.Now() + kRunTimeout;
+  const TimeNs until = h.Now() + kRunEndWaitNs;
   while (w.end < 0 && h.Now() < until && !h.link_lost()) {
     if (observe) {
-      h.Idle(2 * kMs);
+      h.Idle(kOutputSampleNs);
     } else {
       h.WaitFor(next, until - h.Now(),
                 [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kRtEnd); });
@@ -229,11 +226,12 @@ std::string SpansText(const std::vector<std::pair<TimeNs, TimeNs>>& spans) {
 }
 
 // A bloop of about `ms`: one span, lasting half to one and a half times it
-// (the samples are 2 ms apart).
+// (kBloopSlackNs either way: the samples are kOutputSampleNs apart).
 bool BloopLike(const std::vector<std::pair<TimeNs, TimeNs>>& spans, uint16_t ms) {
   if (spans.size() != 1) return false;
   const TimeNs d = spans[0].second - spans[0].first;
-  return d >= TimeNs{ms} * kMs / 2 - 4 * kMs && d <= TimeNs{ms} * kMs * 3 / 2 + 4 * kMs;
+  const TimeNs bloop = TimeNs{ms} * kMs;
+  return d >= bloop / 2 - kBloopSlackNs && d <= bloop * 3 / 2 + kBloopSlackNs;
 }
 
 // The target cannot read the device's outputs: `rules`, judged on them, are
@@ -250,7 +248,7 @@ void EndRun(DmcCaseContext& c, const Watched& w) {
   Expect(c, "DMC-RT-005", w.go == nullptr || w.end >= 0, "RT_END after the run",
          "none within 20 s");
   if (w.end < 0) c.host.Call(dmc::MotorStopAll{});
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
 }
 
 }  // namespace
@@ -309,7 +307,7 @@ void SyncRun(DmcCaseContext& c) {
   dmc::RtRunMove run = ShortRun(end);
   run.sync_dmx = 1;
   ExpectOk(c, "DMC-RT-009", h.Call(run));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   Watched w = GoAndWatch(c, "DMC-RT-009", 0, end, tracks, 0);
   if (observe && w.go != nullptr) {
     for (uint32_t k = 0; k <= end; ++k) {
@@ -336,9 +334,9 @@ void SyncRun(DmcCaseContext& c) {
   ExpectOk(c, "DMC-DMX-001", h.Call(dmc::Dmx{0, 1, fixed}));
   run.sync_dmx = 0;
   run.bloop_dmx_channel = bloop_channel;
-  run.bloop_time_ms = 200;
+  run.bloop_time_ms = kBloopMs;
   ExpectOk(c, "DMC-RT-009", h.Call(run));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   w = GoAndWatch(c, "DMC-RT-009", 0, end, tracks, bloop_channel);
   if (observe && w.go != nullptr) {
     const std::vector<int> want(tracks.size(), 77);
@@ -353,7 +351,7 @@ void SyncRun(DmcCaseContext& c) {
     if (bloop_channel != 0) {
       const auto spans = Spans(w, [](const Watched::Sample& s) { return s.dmx == 255; });
       const auto moved = Spans(w, [](const Watched::Sample& s) { return s.dmx > 0; });
-      Expect(c, "DMC-DMX-011", BloopLike(spans, 200) && moved.size() == 1,
+      Expect(c, "DMC-DMX-011", BloopLike(spans, kBloopMs) && moved.size() == 1,
              "DMX channel 3 at 255 once, for about 200 ms (BLOOP TIME), then back to 0",
              "at 255: " + SpansText(spans) + "; above 0: " + SpansText(moved));
     }
@@ -395,9 +393,9 @@ void Triggers(DmcCaseContext& c) {
   dmc::RtRunMove run = ShortRun(end);
   run.sync_dmx = 1;
   run.bloop_outputs = bloop;
-  run.bloop_time_ms = 200;
+  run.bloop_time_ms = kBloopMs;
   ExpectOk(c, "DMC-RT-009", h.Call(run));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const Watched w = GoAndWatch(c, "DMC-RT-009", 0, end, {}, 0);
   if (observe && w.go != nullptr) {
     for (uint32_t k = 0; k <= end; ++k) {
@@ -412,7 +410,7 @@ void Triggers(DmcCaseContext& c) {
     if (bloop != 0) {
       const auto spans =
           Spans(w, [bloop](const Watched::Sample& s) { return (s.gio & bloop) != 0; });
-      Expect(c, "DMC-RT-020", BloopLike(spans, 200),
+      Expect(c, "DMC-RT-020", BloopLike(spans, kBloopMs),
              "GIO output " + std::to_string(outs) + " on once, for about 200 ms (BLOOP TIME)",
              "on: " + SpansText(spans));
     }
@@ -448,8 +446,8 @@ std::optional<TimeNs> FrameTime(const Watched& w, uint32_t k) {
     if (it != w.first_report_ns.end()) return it->second;
   }
   auto next = w.first_report_ns.find(k + 1);
-  if (next != w.first_report_ns.end()) return next->second - kFrameNs;
-  if (w.clock_origin_ns) return *w.clock_origin_ns + static_cast<TimeNs>(k) * kFrameNs;
+  if (next != w.first_report_ns.end()) return next->second - kRunFrameNs;
+  if (w.clock_origin_ns) return *w.clock_origin_ns + static_cast<TimeNs>(k) * kRunFrameNs;
   return std::nullopt;
 }
 
@@ -486,26 +484,26 @@ void CameraStills(DmcCaseContext& c) {
     dmc::MotorStopAll stop;
     stop.flags = dmc::kStopAllSilent;
     h.Call(stop);
-    WaitRest(c, kRestTimeout);
+    WaitRest(c, kRestWaitNs);
     AtFrame(c, *u, 0, "DMC-RT-002");
   }
   ExpectOk(c, "DMC-RT-021", h.Call(CameraRun(end, dmc::kPlayCameraStills, 90, 270)));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const sim::CameraPort* cam = c.target.Outputs().camera;
   if (cam == nullptr) LogNotObserved(c, "camera exposures", {"DMC-RT-022", "DMC-RT-023"});
   const Watched w = GoAndWatch(c, "DMC-RT-021", 0, end, {}, 0);
   Expect(c, "DMC-RT-021", w.go == nullptr || w.end >= 0, "RT_END after the stills run",
          "none within 20 s");
   if (cam != nullptr && w.go != nullptr) {
-    h.Idle(200 * kMs);  // the end frame's exposure closes after its report
+    h.Idle(kLastExposureCloseNs);
     const auto presses = Presses(*cam, w.go_ns);
     Expect(c, "DMC-RT-022", presses.size() == end + 1,
            std::to_string(end + 1) + " exposures (one per frame 0.." + std::to_string(end) + ")",
            std::to_string(presses.size()) + " shutter presses: " + SpansText(presses));
-    const TimeNs tol = kFrameNs / 10 + kMs;
+    const TimeNs tol = kExposureEdgeTolNs;
     for (uint32_t k = 0; k <= end && presses.size() == end + 1; ++k) {
       const std::optional<TimeNs> t = FrameTime(w, k);
-      const TimeNs open = t ? *t + kFrameNs / 4 : 0, close = t ? *t + kFrameNs * 3 / 4 : 0;
+      const TimeNs open = t ? *t + kRunFrameNs / 4 : 0, close = t ? *t + kRunFrameNs * 3 / 4 : 0;
       const auto& p = presses[k];
       Expect(c, "DMC-RT-023",
              t && std::llabs(p.first - open) <= tol && p.second >= 0 &&
@@ -531,20 +529,19 @@ void CameraVideo(DmcCaseContext& c) {
   dmc::RtRunMove run = ShortRun(end);
   run.flags = dmc::kPlayCameraVideo;  // no angles: "Only used if camera trigger for every frame"
   ExpectOk(c, "DMC-RT-021", h.Call(run));
-  WaitRest(c, kRestTimeout);
+  WaitRest(c, kRestWaitNs);
   const sim::CameraPort* cam = c.target.Outputs().camera;
   if (cam == nullptr) LogNotObserved(c, "camera video triggers", {"DMC-RT-025"});
   const Watched w = GoAndWatch(c, "DMC-RT-021", 0, end, {}, 0);
   Expect(c, "DMC-RT-021", w.go == nullptr || w.end >= 0, "RT_END after the video run",
          "none within 20 s");
   if (cam != nullptr && w.go != nullptr) {
-    h.Idle(500 * kMs);
+    h.Idle(kVideoPressesSettleNs);
     const auto presses = Presses(*cam, w.go_ns);
     const std::optional<TimeNs> t0 = FrameTime(w, 0), tn = FrameTime(w, end);
-    // A press lasts a moment; one may wait for the previous to be released.
-    const TimeNs late = 300 * kMs;
-    const bool ok = t0 && tn && presses.size() == 2 && presses[0].first >= *t0 - kFrameNs &&
-                    presses[0].first <= *t0 + late && presses[1].first >= *tn - kFrameNs &&
+    const TimeNs late = kVideoPressLateNs;
+    const bool ok = t0 && tn && presses.size() == 2 && presses[0].first >= *t0 - kRunFrameNs &&
+                    presses[0].first <= *t0 + late && presses[1].first >= *tn - kRunFrameNs &&
                     presses[1].first <= *tn + late;
     Expect(c, "DMC-RT-025", ok,
            "two shutter presses: at the start frame (" +
@@ -590,14 +587,14 @@ void RollLimits(DmcCaseContext& c) {
     const auto before = GetPositions(h);
     const DmcRecord* r = h.Call(run);
     ExpectCode(c, rule, r, want);
-    h.Idle(300 * kMs);
-    WaitRest(c, kRestTimeout);
+    h.Idle(kRefusedRunShowNs);
+    WaitRest(c, kRestWaitNs);
     const auto after = GetPositions(h);
     const std::optional<uint32_t> code = AckCodeOf(r);
     if (code && *code == ToWire(AckCode::kOk)) {
       // Accepted after all: disarmed before going on.
       h.Call(dmc::MotorStopAll{});
-      WaitRest(c, kRestTimeout);
+      WaitRest(c, kRestWaitNs);
       AtFrame(c, *u, 0, "DMC-RT-002");
       return;
     }
@@ -607,12 +604,12 @@ void RollLimits(DmcCaseContext& c) {
            after ? Vec(*after) : std::string("no MOTOR_GET_POSITION answer"));
     if (before && after && *before != *after) AtFrame(c, *u, 0, "DMC-RT-002");
   };
-  past_limit(500, 0, "DMC-RT-026", AckCode::kErrPreroll);
-  past_limit(0, 500, "DMC-RT-027", AckCode::kErrPostroll);
-  run.preroll_ms = 100;
-  run.postroll_ms = 100;
+  past_limit(kRollPastLimitMs, 0, "DMC-RT-026", AckCode::kErrPreroll);
+  past_limit(0, kRollPastLimitMs, "DMC-RT-027", AckCode::kErrPostroll);
+  run.preroll_ms = kRollWithinLimitMs;
+  run.postroll_ms = kRollWithinLimitMs;
   if (ExpectOk(c, "DMC-RT-029", h.Call(run))) {
-    WaitRest(c, kRestTimeout);
+    WaitRest(c, kRestWaitNs);
     const Watched w = GoAndWatch(c, "DMC-RT-029", 0, end, {}, 0);
     EndRun(c, w);
   }

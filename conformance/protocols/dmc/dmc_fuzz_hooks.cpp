@@ -7,18 +7,12 @@
 
 #include "conformance/protocols/dmc/dmc_host.h"
 #include "conformance/protocols/dmc/dmc_protocol.h"
+#include "conformance/protocols/dmc/dmc_timing.h"
 #include "wire/dmc.h"
 #include "wire/dmc_frame.h"
 
 namespace moco::conformance {
 namespace {
-
-constexpr TimeNs kMs = sim::kNsPerMs;
-
-// Between two host messages: one millisecond, about ten bytes at 115200 baud.
-constexpr TimeNs kGapNs = 1 * kMs;
-// How long the host listens for stray answers after the last one it awaited.
-constexpr TimeNs kQuietNs = 20 * kMs;
 
 // The frame's ID, Type and data section when `m` starts with a whole DMC header.
 bool DmcParts(const wire::Bytes& m, uint32_t& id, uint16_t& type, wire::Bytes& data) {
@@ -96,7 +90,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
   }
   Verdicts verdicts(strict ? std::string() : std::string("DMC-FRAME-*,DMC-CSUM-*"));
   HostOptions options;
-  options.quiet_ns = kQuietNs;
+  options.quiet_ns = dmc_cases::kFuzzQuietNs;
   DmcHost host(target, verdicts, options);
   std::vector<uint32_t> ids;
   for (const wire::Bytes& m : messages) {
@@ -210,7 +204,7 @@ class Matcher final : public ReplayMatcher {
 
 const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kDmc,
-    .gap_ns = kGapNs,
+    .gap_ns = dmc_cases::kFuzzGapNs,
     .mutate = &Mutate,
     .run = &Run,
     .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "base/format.h"
+#include "conformance/protocols/dmc/dmc_timing.h"
 #include "wire/dmc_frame.h"
 
 namespace moco::conformance {
@@ -94,7 +95,12 @@ void DmcProtocol::Describe(const dmc::HiResponse& h, RunReport& report) {
 
 namespace {
 
-using sim::kNsPerMs;
+using dmc_cases::kRestPollNs;
+using dmc_cases::kSettleBusyRetryNs;
+using dmc_cases::kSettleBusyWaitNs;
+using dmc_cases::kSettleFlushNs;
+using dmc_cases::kSettleHiAnswerNs;
+using dmc_cases::kSettleMotionWaitNs;
 
 // Brings a device that introduced itself back to a known state before a case,
 // as Dragonframe prepares a rig, without judging anything (a case is judged
@@ -109,23 +115,22 @@ using sim::kNsPerMs;
 //   the device refuses commands for a while after a stop.
 void Settle(DmcHost& host, const dmc::HiResponse& device) {
   MutedVerdicts mute(host.verdicts());
-  constexpr TimeNs kQuickAnswer = 500 * kNsPerMs;
-  if (host.Await(host.Send(dmc::HiRequest{}), kQuickAnswer) == nullptr && !host.link_lost()) {
+  if (host.Await(host.Send(dmc::HiRequest{}), kSettleHiAnswerNs) == nullptr && !host.link_lost()) {
     static const wire::Bytes kFlush(4096, 0x00);
     host.SendNoise(kFlush);
-    host.Idle(100 * kNsPerMs);
+    host.Idle(kSettleFlushNs);
     if (host.Call(dmc::HiRequest{}) == nullptr) return;  // the greeting judges the silence
   }
   if (device.motor_count == 0) return;
-  const TimeNs until = host.Now() + 3000 * kNsPerMs;
+  const TimeNs until = host.Now() + kSettleMotionWaitNs;
   for (;;) {
     const auto* st = As<dmc::MotorStatusResponse>(host.Call(dmc::MotorStatusRequest{}));
     if (st == nullptr || st->moving_bits == 0 || host.Now() >= until || host.link_lost()) break;
-    host.Idle(50 * kNsPerMs);
+    host.Idle(kRestPollNs);
   }
   // Motors 1..8 cover every case (the boom rig's six included).
   const uint8_t motors = std::min<uint8_t>(device.motor_count, 8);
-  const TimeNs busy_until = host.Now() + 3000 * kNsPerMs;
+  const TimeNs busy_until = host.Now() + kSettleBusyWaitNs;
   for (uint8_t m = 1; m <= motors; ++m) {
     for (;;) {
       // Enabled, with the blur flag go-motion needs (a DMC-16's power-on flags).
@@ -135,7 +140,7 @@ void Settle(DmcHost& host, const dmc::HiResponse& device) {
       const bool busy = code && (*code == dmc::ToWire(dmc::AckCode::kErrHardLow) ||
                                  *code == dmc::ToWire(dmc::AckCode::kErrMoving));
       if (!busy || host.Now() >= busy_until || host.link_lost()) break;
-      host.Idle(100 * kNsPerMs);
+      host.Idle(kSettleBusyRetryNs);
     }
   }
 }

@@ -9,13 +9,14 @@
 #include "conformance/core/transcript.h"
 #include "conformance/protocols/dmc/dmc_cases_internal.h"
 #include "conformance/protocols/dmc/dmc_suites.h"
+#include "conformance/protocols/dmc/dmc_timing.h"
 #include "session/session.h"
 
 namespace moco::conformance {
 namespace {
 
 using dmc::AckCode;
-constexpr TimeNs kMs = sim::kNsPerMs;
+using dmc_cases::kMs;
 
 struct Step {
   enum class Op { kStatus, kGetPosition, kMove, kStop, kStopAll, kReset, kSetSpeed, kJog, kWait };
@@ -52,7 +53,7 @@ std::vector<Step> Generate(uint64_t seed, int steps, uint8_t motor_count) {
         s.b = static_cast<int32_t>(uniform(-3000, 3000));
         break;
       case Step::Op::kWait:
-        s.a = static_cast<int32_t>(uniform(0, 800));
+        s.a = static_cast<int32_t>(uniform(0, dmc_cases::kRandomWaitMaxMs));
         break;
       default:
         break;
@@ -116,7 +117,7 @@ void Execute(DmcHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t mo
       });
     }
   }
-  WaitRest(h, 600'000 * kMs);
+  WaitRest(h, dmc_cases::kRandomRestWaitNs);
   const auto final_pos = GetPositions(h);
   if (!final_pos) return;
   for (size_t m = 0; m < model.size(); ++m) {
