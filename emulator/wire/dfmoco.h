@@ -31,12 +31,12 @@
 #include <vector>
 
 #include "wire/bytes.h"
+#include "wire/dfmoco_timing.h"
 
 namespace moco::dfmoco {
 
 // --- Wire constants (dfmoco-protocol.txt "Protocol", FACTS "DFMoco") ------------------
-// "Speed: 57600 Baud", 8 data bits, 1 stop bit (ERRATA 2.1: 57600 8N1).
-inline constexpr uint32_t kBaudRate = 57600;
+// The baud rate and the timing: wire/dfmoco_timing.h.
 inline constexpr std::string_view kLineEnd = "\r\n";  // every line in and out
 inline constexpr size_t kMaxArgs = 40;                // 40 or more: `error: too many args`
 // Longest line the framer keeps, terminator excluded. The longest well-formed line is a

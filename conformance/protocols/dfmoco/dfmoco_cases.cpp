@@ -19,6 +19,7 @@
 #include "conformance/core/run_report.h"
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 #include "conformance/rules/dfmoco_needs.h"
 
 namespace moco::conformance {
@@ -88,7 +89,8 @@ void BootHi(DfmCaseContext& c) {
   if (!c.target.CanRestart()) return;  // the start-up of an external device is not observed
   bool seen = false;
   for (const DfmLine& l : c.host.lines()) {
-    seen = seen || (l.command < 0 && As<dfmoco::HelloReply>(&l) != nullptr && l.t_ns <= 1000 * kMs);
+    seen = seen ||
+           (l.command < 0 && As<dfmoco::HelloReply>(&l) != nullptr && l.t_ns <= kBootHiWithinNs);
   }
   Expect(c, "DFM-HI-001", seen, "an unprompted hi within 1 s of power-on", "none");
 }
@@ -117,7 +119,7 @@ void Queries(DfmCaseContext& c) {
   // Quiet at rest: after any report still owed (up to a second), nothing comes.
   h.Idle(kReportPeriodNs + Tolerance(c));
   const size_t mark = h.lines().size();
-  h.Idle(2500 * kMs);
+  h.Idle(kQuietAtRestNs);
   const size_t extra = h.lines().size() - mark;
   Expect(c, "DFM-MP-007", extra == 0, "no line for 2.5 s at rest",
          Str(static_cast<int64_t>(extra)) + " line(s), the first " +
@@ -127,7 +129,7 @@ void Queries(DfmCaseContext& c) {
 void LineEnd(DfmCaseContext& c) {
   DfmHost& h = c.host;
   const int k = h.Send("ms", {}, "\n");
-  h.Idle(300 * kMs);
+  h.Idle(kListenForReplyNs);
   const bool taken = h.commands()[static_cast<size_t>(k)].answers > 0;
   Expect(c, "DFM-LINE-007", taken, "a command ended by a bare \\n is taken (ERRATA 2.1)",
          "no answer to \"ms\\n\" (the sketch's framing, docs/device-facts.md)");
@@ -243,7 +245,7 @@ void Unknown(DfmCaseContext& c) {
   for (const char* line : {"xx 1 2", "hello", "MM 1 100", "zz"}) {
     const size_t mark = h.lines().size();
     h.Send(line);
-    h.Idle(300 * kMs);
+    h.Idle(kListenForReplyNs);
     std::string seen;
     for (size_t i = mark; i < h.lines().size(); ++i) {
       if (As<dfmoco::PositionReply>(&h.lines()[i]) == nullptr) seen = Show(&h.lines()[i]);
@@ -320,7 +322,6 @@ namespace {
 // Polls every motor's position until none has changed for kStillForRest, or
 // until `until`.
 void WaitPositionsStill(DfmHost& host, TimeNs until) {
-  constexpr TimeNs kStillForRest = 150 * kMs;
   std::vector<std::optional<int32_t>> last;
   TimeNs still_since = host.Now();
   while (host.Now() < until && !host.link_lost()) {

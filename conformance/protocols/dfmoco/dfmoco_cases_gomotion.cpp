@@ -13,6 +13,9 @@
 #include <vector>
 
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
+#include "sim/planner_dfmoco.h"
+#include "wire/dfmoco_timing.h"
 
 namespace moco::conformance::dfmoco_cases {
 
@@ -87,9 +90,6 @@ struct GoSample {
   int32_t steps;
 };
 
-constexpr TimeNs kGoWithinNs = 150 * kMs;  // DFM-GO-006's tolerance
-constexpr TimeNs kChunkNs = 50 * kMs;      // FACTS: the sketch's velocity chunks
-
 double Seconds(TimeNs t) { return static_cast<double>(t) / 1e9; }
 
 // DFM-GO-006 along the move, not only its length: Dragonframe triggers the
@@ -109,8 +109,9 @@ void JudgeGoShape(DfmCaseContext& c, const std::vector<std::pair<int32_t, BlurPl
     const BlurPlan& plan = motor_plan.second;
     for (const GoSample& s : samples) {
       if (s.motor != m) continue;
-      const auto span = plan.Span(Seconds(s.asked_ns - t_go - kGoWithinNs),
-                                  Seconds(s.answered_ns - t_go + kChunkNs + kGoWithinNs));
+      const auto span =
+          plan.Span(Seconds(s.asked_ns - t_go - kGoWithinNs),
+                    Seconds(s.answered_ns - t_go + sim::kDfmocoChunkNs + kGoWithinNs));
       const double lo = span.first, hi = span.second;
       const bool ok = s.steps >= lo - 2.0 && s.steps <= hi + 2.0;
       c.v.Check("DFM-GO-006", ok, [&] {
@@ -169,7 +170,7 @@ void Blur(DfmCaseContext& c) {
     }
   });
   const TimeNs took = rest.rest_ns - t_go;
-  const TimeNs want = 2000 * kMs + exposure_ms * kMs;
+  const TimeNs want = 2 * dfmoco::kGoMotionRampNs + exposure_ms * kMs;
   Expect(c, "DFM-GO-006", std::llabs(took - want) <= kGoWithinNs,
          "motion for 1 s + " + Str(exposure_ms) + " ms + 1 s after go", Str(took / kMs) + " ms");
   JudgeGoShape(c, plans, samples, t_go);
@@ -236,7 +237,7 @@ void BlurTooFast(DfmCaseContext& c) {
   const auto* b = As<dfmoco::BlurReply>(r);
   Expect(c, "DFM-GO-008", b != nullptr && b->value == dfmoco::kBlurRefused,
          "bf -1 for 2,000,000 steps/s", Show(r));
-  h.Idle(200 * kMs);
+  h.Idle(kAfterBlurRefusedNs);
   const DfmLine* ms = h.Call("ms");
   Expect(c, "DFM-GO-008", !ShowsMoving(ms, 1), "nothing moves after bf -1", Show(ms));
   const auto p = DfmPosition(h, 1);

@@ -1,7 +1,7 @@
 // What the DFMoco case files share (dfmoco_cases.cpp and dfmoco_cases_*.cpp): the
-// timing constants, the checks and queries every case makes, and the cases of the
-// other files that the case table in dfmoco_cases.cpp lists. Internal to the DFMoco
-// suites.
+// timing constants (dfmoco_timing.h), the checks and queries every case makes, and the
+// cases of the other files that the case table in dfmoco_cases.cpp lists. Internal to
+// the DFMoco suites.
 #ifndef MOCO_CONFORMANCE_PROTOCOLS_DFMOCO_DFMOCO_CASES_INTERNAL_H_
 #define MOCO_CONFORMANCE_PROTOCOLS_DFMOCO_DFMOCO_CASES_INTERNAL_H_
 
@@ -14,14 +14,9 @@
 #include <vector>
 
 #include "conformance/protocols/dfmoco/dfmoco_suites.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 
 namespace moco::conformance::dfmoco_cases {
-
-inline constexpr TimeNs kMs = sim::kNsPerMs;
-inline constexpr TimeNs kRestTimeout = 120'000 * kMs;
-inline constexpr TimeNs kPollNs = 50 * kMs;            // DfmWaitRest's `ms` polling period
-inline constexpr TimeNs kReportPeriodNs = 1000 * kMs;  // FACTS: `mp` once a second
-inline constexpr TimeNs kStopWithinNs = 5000 * kMs;    // DFM-SM-002 / SA-002 "fairly quickly"
 
 std::string Str(int64_t v);
 // Evidence at line `l` (or at the host's time when there is none).

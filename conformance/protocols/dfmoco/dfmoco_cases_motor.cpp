@@ -12,6 +12,7 @@
 
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 #include "conformance/rules/dfmoco_needs.h"
 
 namespace moco::conformance::dfmoco_cases {
@@ -70,7 +71,7 @@ void JudgeReports(DfmCaseContext& c, const Motion& m, const DfmRest& rest, int32
   for (const Report& r : reports) {
     if (r.t_ns <= last_moving) times.push_back(r.t_ns);
   }
-  const bool long_move = last_moving - m.t0_ns > 1500 * kMs;
+  const bool long_move = last_moving - m.t0_ns > kLongMoveNs;
   if (long_move) {
     Expect(c, "DFM-MP-002", times.size() > 1,
            "mp " + Str(m.motor) + " reports during a move of " +
@@ -167,7 +168,7 @@ void PulseRate(DfmCaseContext& c) {
   const DfmRest rest = Rest(c);
   // 1500 steps at 1000 steps/s take 1.5 s at least; the rest is seen one poll late at most.
   const TimeNs took = rest.rest_ns - t0;
-  Expect(c, "DFM-PR-003", took >= 1500 * kMs, "at least 1500 ms for 1500 steps at pr 1000",
+  Expect(c, "DFM-PR-003", took >= kPulseRateMoveMinNs, "at least 1500 ms for 1500 steps at pr 1000",
          Str(took / kMs) + " ms");
   h.Call("pr 1 5000");
   h.Call(Cmd("mm", {1, *from}));
@@ -185,10 +186,10 @@ void Stop(DfmCaseContext& c) {
   Motion m{1, (*from)[0], to, h.lines().size(), h.Now()};
   h.Call(Cmd("mm", {1, to}));
   if (two) h.Call(Cmd("mm", {2, (*from)[1] + 40000}));
-  h.Idle(1200 * kMs);
+  h.Idle(kMoveBeforeStopNs);
   const TimeNs t_stop = h.Now();
   h.Call("sm 1");
-  h.Idle(200 * kMs);
+  h.Idle(kAfterStopCheckNs);
   if (two) {
     const DfmLine* ms = h.Call("ms");
     Expect(c, "DFM-SM-003", ShowsMoving(ms, 2), "motor 2 still moving after sm 1", Show(ms));
@@ -237,7 +238,7 @@ void StopAll(DfmCaseContext& c) {
         Motion{m, (*from)[static_cast<size_t>(m - 1)], to, h.lines().size(), h.Now()});
     h.Call(Cmd("mm", {m, to}));
   }
-  h.Idle(1500 * kMs);
+  h.Idle(kMoveBeforeStopAllNs);
   const TimeNs t_stop = h.Now();
   h.Call("sa");
   const DfmRest rest = Rest(c);
@@ -266,7 +267,7 @@ void FastReversal(DfmCaseContext& c) {
   const auto from = DfmPosition(h, 1);
   if (!from) return;
   h.Call(Cmd("mm", {1, *from + 60000}));
-  h.Idle(2300 * kMs);  // 20000 steps/s after 2 s at 10000 steps/s^2
+  h.Idle(kReachTopRateNs);
   h.Call(Cmd("mm", {1, *from}));
   Rest(c);
   h.Call("pr 1 5000");
@@ -309,7 +310,7 @@ void Jog(DfmCaseContext& c) {
   bool towards = true;
   for (int i = 0; i < 6; ++i) {
     h.Call(Cmd("jm", {1, far}));
-    h.Idle(200 * kMs);
+    h.Idle(kJogRepeatNs);
     const auto p = DfmPosition(h, 1);
     if (!p) return;
     towards = towards && *p >= last && *p <= far;
@@ -333,7 +334,7 @@ void Jog(DfmCaseContext& c) {
   if (DfmocoApplies(DfmocoNeeds::kJogVelocity, c.device) && at) {
     const int32_t back = *at - 100000;
     h.Call(Cmd("jm", {1, back, 5000}));
-    h.Idle(300 * kMs);
+    h.Idle(kMotorStartNs);
     Rest(c);
     const auto v = DfmPosition(h, 1);
     if (v) {

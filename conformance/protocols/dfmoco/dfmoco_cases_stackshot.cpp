@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "conformance/protocols/dfmoco/dfmoco_cases_internal.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 
 namespace moco::conformance::dfmoco_cases {
 
@@ -42,7 +43,7 @@ void SsPositionsAll(DfmCaseContext& c) {
   const size_t mark = h.lines().size();
   const int k = h.Send("mp *");
   h.Await(k);
-  h.Idle(300 * kMs);
+  h.Idle(kMpAllLinesNs);
   std::vector<std::pair<int32_t, int32_t>> got;
   std::string seen;
   for (size_t i = mark; i < h.lines().size(); ++i) {
@@ -82,7 +83,7 @@ void SsMoveReports(DfmCaseContext& c) {
   const DfmRest rest = Rest(c);
   const TimeNs last_moving = rest.last_moving_ns.empty() ? -1 : rest.last_moving_ns[0];
   const std::vector<const DfmLine*> reports = Unprompted<dfmoco::MoveReply>(h, mark, 1);
-  if (last_moving - t0 > 1500 * kMs) {
+  if (last_moving - t0 > kLongMoveNs) {
     bool within = !reports.empty();
     std::string seen;
     for (const DfmLine* l : reports) {
@@ -120,7 +121,7 @@ void SsNewPosition(DfmCaseContext& c) {
          "mp 1 500", Show(np));
   h.Call("pr 1 2000");
   h.Call("mm 1 8500");
-  h.Idle(300 * kMs);
+  h.Idle(kMotorStartNs);
   const DfmLine* moving = h.Call("np 1 3500");
   const auto* mp = As<dfmoco::PositionReply>(moving);
   Expect(c, "DFM-SS-005",
@@ -149,7 +150,7 @@ void SsStopAllMotor(DfmCaseContext& c) {
     to.push_back((*from)[static_cast<size_t>(m - 1)] + 20000);
     h.Call(Cmd("mm", {m, to.back()}));
   }
-  h.Idle(500 * kMs);
+  h.Idle(kSsMoveBeforeStopAllNs);
   const DfmLine* sa = h.Call("sa 1");
   Expect(c, "DFM-SS-007", As<dfmoco::StopAllReply>(sa) != nullptr, "sa", Show(sa));
   const TimeNs t0 = h.Now();
@@ -206,9 +207,9 @@ void SsNoGoMotion(DfmCaseContext& c) {
   const int32_t p = (*before)[0];
   const size_t mark = h.lines().size();
   h.Send(Cmd("bf", {1000, 500, 1, p, p + 1000, p + 2000}));
-  h.Idle(1500 * kMs);
+  h.Idle(kSsGoMotionListenNs);
   h.Send("go");
-  h.Idle(1500 * kMs);
+  h.Idle(kSsGoMotionListenNs);
   std::string seen;
   for (size_t i = mark; i < h.lines().size(); ++i) {
     const DfmLine& l = h.lines()[i];

@@ -8,27 +8,18 @@
 #include <string_view>
 
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 #include "wire/dfmoco.h"
 
 namespace moco::conformance {
 namespace {
 
-constexpr TimeNs kMs = sim::kNsPerMs;
-
-// Between two host messages.
-constexpr TimeNs kGapNs = 1 * kMs;
-// A host waits for the answer before the next command (the sketch's 57600
-// baud line and 16-message queue cannot keep up with more): after each
-// message it reads until the device has been quiet for kSettleQuietNs, at
-// most kSettleMaxNs.
-constexpr TimeNs kSettleQuietNs = 5 * kMs;
-constexpr TimeNs kSettleMaxNs = 100 * kMs;
-// The sketch's boot greeting comes within this of power-on.
-constexpr TimeNs kBootGreetingNs = 3000 * kMs;
-// The `hi` after the session is answered within this.
-constexpr TimeNs kHiAnswerNs = 2000 * kMs;
-// What is read after that answer, for lines still on their way.
-constexpr TimeNs kTailNs = 20 * kMs;
+using dfmoco_cases::kFuzzBootGreetingNs;
+using dfmoco_cases::kFuzzGapNs;
+using dfmoco_cases::kFuzzHiAnswerNs;
+using dfmoco_cases::kFuzzSettleMaxNs;
+using dfmoco_cases::kFuzzSettleQuietNs;
+using dfmoco_cases::kFuzzTailNs;
 
 constexpr std::string_view kWords[] = {"hi", "ms", "mm", "mp", "sm", "sa", "jm",
                                        "im", "pr", "zm", "np", "bf", "go", "mp *"};
@@ -104,13 +95,13 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
 FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) {
   wire::Bytes out;
   // The boot greeting (the sketch starts after its boot delay).
-  const TimeNs boot_deadline = target.Now() + kBootGreetingNs;
+  const TimeNs boot_deadline = target.Now() + kFuzzBootGreetingNs;
   while (out.empty() && target.Now() < boot_deadline) target.Receive(boot_deadline, out);
   auto settle = [&] {
-    const TimeNs limit = target.Now() + kSettleMaxNs;
+    const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
     while (target.Now() < limit) {
       const size_t n = out.size();
-      target.Receive(std::min(limit, target.Now() + kSettleQuietNs), out);
+      target.Receive(std::min(limit, target.Now() + kFuzzSettleQuietNs), out);
       if (out.size() == n) break;
     }
   };
@@ -123,7 +114,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
   const std::string_view tail = "\r\nhi\r\n";
   const size_t before_hi = out.size();
   target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(tail.data()), tail.size()));
-  const TimeNs deadline = target.Now() + kHiAnswerNs;
+  const TimeNs deadline = target.Now() + kFuzzHiAnswerNs;
   while (target.Now() < deadline) {
     target.Receive(deadline, out);
     if (out.size() > before_hi && out.back() == '\n') {
@@ -133,7 +124,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
       if (s.find("hi ") != std::string_view::npos) break;
     }
   }
-  target.Receive(target.Now() + kTailNs, out);
+  target.Receive(target.Now() + kFuzzTailNs, out);
 
   const std::string_view text(reinterpret_cast<const char*>(out.data()), out.size());
   dfmoco::Dialect dialect;
@@ -234,14 +225,14 @@ class Matcher final : public ReplayMatcher {
 const FuzzHooks kHooks[] = {
     {
         .protocol = Protocol::kDfmoco,
-        .gap_ns = kGapNs,
+        .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
         .run = &Run,
         .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },
     },
     {
         .protocol = Protocol::kStackshotDfmoco,
-        .gap_ns = kGapNs,
+        .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
         .run = nullptr,
         .matcher = []() { return ExactMatcher("the line differs"); },

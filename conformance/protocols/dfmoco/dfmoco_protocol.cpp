@@ -4,6 +4,8 @@
 #include <charconv>
 #include <string>
 
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
+
 namespace moco::conformance {
 
 std::optional<std::array<int, 3>> ParseDfmocoVersion(std::string_view text) {
@@ -131,7 +133,7 @@ std::optional<DfmDevice> DfmocoProtocol::Greet(DfmHost& host, Target& target,
   // loses what arrives): wait for its boot greeting, up to 1 s, before
   // greeting it, so the boot `hi` is not taken for the answer.
   if (target.CanRestart()) {
-    host.WaitFor(0, 1000 * sim::kNsPerMs,
+    host.WaitFor(0, dfmoco_cases::kBootHiWithinNs,
                  [](const DfmLine& l) { return As<dfmoco::HelloReply>(&l) != nullptr; });
   }
   for (int attempt = 0; attempt < 2 && !host.link_lost(); ++attempt) {

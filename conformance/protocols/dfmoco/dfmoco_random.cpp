@@ -9,12 +9,14 @@
 #include "conformance/core/sequence.h"
 #include "conformance/core/transcript.h"
 #include "conformance/protocols/dfmoco/dfmoco_suites.h"
+#include "conformance/protocols/dfmoco/dfmoco_timing.h"
 #include "session/session.h"
 
 namespace moco::conformance {
 namespace {
 
-constexpr TimeNs kMs = sim::kNsPerMs;
+using dfmoco_cases::kMs;
+using dfmoco_cases::kRandomRestTimeoutNs;
 
 struct Step {
   enum class Op {
@@ -136,7 +138,7 @@ void Execute(DfmHost& h, Verdicts& v, const std::vector<Step>& steps, int32_t mo
         h.Idle(s.a * kMs);
         continue;
       case Step::Op::kSettle:
-        DfmWaitRest(h, 600'000 * kMs);
+        DfmWaitRest(h, kRandomRestTimeoutNs);
         for (MotorModel& x : model) x.settled = true;
         continue;
       case Step::Op::kMove:
@@ -167,7 +169,7 @@ void Execute(DfmHost& h, Verdicts& v, const std::vector<Step>& steps, int32_t mo
     }
     h.Call(Describe(s));
   }
-  DfmWaitRest(h, 600'000 * kMs);
+  DfmWaitRest(h, kRandomRestTimeoutNs);
   for (int32_t m = 1; m <= motors; ++m) {
     const MotorModel& mm = model[static_cast<size_t>(m - 1)];
     if (!mm.rest_steps) continue;

@@ -10,6 +10,7 @@
 
 #include "sim/planner_dfmoco.h"
 #include "wire/dfmoco_sketch_reader.h"
+#include "wire/dfmoco_timing.h"
 
 namespace moco::devices {
 namespace {
@@ -703,13 +704,14 @@ TimeNs DfmocoArduino::NextReportTick(TimeNs after_ns) const {
   // comes ten chunks after the first chunk boundary of the running sketch.
   const TimeNs first_boundary =
       FloorDiv(start_ns_ + sim::kDfmocoChunkNs - 1, sim::kDfmocoChunkNs) * sim::kDfmocoChunkNs;
-  const TimeNs origin = first_boundary + kFirstReportNs;
+  const TimeNs origin = first_boundary + dfmoco::kFirstReportNs;
   if (after_ns < origin) return origin;
   return origin + (FloorDiv(after_ns - origin, ReportPeriodNs()) + 1) * ReportPeriodNs();
 }
 
 TimeNs DfmocoArduino::ReportPeriodNs() const {
-  return faults_.report_period_ms > 0 ? faults_.report_period_ms * sim::kNsPerMs : kReportPeriodNs;
+  return faults_.report_period_ms > 0 ? faults_.report_period_ms * sim::kNsPerMs
+                                      : dfmoco::kReportPeriodNs;
 }
 
 void DfmocoArduino::ArmReportTimer() {

@@ -66,9 +66,6 @@ class DfmocoArduino final : public Device, private sim::RigObserver {
   // always stays free) plus the one being transmitted.
   static constexpr size_t kTxRingSlots = 16;
   static constexpr size_t kMaxOutstanding = kTxRingSlots;
-  // Periodic `mp` reports: every second, first at 0.5 s after the sketch starts.
-  static constexpr sim::TimeNs kReportPeriodNs = sim::kNsPerSecond;
-  static constexpr sim::TimeNs kFirstReportNs = 500 * sim::kNsPerMs;
   // `bf` answer when the move is prepared (ERRATA 2.5, FACTS).
   static constexpr int32_t kBlurReady = 1000;
 
