@@ -28,6 +28,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "wire/stackshot_timing.h"
+
 namespace moco::stackshot {
 
 // --- Framing (section 2, ERRATA 3.1) ----------------------------------------
@@ -55,13 +57,11 @@ inline constexpr uint8_t kAxisMask = 0x30;
 inline constexpr uint8_t kReservedBit6 = 0x40;
 inline constexpr uint8_t kSubItemBit = 0x80;
 
-// Mandatory inter-frame gap that lets a receiver drop a partial packet.
-inline constexpr uint32_t kInterFrameGapMs = 2;
+// The 2 ms inter-frame gap (section 2) is in stackshot_timing.h.
 
 // --- Section 1.3 defines ----------------------------------------------------
-inline constexpr size_t kCommBufferSize = 40;       // COMM_BUFFER_SIZE
-inline constexpr uint32_t kBaudRate = 38400;        // STACKSHOT_BAUD_RATE (ERRATA 3.7)
-inline constexpr uint32_t kDfMocoBaudRate = 57600;  // section 3 (ERRATA 3.7)
+inline constexpr size_t kCommBufferSize = 40;  // COMM_BUFFER_SIZE
+// STACKSHOT_BAUD_RATE is kBaudRate in stackshot_timing.h.
 
 // Rail status bits of CC_RAIL_STATUS (u32 bit field).
 inline constexpr uint32_t kRailStatusIdle = 0x00;

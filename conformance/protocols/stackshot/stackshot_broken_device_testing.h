@@ -24,6 +24,7 @@
 #include "devices/stackshot3x/stackshot3x.h"
 #include "devices/stackshot3x/state_store.h"
 #include "wire/stackshot.h"
+#include "wire/stackshot_timing.h"
 
 namespace moco::conformance::ss_testing {
 
@@ -118,7 +119,7 @@ class BrokenStackshot3x final : public devices::Device {
       bytes = changed;
     }
     // The spec's 2 ms inter-frame gap drops a partial packet (section 2).
-    if (s_.Now() - last_byte_ns_ >= stackshot::kInterFrameGapMs * sim::kNsPerMs) {
+    if (s_.Now() - last_byte_ns_ >= stackshot::kInterFrameGapNs) {
       host_decoder_.Flush();
     }
     last_byte_ns_ = s_.Now();

@@ -7,6 +7,7 @@
 #include "conformance/protocols/stackshot/stackshot_suites.h"
 
 #include "conformance/protocols/stackshot/stackshot_cases_internal.h"
+#include "conformance/protocols/stackshot/stackshot_timing.h"
 
 #include <cmath>
 #include <cstdio>
@@ -72,11 +73,11 @@ stackshot::HostCommand MoveAtSpeed(uint8_t axis, int64_t delta_steps, float frac
 
 // Moves `axis` back to `steps` (relative move from where it rests).
 void ReturnTo(SsCaseContext& c, uint8_t axis, int64_t steps) {
-  SsWaitRest(c.host, {axis}, kRestTimeout);
+  SsWaitRest(c.host, {axis}, kRestWaitNs);
   const auto p = SsPositionSteps(c.host, axis);
   if (!p || *p == steps) return;
   c.host.Call(Move(axis, steps - *p));
-  SsWaitRest(c.host, {axis}, kRestTimeout);
+  SsWaitRest(c.host, {axis}, kRestWaitNs);
 }
 
 std::string Steps(std::optional<int64_t> p) { return p ? std::to_string(*p) : "no position"; }
@@ -176,12 +177,12 @@ void ResyncCase(SsCaseContext& c) {
   // Noise without a sync byte, then a request.
   const uint8_t noise[] = {0x00, 0x13, 0xaa, 0xfe, 0x10};
   h.SendNoise(noise);
-  h.Idle(10 * kMs);
+  h.Idle(kResyncPauseNs);
   ExpectOk(c, "SS-PKT-006", h.Call(SsRead(Command::kPing, stackshot::PingRequest{1})));
   // A packet cut short (its header promises 10 data bytes), the gap, a request.
   const uint8_t partial[] = {stackshot::kSyncHost, 0x10, 0x07, 0x01, 0x0a, 0x00, 0x01};
   h.SendNoise(partial);
-  h.Idle(10 * kMs);
+  h.Idle(kResyncPauseNs);
   const SsRecord* r = h.Call(SsRead(Command::kPing, stackshot::PingRequest{2}));
   const auto* pong = PayloadOf<stackshot::PingReply>(r);
   Expect(c, "SS-PKT-006", pong != nullptr && *pong == stackshot::PingAnswer(2),
@@ -231,7 +232,7 @@ void BadLengthCase(SsCaseContext& c) {
   ExpectRefused(c, "SS-ERR-003", send(Command::kRailConfigBacklight, Action::kWrite, 2));
   ExpectRefused(c, "SS-ERR-003", send(Command::kMotionConfig, Action::kWrite, 131));
   const auto p = SsPositionSteps(c.host, 0);
-  c.host.Idle(100 * kMs);
+  c.host.Idle(kBadLengthStillNs);
   const auto q = SsPositionSteps(c.host, 0);
   Expect(c, "SS-ERR-003", p == q, "a refused short CC_RAIL_MOVE moves nothing: " + Steps(p),
          Steps(q));
@@ -257,7 +258,7 @@ void AxisThreeCase(SsCaseContext& c) {
 
 void AtRestCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  SsWaitRest(h, Axes(c), kRestTimeout);
+  SsWaitRest(h, Axes(c), kRestWaitNs);
   for (uint8_t axis : Axes(c)) {
     const auto st = SsRailStatus(h, axis);
     Expect(c, "SS-STATUS-003", st && (*st & stackshot::kRailStatusMoving) == 0,
@@ -305,7 +306,7 @@ void MoveCase(SsCaseContext& c) {
     ExpectStatus(c, "SS-MOVE-007", during, Action::kBusy);
     ExpectStatus(c, "SS-POS-002", h.Call(SsWrite(Command::kRailPositionZero)), Action::kBusy);
   }
-  const bool rested = SsWaitRest(h, {0}, kRestTimeout);
+  const bool rested = SsWaitRest(h, {0}, kRestWaitNs);
   Expect(c, "SS-STATUS-002", rested, "MOVING clear once the move ends", "still moving");
   auto p1 = SsPositionSteps(h, 0);
   const int64_t added = second == Action::kRspOk ? 500 : 0;
@@ -324,13 +325,13 @@ void MoveCase(SsCaseContext& c) {
   // so a fault above is not counted again.
   const int64_t at = p1 ? *p1 : *p0 + 1600 + added;
   ExpectOk(c, "SS-MOVE-001", h.Call(Move(0, 1600)));
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   p1 = SsPositionSteps(h, 0);
   Expect(c, "SS-MOVE-001", p1 && *p1 == at + 1600,
          "the next 1600-step move ends on " + std::to_string(at + 1600), Steps(p1));
   // Backwards with backlash compensation: the rail still ends on its target.
   ExpectOk(c, "SS-MOVE-001", h.Call(Move(0, -3200, true)));
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   p1 = SsPositionSteps(h, 0);
   Expect(c, "SS-MOVE-001", p1 && *p1 == at - 1600,
          "back on " + std::to_string(at - 1600) + " (backlash on)", Steps(p1));
@@ -349,19 +350,19 @@ void MoveAtSpeedCase(SsCaseContext& c) {
   const auto p0 = SsPositionSteps(h, 0);
   if (!p0) return;
   ExpectOk(c, "SS-MOVE-003", h.Call(MoveAtSpeed(0, 800, 0.5f)));
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   auto p = SsPositionSteps(h, 0);
   Expect(c, "SS-MOVE-003", p && *p == *p0 + 800, "at rest on " + std::to_string(*p0 + 800),
          Steps(p));
   // During a long move: relative to the position when it arrives.
   ExpectOk(c, "SS-MOVE-001", h.Call(Move(0, 16000)));
-  h.Idle(200 * kMs);
+  h.Idle(kMotorStartNs);
   const auto before = SsPositionSteps(h, 0);
   const SsRecord* r = h.Call(MoveAtSpeed(0, -400, 1.0f));
   const auto after = SsPositionSteps(h, 0);
   ExpectStatus(c, "SS-MOVE-004", r, Action::kRspOk);
   if (StatusOf(r) == Action::kRspOk && before && after) {
-    SsWaitRest(h, {0}, kRestTimeout);
+    SsWaitRest(h, {0}, kRestWaitNs);
     p = SsPositionSteps(h, 0);
     const int64_t lo = std::min(*before, *after) - 400, hi = std::max(*before, *after) - 400;
     Expect(c, "SS-MOVE-003", p && *p >= lo && *p <= hi,
@@ -391,7 +392,7 @@ void BadMoveCase(SsCaseContext& c) {
   for (float f : {0.0f, 1.5f, -0.5f, std::numeric_limits<float>::quiet_NaN()}) {
     ExpectStatus(c, "SS-MOVE-005", h.Call(MoveAtSpeed(0, 100, f)), Action::kBadParam);
   }
-  h.Idle(200 * kMs);
+  h.Idle(kNoMotionWatchNs);
   const auto p1 = SsPositionSteps(h, 0);
   Expect(c, "SS-MOVE-005", p1 == p0, "the rail still on " + Steps(p0), Steps(p1));
   // A negative distance (the direction byte carries the sign).
@@ -410,15 +411,15 @@ void StopCase(SsCaseContext& c) {
   if (!p0) return;
   const int64_t far = *p0 + 200000;
   h.Call(Move(0, 200000));
-  h.Idle(300 * kMs);
+  h.Idle(kRunBeforeStopNs);
   ExpectOk(c, "SS-STOP-001", h.Call(SsWrite(Command::kRailStop)));
-  const bool rested = SsWaitRest(h, {0}, 10'000 * kMs);
+  const bool rested = SsWaitRest(h, {0}, kStopRestWaitNs);
   const auto p1 = SsPositionSteps(h, 0);
   Expect(c, "SS-STOP-001", rested && p1 && *p1 > *p0 && *p1 < far,
          "at rest between " + std::to_string(*p0) + " and " + std::to_string(far),
          (rested ? "" : "still moving at ") + Steps(p1));
   ExpectOk(c, "SS-STOP-002", h.Call(SsWrite(Command::kRailStop)));
-  h.Idle(200 * kMs);
+  h.Idle(kNoMotionWatchNs);
   const auto p2 = SsPositionSteps(h, 0);
   Expect(c, "SS-STOP-002", p1 == p2, "STOP at rest moves nothing: " + Steps(p1), Steps(p2));
   ReturnTo(c, 0, *p0);
@@ -426,7 +427,7 @@ void StopCase(SsCaseContext& c) {
 
 void ZeroCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   ExpectOk(c, "SS-POS-001", h.Call(SsWrite(Command::kRailPositionZero)));
   const auto cur = SsPositionSteps(h, 0);
   const auto tgt = SsPositionSteps(h, 0, true);
@@ -451,25 +452,25 @@ std::optional<TimeNs> WaitShutter(SsHost& h, TimeNs timeout_ns, TimeNs pulses_ns
     }
     if ((*st & stackshot::kRailStatusShutter) == 0) return h.Now() - t0;
     if (h.Now() - t0 >= timeout_ns || h.link_lost()) return std::nullopt;
-    h.Idle(20 * kMs);
+    h.Idle(kShutterPollNs);
   }
 }
 
 void ShutterCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  WaitShutter(h, 10'000 * kMs);
+  WaitShutter(h, kShutterClearWaitNs);
   ExpectOk(c, "SS-SHUT-001",
            h.Call(SsWrite(Command::kRailShutterFire, stackshot::ShutterFire{2, 0.2f, 0.2f})));
   const auto st = SsRailStatus(h, 0);
   Expect(c, "SS-STATUS-004", st && (*st & stackshot::kRailStatusShutter) != 0,
          "SHUTTER while 2 pulses of 0.2 s fire", st ? std::to_string(*st) : "no status");
-  const auto took = WaitShutter(h, 10'000 * kMs, 800 * kMs);
+  const auto took = WaitShutter(h, kShutterClearWaitNs, kTwoPulsesNs);
   Expect(c, "SS-STATUS-004", took.has_value(), "SHUTTER clear after the pulses",
          "still set after 10 s");
   // Out-of-range values are bounded, not refused.
   ExpectOk(c, "SS-SHUT-001",
            h.Call(SsWrite(Command::kRailShutterFire, stackshot::ShutterFire{0, -1.0f, 0.0f})));
-  WaitShutter(h, 10'000 * kMs, 1000 * kMs);
+  WaitShutter(h, kShutterClearWaitNs, kBoundedPulsesNs);
 }
 
 void UserAbortCase(SsCaseContext& c) {
@@ -487,9 +488,9 @@ void UserAbortCase(SsCaseContext& c) {
   const auto p0 = SsPositionSteps(h, 0);
   if (!p0) return;
   h.Call(Move(0, 100000));
-  h.Idle(200 * kMs);
+  h.Idle(kMotorStartNs);
   c.target.PressButton(kButton);
-  h.Idle(50 * kMs);
+  h.Idle(kAfterAbortNs);
   st = SsRailStatus(h, 0);
   Expect(c, "SS-STATUS-005", st && (*st & stackshot::kRailStatusUserAborted) != 0,
          "USER_ABORTED after a button abort", st ? std::to_string(*st) : "no status");
@@ -602,10 +603,9 @@ std::optional<uint32_t> SsRailStatus(SsHost& host, uint8_t axis) {
 
 namespace {
 
-// Polls the axes' positions until none has changed for kStillForRest, or
+// Polls the axes' positions until none has changed for kSsStillForRestNs, or
 // until `until`.
 void WaitPositionsStill(SsHost& host, const std::vector<uint8_t>& axes, TimeNs until) {
-  constexpr TimeNs kStillForRest = 200 * kMs;
   std::vector<std::optional<int64_t>> last;
   TimeNs still_since = host.Now();
   while (host.Now() < until && !host.link_lost()) {
@@ -614,10 +614,10 @@ void WaitPositionsStill(SsHost& host, const std::vector<uint8_t>& axes, TimeNs u
     if (now != last) {
       last = std::move(now);
       still_since = host.Now();
-    } else if (host.Now() - still_since >= kStillForRest) {
+    } else if (host.Now() - still_since >= kSsStillForRestNs) {
       return;
     }
-    host.Idle(std::min<TimeNs>(100 * kMs, until - host.Now()));
+    host.Idle(std::min<TimeNs>(kSsStatusPollNs, until - host.Now()));
   }
 }
 
@@ -641,7 +641,7 @@ bool SsWaitRest(SsHost& host, const std::vector<uint8_t>& axes, TimeNs timeout_n
     }
     if (!moving) return true;
     if (host.Now() >= until || host.link_lost()) return false;
-    host.Idle(100 * kMs);
+    host.Idle(kSsStatusPollNs);
   }
 }
 

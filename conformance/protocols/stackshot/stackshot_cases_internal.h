@@ -15,9 +15,6 @@
 
 namespace moco::conformance::ss_cases {
 
-inline constexpr TimeNs kMs = sim::kNsPerMs;
-inline constexpr TimeNs kRestTimeout = 120'000 * kMs;
-
 // Evidence at record `r` (or at the host's time when there is none).
 Evidence EvOf(const SsHost& h, const SsRecord* r, std::string expected, std::string observed);
 bool Expect(SsCaseContext& c, std::string_view rule, bool ok, std::string expected,

@@ -12,6 +12,7 @@
 
 #include "base/format.h"
 #include "conformance/protocols/stackshot/stackshot_cases_internal.h"
+#include "conformance/protocols/stackshot/stackshot_timing.h"
 #include "devices/stackshot3x/stackshot3x.h"
 
 namespace moco::conformance::ss_cases {
@@ -203,7 +204,7 @@ bool ResetAndWait(SsCaseContext& c) {
   SsHost& h = c.host;
   ExpectOk(c, "SS-RESET-001", h.Call(SsWrite(Command::kReset)));
   for (int i = 0; i < 20; ++i) {
-    h.Idle(100 * kMs);
+    h.Idle(kResetPingPauseNs);
     const SsRecord* r = h.Call(SsRead(Command::kPing, stackshot::PingRequest{0x42}));
     if (StatusOf(r) == Action::kRspOk) {
       c.v.Pass("SS-RESET-001");
@@ -373,7 +374,7 @@ std::string Frames(const std::set<uint32_t>& frames) {
 
 void StackCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  SsWaitRest(h, Axes(c), kRestTimeout);
+  SsWaitRest(h, Axes(c), kRestWaitNs);
   const auto p0 = SsPositionSteps(h, 0);
   if (!p0) return;
   // A stack step is a move, a pause "before activating the shutter"
@@ -415,8 +416,8 @@ void StackCase(SsCaseContext& c) {
   uint32_t frames = 0;
   std::set<uint32_t> fired;  // the stack positions at which the shutter was seen firing
   bool ended = false;
-  for (const TimeNs until = h.Now() + 60'000 * kMs; h.Now() < until && !h.link_lost();) {
-    h.Idle(100 * kMs);
+  for (const TimeNs until = h.Now() + kStackRunWaitNs; h.Now() < until && !h.link_lost();) {
+    h.Idle(kSsStatusPollNs);
     // The count first: it does not change while the shutter fires.
     const auto* pos = PayloadOf<stackshot::U32Value>(h.Call(SsRead(Command::kRailStackPosition)));
     if (pos != nullptr) frames = std::max(frames, pos->value);
@@ -439,7 +440,7 @@ void StackCase(SsCaseContext& c) {
   Expect(c, "SS-STACK-001", fired.size() == 3,
          "the shutter seen firing (CC_RAIL_STATUS SHUTTER) in each of the 3 frames",
          "seen firing " + Frames(fired));
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   const auto p1 = SsPositionSteps(h, 0);
   Expect(c, "SS-STACK-001", p1 && std::llabs(*p1 - (*p0 + 800)) <= 1,
          "the rail at rest on the X end position " + std::to_string(*p0 + 800) + " steps",
@@ -448,7 +449,7 @@ void StackCase(SsCaseContext& c) {
   h.Call(Move(0, 20000));
   ExpectStatus(c, "SS-STACK-002", h.Call(SsWrite(Command::kRailStack, s)), Action::kBusy);
   h.Call(SsWrite(Command::kRailStop));
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   Undo(h, undo);
   ReturnTo(c, 0, *p0);
 }
@@ -500,8 +501,8 @@ double CurveAt(const stackshot::BezierCurve& k, double t_s) {
 std::optional<float> PlayX(SsCaseContext& c, std::string_view rule) {
   ExpectOk(c, rule,
            c.host.Call(SsWrite(Command::kMotionStart, stackshot::MotionStart{true, false, false})));
-  c.host.Idle(100 * kMs);
-  SsWaitRest(c.host, {0}, kRestTimeout);
+  c.host.Idle(kCurveStartNs);
+  SsWaitRest(c.host, {0}, kRestWaitNs);
   return PositionMm(c.host, 0);
 }
 
@@ -528,7 +529,7 @@ void PlayAlongTheCurve(SsCaseContext& c, const stackshot::MotionConfig& m, doubl
   size_t on_curve = 0;
   bool bad = false, moving_checked = false;
   while (h.Now() < go_hi + length && !h.link_lost()) {
-    h.Idle(200 * kMs);
+    h.Idle(kCurveSampleNs);
     const int i =
         h.Send(SsRead(Command::kRailPositionCurrent, stackshot::UnitsQuery{Units::kMm}, 0));
     const SsRecord* r = h.Await(i);
@@ -550,7 +551,7 @@ void PlayAlongTheCurve(SsCaseContext& c, const stackshot::MotionConfig& m, doubl
       c.v.Check("SS-CURVE-005", false,
                 [&] { return EvOf(h, r, expected, stackshot::FormatF32(v->value) + " mm"); });
     }
-    if (!moving_checked && hi_s >= 0.5 && hi_s < t_s - 0.5) {
+    if (!moving_checked && hi_s >= kCurveMovingMarginS && hi_s < t_s - kCurveMovingMarginS) {
       moving_checked = true;
       const auto st = SsRailStatus(h, 0);
       Expect(c, "SS-CURVE-005", st && (*st & stackshot::kRailStatusMoving) != 0,
@@ -563,7 +564,7 @@ void PlayAlongTheCurve(SsCaseContext& c, const stackshot::MotionConfig& m, doubl
                " s curve plays",
            std::to_string(on_curve));
   }
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   const auto y = PositionMm(h, 0);
   const float last = k.p[3].y.value();
   Expect(c, "SS-CURVE-005", y && std::fabs(*y - last) <= 0.01f,
@@ -572,7 +573,7 @@ void PlayAlongTheCurve(SsCaseContext& c, const stackshot::MotionConfig& m, doubl
 
 void CurveCase(SsCaseContext& c) {
   SsHost& h = c.host;
-  SsWaitRest(h, {0}, kRestTimeout);
+  SsWaitRest(h, {0}, kRestWaitNs);
   const auto p0 = SsPositionSteps(h, 0);
   const auto y0 = PositionMm(h, 0);
   if (!p0 || !y0) return;

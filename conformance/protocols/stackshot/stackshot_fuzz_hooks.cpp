@@ -4,22 +4,12 @@
 // (section 4.1: one reply per request, in order, a legal status, a correct
 // checksum) and a PING answered after the session; replays byte-exact.
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
+#include "conformance/protocols/stackshot/stackshot_timing.h"
 #include "wire/stackshot.h"
 #include "wire/stackshot_constants.h"
 
 namespace moco::conformance {
 namespace {
-
-constexpr TimeNs kMs = sim::kNsPerMs;
-
-// Between two host messages: more than the 2 ms inter-frame gap
-// (stackshot-protocol.txt section 2), so a partial packet is dropped before
-// the next one.
-constexpr TimeNs kGapNs = 3 * kMs;
-// The PING after the session is answered within this.
-constexpr TimeNs kPingAnswerNs = 500 * kMs;
-// Replies still on their way: read until the device is quiet this long.
-constexpr TimeNs kDrainQuietNs = 50 * kMs;
 
 void Mutate(MutationSource& s, wire::Bytes& m) {
   auto peeked = stackshot::PeekHostPacket(m);
@@ -90,10 +80,10 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
     target.Send(bytes);
     requests.Feed(bytes, sent);
   }
-  target.Receive(target.Now() + kPingAnswerNs, out);
+  target.Receive(target.Now() + kSsFuzzPingAnswerNs, out);
   while (true) {
     const size_t n = out.size();
-    target.Receive(target.Now() + kDrainQuietNs, out);
+    target.Receive(target.Now() + kSsFuzzDrainQuietNs, out);
     if (out.size() == n) break;
   }
 
@@ -145,7 +135,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
 
 const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kStackshot,
-    .gap_ns = kGapNs,
+    .gap_ns = kSsFuzzGapNs,
     .mutate = &Mutate,
     .run = &Run,
     .matcher = []() { return ExactMatcher("the packet differs"); },

@@ -4,6 +4,7 @@
 #include "conformance/protocols/stackshot/stackshot_host.h"
 
 #include "base/format.h"
+#include "conformance/protocols/stackshot/stackshot_timing.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -23,9 +23,6 @@
 
 namespace moco::conformance {
 
-// CC_SOFTWARE_CHECKSUM's reply deadline (SS-DL-003): host tools time out after 1 s.
-inline constexpr TimeNs kSsChecksumDeadlineNs = 1000 * sim::kNsPerMs;
-
 // One packet the host sent.
 struct SsRequest {
   TimeNs sent_ns = 0;

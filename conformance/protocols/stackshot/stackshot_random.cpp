@@ -9,14 +9,15 @@
 #include "conformance/core/sequence.h"
 #include "conformance/core/transcript.h"
 #include "conformance/protocols/stackshot/stackshot_suites.h"
+#include "conformance/protocols/stackshot/stackshot_timing.h"
 #include "session/session.h"
 
 namespace moco::conformance {
 namespace {
 
+using ss_cases::kMs;
 using stackshot::Action;
 using stackshot::Command;
-constexpr TimeNs kMs = sim::kNsPerMs;
 
 struct Step {
   enum class Op { kStatus, kPosition, kMove, kMoveAtSpeed, kStop, kZero, kWait, kPing, kSettle };
@@ -48,7 +49,7 @@ std::vector<Step> Generate(uint64_t seed, int steps, uint8_t axes) {
         s.fraction = static_cast<float>(uniform(2, 20)) * 0.05f;
         break;
       case Step::Op::kWait:
-        s.a = static_cast<int32_t>(uniform(0, 800));
+        s.a = static_cast<int32_t>(uniform(0, kSsRandomWaitMaxNs / kMs));
         break;
       case Step::Op::kPing:
         s.a = static_cast<int32_t>(uniform(0, 255));
@@ -132,7 +133,7 @@ void Compare(SsHost& h, Verdicts& v, const std::vector<AxisModel>& model) {
 void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axes) {
   std::vector<uint8_t> all;
   for (uint8_t a = 0; a < axes; ++a) all.push_back(a);
-  SsWaitRest(h, all, 60'000 * kMs);
+  SsWaitRest(h, all, kSsRandomRestWaitNs);
   std::vector<AxisModel> model(axes);
   for (uint8_t a = 0; a < axes; ++a) {
     model[a].rest_steps = SsPositionSteps(h, a);
@@ -211,7 +212,7 @@ void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axe
         r = h.Call(SsRead(Command::kPing, stackshot::PingRequest{static_cast<uint8_t>(s.a)}));
         break;
       case Step::Op::kSettle:
-        SsWaitRest(h, all, 60'000 * kMs);
+        SsWaitRest(h, all, kSsRandomRestWaitNs);
         for (AxisModel& am : model) am.settled = true;
         Compare(h, v, model);
         break;
@@ -223,7 +224,7 @@ void Execute(SsHost& h, Verdicts& v, const std::vector<Step>& steps, uint8_t axe
       });
     }
   }
-  SsWaitRest(h, all, 60'000 * kMs);
+  SsWaitRest(h, all, kSsRandomRestWaitNs);
   Compare(h, v, model);
 }
 

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "wire/protocol.h"
+#include "wire/stackshot_timing.h"
 
 namespace moco::devices {
 namespace {
@@ -292,7 +293,7 @@ void Stackshot3x::ArmGapTimer() {
   // say nothing about the packet (section 4.2: large commands are "broken
   // into smaller packet transmissions"), so on Wi-Fi no gap applies.
   if (host_link_ != HostLink::kSerial || SpeaksDfmoco() || decoder_.pending_bytes() == 0) return;
-  gap_timer_ = scheduler_.After(stackshot::kInterFrameGapMs * sim::kNsPerMs, [this] {
+  gap_timer_ = scheduler_.After(stackshot::kInterFrameGapNs, [this] {
     gap_timer_ = sim::Scheduler::kNoTimer;
     decoder_.Flush();
   });
