@@ -29,9 +29,12 @@ struct DialectChoice {
   std::string_view description;
 };
 
-// Timing options of the checks, in the target's clock.
+// Timing options of the checks, in the target's clock. The defaults are the
+// runner's, for every protocol (mococheck run --deadline-ms,
+// --answer-timeout-ms, --position-gap-ms); no specification gives a number for
+// them. A protocol's own timing is in its <p>_timing.h.
 struct HostOptions {
-  TimeNs deadline_ns = 250 * sim::kNsPerMs;  // DMC-DL-*: an answer within this
+  TimeNs deadline_ns = 250 * sim::kNsPerMs;  // the *-DL-* rules: an answer within this
   // Per request kind, overriding deadline_ns: "hi" (DMC-DL-001), "query"
   // (DL-002), "command" (DL-003), "upload" (DL-004), "rt" (DL-005).
   std::map<std::string, TimeNs, std::less<>> deadline_by_kind_ns;

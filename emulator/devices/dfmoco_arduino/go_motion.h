@@ -18,10 +18,12 @@
 #include "sim/planner.h"
 #include "sim/planner_dfmoco.h"
 #include "sim/scheduler.h"
+#include "wire/dfmoco_timing.h"
 
 namespace moco::devices {
 
-inline constexpr double kGoMotionRampS = 1.0;  // "exactly 1 second" before and after
+// "exactly 1 second" before and after (dfmoco::kGoMotionRampNs), in seconds.
+inline constexpr double kGoMotionRampS = static_cast<double>(dfmoco::kGoMotionRampNs) / 1e9;
 
 // One motor's go-motion move in absolute steps (continuous; the motor lands on
 // whole steps).

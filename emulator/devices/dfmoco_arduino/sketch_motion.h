@@ -21,12 +21,16 @@
 #include <array>
 #include <cstdint>
 
+#include "sim/planner_dfmoco.h"
+
 namespace moco::devices {
 
 class SketchAxis {
  public:
   static constexpr int kSegments = 7;  // P2P_MOVE_COUNT
-  static constexpr float kChunkS = 0.05f;
+  // The sketch's velocity chunk (sim::kDfmocoChunkNs, 50 ms) in seconds.
+  static constexpr float kChunkS = static_cast<float>(sim::kDfmocoChunkNs) / 1e9f;
+  static_assert(kChunkS == 0.05f);
   // Steps per chunk -> chunk speed (the accumulator increment per 50 us).
   static constexpr float kSpeedPerStep = 65.6f;
   // Chunk speed -> steps/s: v = 20 * speed / 65.536.
