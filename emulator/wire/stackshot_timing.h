@@ -1,7 +1,7 @@
 // Timing facts of the Cognisys StackShot / StackShot 3X protocol: the line
 // rates, the inter-frame gap and the host timeouts and periods the spec,
 // ERRATA.md part 3 and FACTS.md "StackShot" state (stackshot-protocol.txt
-// sections 1.3, 2, 3 and 4.1). Durations are int64_t nanoseconds (the wire
+// sections 1.3, 2 and 3). Durations are int64_t nanoseconds (the wire
 // layer has no clock of its own), with the human value beside each.
 #ifndef MOCO_WIRE_STACKSHOT_TIMING_H_
 #define MOCO_WIRE_STACKSHOT_TIMING_H_
@@ -24,8 +24,6 @@ inline constexpr int64_t kInterFrameGapNs = 2'000'000;  // 2 ms
 inline constexpr int64_t kHostReplyTimeoutNs = 1'000'000'000;  // 1 s
 // Host tools poll CC_RAIL_STATUS this often (FACTS.md "StackShot": "poll status every 100 ms").
 inline constexpr int64_t kHostStatusPollNs = 100'000'000;  // 100 ms
-// The host's TCP socket timeout over Wi-Fi (section 4.1: "5 seconds for large commands").
-inline constexpr int64_t kWifiSocketTimeoutNs = 5'000'000'000;  // 5 s
 
 }  // namespace moco::stackshot
 

@@ -208,6 +208,7 @@ inline constexpr TimeNs kSettleMotionWaitNs = 3000 * kMs;
 // commands after a stop (ERR_HARD_LOW, ERR_MOVING); it outlasts dmc-lite's
 // STOP_ALL lockout (dmc::kReferenceStopAllLockoutNs).
 inline constexpr TimeNs kSettleBusyWaitNs = 3000 * kMs;
+static_assert(kSettleBusyWaitNs > dmc::kReferenceStopAllLockoutNs);
 // Plan choice: MOTOR_CONFIGURE is retried this often meanwhile.
 inline constexpr TimeNs kSettleBusyRetryNs = 100 * kMs;
 
