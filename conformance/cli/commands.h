@@ -40,16 +40,16 @@ struct TargetRequest {
   // The message when --target is empty and the session's device is not an
   // emulated model.
   std::string no_device_message;
-  // Only in-process targets (fuzz: each mutant needs a fresh device in
-  // virtual time): the message for any other kind. The target is then not
-  // built (the command builds its own in-process device).
-  std::string in_process_only_message;
+  // Only targets on a virtual clock, in-process devices and firmware under
+  // simavr (fuzz: each mutant needs a fresh device in virtual time): the
+  // message for any other kind.
+  std::string virtual_clock_only_message;
 };
 
 struct ResolvedTarget {
   TargetSpec spec;
   Protocol protocol = Protocol::kDmc;
-  std::unique_ptr<Target> target;  // not opened yet; nullptr with in_process_only_message
+  std::unique_ptr<Target> target;  // not opened yet
   // An in-process model that starts speaking another protocol it also speaks
   // (devices::LineFor; in-process:stackshot3x with --protocol dfmoco: its
   // DfMoco mode); nullopt: its own.

@@ -1,5 +1,7 @@
 // `mococheck fuzz`: recorded host traffic mutated and run against fresh
-// in-process devices, each mutant checked against the device invariants.
+// in-process devices or firmware under simavr, each mutant checked against the
+// device invariants; firmware is booted once, each mutant runs in a process
+// forked from the booted state, and its code coverage guides the corpus.
 #include <unistd.h>
 
 #include <cstdio>
@@ -12,6 +14,10 @@
 
 namespace moco::conformance::cli {
 namespace {
+
+// The coverage map of a firmware run: 64 KiB, as AFL's (few collisions below
+// some ten thousand edges; an AVR firmware of 32 KiB of flash has fewer).
+constexpr size_t kCoverageBytes = size_t{64} << 10;
 
 struct FuzzArgs {
   std::vector<std::string> sessions;
@@ -45,15 +51,21 @@ int Fuzz(const FuzzArgs& a) {
   request.protocol = proto;
   request.traffic_name = "the sessions'";
   request.no_device_message = "the sessions name no emulated device; give --target";
-  request.in_process_only_message =
-      "fuzz runs in-process devices only (each mutant needs a fresh device in virtual "
-      "time); give --target in-process:MODEL, and use replay for a real device";
+  request.virtual_clock_only_message =
+      "fuzz runs devices in virtual time only (each mutant needs a fresh device): give "
+      "--target in-process:MODEL or simavr:FIRMWARE.elf, and use replay for a real device";
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
-  const std::string model = std::get<ResolvedTarget>(resolved).spec.address;
-  FuzzExecutor executor(proto, InProcessTarget::ForModel(
-                                   model, a.profile, std::get<ResolvedTarget>(resolved).speaking));
+  ResolvedTarget& target = std::get<ResolvedTarget>(resolved);
+  const bool firmware = target.spec.kind == TargetSpec::Kind::kSimavr;
+  FuzzExecutor::Options run_options;
+  run_options.fork = firmware;
+  run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
+  FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
+  // Saved mutants name the device the sessions were recorded with; for
+  // firmware, replay them with the same --target.
+  const std::string model = firmware ? seeds.front().device : target.spec.address;
   FuzzOptions options;
   options.seed = a.seed;
   options.runs = a.runs;
@@ -63,23 +75,33 @@ int Fuzz(const FuzzArgs& a) {
   options.max_failures = a.max_failures;
   const bool tty = isatty(STDERR_FILENO) != 0;
   const FuzzReport r = RunFuzz(executor, proto, seeds, options, [&](const FuzzReport& so_far) {
-    char line[160];
+    char line[200];
     std::snprintf(line, sizeof line, "fuzz: %llu execs, %.0f/s, %zu failure(s)",
                   static_cast<unsigned long long>(so_far.execs), so_far.ExecsPerSecond(),
                   so_far.failures.size());
-    std::cerr << line << (tty ? "\r" : "\n") << std::flush;
+    std::string text = line;
+    if (so_far.coverage) {
+      text +=
+          ", " + std::to_string(so_far.edges) + " edges, corpus " + std::to_string(so_far.corpus);
+    }
+    std::cerr << text << (tty ? "\r" : "\n") << std::flush;
   });
   if (tty) std::cerr << "\n";
   char summary[200];
   std::snprintf(summary, sizeof summary,
                 "mococheck fuzz: %s, %zu seed session(s), seed %llu: %llu execs in %.1f s (%.0f "
                 "execs/s, %llu host messages)\n",
-                model.c_str(), seeds.size(), static_cast<unsigned long long>(a.seed),
-                static_cast<unsigned long long>(r.execs), r.wall_s, r.ExecsPerSecond(),
-                static_cast<unsigned long long>(r.messages));
+                firmware ? executor.target_name().c_str() : model.c_str(), seeds.size(),
+                static_cast<unsigned long long>(a.seed), static_cast<unsigned long long>(r.execs),
+                r.wall_s, r.ExecsPerSecond(), static_cast<unsigned long long>(r.messages));
   std::cout << summary;
+  if (r.coverage) {
+    std::cout << "coverage: " << r.edges << " edges of the firmware's code reached; corpus "
+              << r.corpus << " session(s), " << r.corpus - seeds.size()
+              << " of them mutants that reached new edges\n";
+  }
   for (const FuzzFailure& f : r.failures) {
-    std::cout << "FAIL " << f.violation << "\n  mutations:";
+    std::cout << "FAIL [" << FindingKindName(f.kind) << "] " << f.violation << "\n  mutations:";
     for (const std::string& m : f.mutations) std::cout << " " << m;
     std::cout << "\n  shrunk to " << f.messages.size() << " host message(s)";
     if (!f.saved_path.empty()) std::cout << "; saved: " << f.saved_path;
@@ -97,10 +119,15 @@ Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub) {
   using moco::cli::AddNumber;
   auto a = std::make_shared<FuzzArgs>();
   CLI::App* fuzz = app.add_subcommand(
-      "fuzz", "Mutate recorded host traffic and check device invariants (in-process targets)");
+      "fuzz",
+      "Mutate recorded host traffic and check device invariants (in-process devices, or AVR "
+      "firmware under simavr with coverage)");
   sub = fuzz;
   fuzz->add_option("sessions", a->sessions, "Session files to mutate (same protocol)")->required();
-  fuzz->add_option("--target", a->target, "in-process:MODEL (default: the first session's device)");
+  fuzz->add_option("--target", a->target,
+                   "in-process:MODEL (default: the first session's device) or "
+                   "simavr:FIRMWARE.elf[@MCU[:HZ]] (booted once, each mutant forked from there, "
+                   "coverage-guided)");
   fuzz->add_option("--profile", a->profile, "Device profile for the in-process device")
       ->check(CLI::ExistingFile);
   AddNumber(fuzz, "--seed", a->seed, uint64_t{0}, UINT64_MAX, "Seed of the mutator");

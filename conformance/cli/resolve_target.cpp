@@ -46,11 +46,12 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
   out.spec = std::get<TargetSpec>(spec);
   const TargetSpec& ts = out.spec;
   const bool in_process = ts.kind == TargetSpec::Kind::kInProcess;
-  if (!request.in_process_only_message.empty() && !in_process) {
-    return request.in_process_only_message;
+  if (!request.virtual_clock_only_message.empty() && !in_process &&
+      ts.kind != TargetSpec::Kind::kSimavr) {
+    return request.virtual_clock_only_message;
   }
   const devices::DeviceModel* model = in_process ? devices::FindDeviceModel(ts.address) : nullptr;
-  if (!request.in_process_only_message.empty() && model == nullptr) {
+  if (in_process && model == nullptr) {
     return "unknown in-process model \"" + ts.address + "\"; the models are: " + KnownModels();
   }
 
@@ -86,7 +87,6 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
   if (!request.profile.empty() && !in_process) {
     return "--profile applies to in-process targets only; an external device has its own";
   }
-  if (!request.in_process_only_message.empty()) return out;
   if (out.speaking) {
     out.target = InProcessTarget::ForModel(ts.address, request.profile, out.speaking);
     return out;

@@ -83,6 +83,16 @@ void MutationSource::MutateDataBytes(wire::Bytes& data) {
   }
 }
 
+std::string_view FindingKindName(FuzzVerdict::Kind kind) {
+  switch (kind) {
+    case FuzzVerdict::Kind::kInvariant:
+      return "invariant";
+    case FuzzVerdict::Kind::kFirmwareStopped:
+      return "firmware-stopped";
+  }
+  return "invariant";
+}
+
 std::unique_ptr<ReplayMatcher> ExactMatcher(std::string why) {
   return std::make_unique<Exact>(std::move(why));
 }

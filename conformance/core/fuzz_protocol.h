@@ -32,7 +32,16 @@ struct FuzzVerdict {
   std::string violation;  // the invariant broken and what was seen; empty when ok
   size_t messages = 0;    // host messages sent
   size_t replies = 0;     // device messages received
+  // What kind of finding a failed run is: kInvariant (the protocol's stream
+  // laws: framing, every request answered once, liveness afterwards), or the
+  // firmware stopping (kFirmwareStopped: a crash, an illegal instruction, a
+  // halt; Target::FirmwareStopped says which).
+  enum class Kind { kInvariant, kFirmwareStopped };
+  Kind kind = Kind::kInvariant;
 };
+
+// "invariant", "firmware-stopped": the finding kinds as reports name them.
+std::string_view FindingKindName(FuzzVerdict::Kind kind);
 
 inline FuzzVerdict Violation(std::string what, size_t messages, size_t replies) {
   return FuzzVerdict{false, std::move(what), messages, replies};
@@ -89,10 +98,17 @@ struct FuzzHooks {
   // checksum or line end repaired, except where a mutation breaks it on
   // purpose), noting each mutation in `source`.
   void (*mutate)(MutationSource& source, wire::Bytes& message) = nullptr;
-  // Plays `messages` into a freshly restarted in-process device in virtual
-  // time, `gap_ns` apart, and judges the invariants. nullptr: sessions of this
-  // protocol are mutated and replayed, not run by the fuzzer.
-  FuzzVerdict (*run)(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) = nullptr;
+  // Waits out the device's start after a restart (a boot greeting), appending
+  // what it writes to `out`. nullptr: the device is ready at once. A target
+  // that runs firmware boots once, and every run starts from that state
+  // (FuzzExecutor).
+  void (*boot)(Target& target, wire::Bytes& out) = nullptr;
+  // Plays `messages` into the booted device in virtual time, `gap_ns` apart,
+  // and judges the invariants; `boot_out` is what the device wrote while it
+  // booted. nullptr: sessions of this protocol are mutated and replayed, not
+  // run by the fuzzer.
+  FuzzVerdict (*run)(Target& target, const Messages& messages, TimeNs gap_ns,
+                     const wire::Bytes& boot_out) = nullptr;
   // A matcher for one replay.
   std::unique_ptr<ReplayMatcher> (*matcher)() = nullptr;
 };

@@ -5,12 +5,41 @@
 #include <chrono>
 #include <filesystem>
 #include <set>
+#include <span>
+#include <vector>
 
 #include "conformance/core/sequence.h"
 #include "session/session.h"
 
 namespace moco::conformance {
 namespace {
+
+// AFL's hit-count classes: a slot's count becomes one bit, so a mutant that
+// runs an edge 4-7 times where every run before ran it once is new.
+uint8_t CountClass(uint8_t count) {
+  if (count == 0) return 0;
+  if (count <= 3) return static_cast<uint8_t>(1u << (count - 1));
+  if (count <= 7) return 8;
+  if (count <= 15) return 16;
+  if (count <= 31) return 32;
+  if (count <= 127) return 64;
+  return 128;
+}
+
+// Adds a run's edge counts to `seen` (per slot, the classes reached so far);
+// true when the run reached something new. `edges` counts the slots reached.
+bool MergeCoverage(std::span<const uint8_t> run, std::vector<uint8_t>& seen, size_t& edges) {
+  bool fresh = false;
+  for (size_t i = 0; i < run.size(); ++i) {
+    if (run[i] == 0) continue;
+    const uint8_t c = CountClass(run[i]);
+    if ((seen[i] & c) == c) continue;
+    if (seen[i] == 0) ++edges;
+    seen[i] |= c;
+    fresh = true;
+  }
+  return fresh;
+}
 
 // Drops messages while the mutant still fails, keeping at least one.
 Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violation) {
@@ -91,12 +120,22 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
   for (const Seed& s : seeds) donors.push_back(s.messages);
   std::set<std::string> seen;  // violations reported, by their first 60 characters
 
+  std::vector<Messages> corpus = donors;
+  std::vector<uint8_t> covered(executor.coverage().size(), 0);
+  report.coverage = !covered.empty();
+  auto note_coverage = [&](const Messages& messages) {
+    if (report.coverage && MergeCoverage(executor.coverage(), covered, report.edges)) {
+      corpus.push_back(messages);
+    }
+    report.corpus = corpus.size();
+  };
+
   auto record = [&](Messages messages, const std::vector<std::string>& mutations,
-                    std::string violation) {
+                    std::string violation, FuzzVerdict::Kind kind) {
     messages = Shrink(executor, std::move(messages), violation);
     const std::string key = violation.substr(0, 60);
     if (!seen.insert(key).second) return;
-    FuzzFailure f{std::move(messages), mutations, std::move(violation), ""};
+    FuzzFailure f{std::move(messages), mutations, std::move(violation), "", kind};
     if (!options.crash_dir.empty()) {
       std::error_code ec;
       std::filesystem::create_directories(options.crash_dir, ec);
@@ -117,7 +156,9 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     const FuzzVerdict v = executor.Run(s.messages);
     ++report.execs;
     report.messages += v.messages;
-    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v.violation);
+    if (report.coverage) MergeCoverage(executor.coverage(), covered, report.edges);
+    report.corpus = corpus.size();
+    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v.violation, v.kind);
   }
 
   Messages mutant;
@@ -127,12 +168,13 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
             : std::chrono::duration<double>(Clock::now() - t0).count() >= options.seconds) {
       break;
     }
-    mutant = seeds[mutator.Below(seeds.size())].messages;
+    mutant = corpus[mutator.Below(corpus.size())];
     mutator.Mutate(mutant, donors);
     const FuzzVerdict v = executor.Run(mutant);
     ++report.execs;
     report.messages += v.messages;
-    if (!v.ok) record(mutant, mutator.last_mutations(), v.violation);
+    if (v.ok) note_coverage(mutant);
+    if (!v.ok) record(mutant, mutator.last_mutations(), v.violation, v.kind);
     if (progress && (report.execs & 255) == 0) {
       const auto now = Clock::now();
       if (now - last_progress >= std::chrono::seconds(1)) {

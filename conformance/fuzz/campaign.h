@@ -1,7 +1,11 @@
 // `mococheck fuzz`: mutates the host side of recorded sessions (docs/sessions.md)
-// and runs every mutant against an in-process device (see mutator.h and
-// executor.h). A mutant that breaks an invariant is shrunk (messages dropped
-// while it still fails) and saved as a session file `mococheck replay` reruns.
+// and runs every mutant against a device in virtual time: an in-process one,
+// or firmware under simavr (see mutator.h and executor.h). A mutant that
+// breaks an invariant or stops the firmware is shrunk (messages dropped while
+// it still fails) and saved as a session file `mococheck replay` reruns. Where
+// the executor observes the firmware's code, a mutant that reaches an edge
+// (or an edge's hit count class) no run reached before joins the corpus the
+// next mutants are made from.
 #ifndef MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
 #define MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
 
@@ -43,12 +47,16 @@ struct FuzzFailure {
   std::vector<std::string> mutations;
   std::string violation;
   std::string saved_path;  // empty when not saved
+  FuzzVerdict::Kind kind = FuzzVerdict::Kind::kInvariant;
 };
 
 struct FuzzReport {
   uint64_t execs = 0;
   uint64_t messages = 0;  // host messages sent over all execs
   double wall_s = 0;
+  bool coverage = false;  // the executor observed the code
+  size_t edges = 0;       // distinct edges reached over all runs
+  size_t corpus = 0;      // sessions mutants are made from: the seeds and every new-coverage mutant
   std::vector<FuzzFailure> failures;
   double ExecsPerSecond() const { return wall_s > 0 ? static_cast<double>(execs) / wall_s : 0; }
 };

@@ -2,26 +2,160 @@
 // protocol's (its FuzzHooks, conformance/protocols/registry.h).
 #include "conformance/fuzz/executor.h"
 
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
 #include "conformance/protocols/registry.h"
 
 namespace moco::conformance {
+namespace {
 
-FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<InProcessTarget> target)
-    : protocol_(protocol), hooks_(FindFuzzHooks(protocol)), target_(std::move(target)) {}
+// What a forked child writes back after the coverage map.
+struct SharedVerdict {
+  uint32_t done;  // 1 once the rest is written
+  uint32_t ok;
+  uint32_t kind;
+  uint32_t violation_bytes;
+  uint64_t messages;
+  uint64_t replies;
+  char violation[4096];
+};
 
-FuzzExecutor::~FuzzExecutor() = default;
+std::string WaitStatusText(int status) {
+  if (WIFSIGNALED(status)) {
+    return "killed by signal " + std::to_string(WTERMSIG(status)) + " (" +
+           strsignal(WTERMSIG(status)) + ")";
+  }
+  if (WIFEXITED(status)) return "exit status " + std::to_string(WEXITSTATUS(status));
+  return "status " + std::to_string(status);
+}
 
-std::optional<std::string> FuzzExecutor::Open() { return target_->Open(); }
+}  // namespace
+
+FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target)
+    : FuzzExecutor(protocol, std::move(target), Options()) {}
+
+FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target, Options options)
+    : protocol_(protocol),
+      hooks_(FindFuzzHooks(protocol)),
+      target_(std::move(target)),
+      options_(options) {}
+
+FuzzExecutor::~FuzzExecutor() {
+  if (shared_ != nullptr) munmap(shared_, shared_bytes_);
+}
+
+std::optional<std::string> FuzzExecutor::Open() {
+  if (!target_->VirtualClock() || !target_->CanRestart()) {
+    return target_->Name() +
+           " runs in real time or cannot restart; fuzz needs a device in virtual time "
+           "(in-process:MODEL or simavr:FIRMWARE.elf); use replay for a real device";
+  }
+  const size_t map = options_.coverage_bytes;
+  if (map != 0 && (map & (map - 1)) != 0) {
+    return "the coverage map's size " + std::to_string(map) + " is not a power of two";
+  }
+  if (map != 0 || options_.fork) {
+    shared_bytes_ = map + sizeof(SharedVerdict);
+    void* p =
+        mmap(nullptr, shared_bytes_, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) {
+      shared_bytes_ = 0;
+      return std::string("cannot map the fuzzer's shared memory: ") + std::strerror(errno);
+    }
+    shared_ = static_cast<uint8_t*>(p);
+  }
+  if (auto err = target_->Open()) return err;
+  if (map != 0 && !target_->SetCoverageMap(shared_, map)) {
+    return target_->Name() +
+           " cannot observe its device's code: no coverage (fuzz it without "
+           "coverage, or run its firmware under simavr)";
+  }
+  if (options_.fork) {
+    target_->Restart();
+    boot_out_.clear();
+    if (hooks_ != nullptr && hooks_->boot != nullptr) hooks_->boot(*target_, boot_out_);
+    if (auto why = target_->FirmwareStopped()) {
+      return "the firmware stopped while it booted: " + *why;
+    }
+  }
+  return std::nullopt;
+}
 
 TimeNs FuzzExecutor::gap_ns() const { return hooks_ == nullptr ? 0 : hooks_->gap_ns; }
+
+std::span<const uint8_t> FuzzExecutor::coverage() const {
+  if (shared_ == nullptr || options_.coverage_bytes == 0) return {};
+  return {shared_, options_.coverage_bytes};
+}
+
+std::string FuzzExecutor::target_name() const { return target_->Name(); }
+
+FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& boot_out) {
+  FuzzVerdict v = hooks_->run(*target_, messages, gap_ns(), boot_out);
+  if (auto why = target_->FirmwareStopped()) {
+    v.ok = false;
+    v.kind = FuzzVerdict::Kind::kFirmwareStopped;
+    v.violation = "the firmware stopped: " + *why;
+  }
+  return v;
+}
 
 FuzzVerdict FuzzExecutor::Run(const Messages& messages) {
   if (hooks_ == nullptr || hooks_->run == nullptr) {
     return Violation("the " + std::string(wire::Info(protocol_).title) + " protocol is not fuzzed",
                      0, 0);
   }
+  if (options_.coverage_bytes != 0) std::fill_n(shared_, options_.coverage_bytes, uint8_t{0});
+  if (options_.fork) return RunForked(messages);
   target_->Restart();
-  return hooks_->run(*target_, messages, hooks_->gap_ns);
+  wire::Bytes boot_out;
+  if (hooks_->boot != nullptr) hooks_->boot(*target_, boot_out);
+  return RunHere(messages, boot_out);
+}
+
+FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
+  auto* back = reinterpret_cast<SharedVerdict*>(shared_ + options_.coverage_bytes);
+  std::memset(back, 0, sizeof *back);
+  const pid_t pid = fork();
+  if (pid < 0) {
+    return Violation(std::string("mococheck could not fork a run: ") + std::strerror(errno),
+                     messages.size(), 0);
+  }
+  if (pid == 0) {
+    // The child: plays from the booted state, writes the verdict back and
+    // leaves without running any exit handler of the parent's.
+    const FuzzVerdict v = RunHere(messages, boot_out_);
+    back->ok = v.ok ? 1 : 0;
+    back->kind = static_cast<uint32_t>(v.kind);
+    back->messages = v.messages;
+    back->replies = v.replies;
+    const size_t n = std::min(v.violation.size(), sizeof back->violation);
+    std::memcpy(back->violation, v.violation.data(), n);
+    back->violation_bytes = static_cast<uint32_t>(n);
+    back->done = 1;
+    _exit(0);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (back->done != 1) {
+    return Violation(
+        "mococheck's run process ended without a verdict (" + WaitStatusText(status) + ")",
+        messages.size(), 0);
+  }
+  FuzzVerdict v;
+  v.ok = back->ok != 0;
+  v.kind = static_cast<FuzzVerdict::Kind>(back->kind);
+  v.messages = back->messages;
+  v.replies = back->replies;
+  v.violation.assign(back->violation, back->violation_bytes);
+  return v;
 }
 
 }  // namespace moco::conformance

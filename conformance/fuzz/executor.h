@@ -1,14 +1,23 @@
-// Runs one mutated host session against a freshly powered in-process device
-// in virtual time and judges the invariants every device must keep whatever
-// the host sends: no crash, every device message well formed, every request
-// answered as its protocol says, and the device still answering its greeting
-// afterwards. Each protocol states its own in its folder
-// (conformance/protocols/*/*_fuzz_hooks.cpp).
+// Runs one mutated host session against a device in virtual time and judges
+// the invariants every device must keep whatever the host sends: no crash,
+// every device message well formed, every request answered as its protocol
+// says, and the device still answering its greeting afterwards. Each protocol
+// states its own in its folder (conformance/protocols/*/*_fuzz_hooks.cpp).
+//
+// The device is an in-process one (restarted, powered afresh at time 0,
+// before every run) or firmware run by a target (simavr). Firmware boots
+// once; with Options::fork each run then plays in a child process forked
+// from the booted state, so no run re-boots and nothing one run does (its
+// memory, its stack, a crash) reaches the next. Where the target can observe
+// the firmware's code, every run counts its edges into one coverage map
+// (Target::SetCoverageMap) that coverage() shows afterwards.
 #ifndef MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_
 #define MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 
 #include "conformance/core/fuzz_protocol.h"
@@ -19,23 +28,48 @@ namespace moco::conformance {
 
 class FuzzExecutor {
  public:
-  // `target` is an in-process target of a device speaking `protocol`; it is
-  // restarted (powered afresh, time 0) before every run.
-  FuzzExecutor(Protocol protocol, std::unique_ptr<InProcessTarget> target);
-  ~FuzzExecutor();
+  struct Options {
+    // Boot once, then play each run in a child process forked from the
+    // booted state (POSIX fork). Off: each run restarts the target and boots.
+    bool fork = false;
+    // The coverage map's size in bytes (a power of two); 0: no coverage.
+    size_t coverage_bytes = 0;
+  };
 
-  // Opens the target; an error message (bad model or profile) or nullopt.
+  // `target` must run on a virtual clock and restart (in-process, simavr).
+  FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target);
+  FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target, Options options);
+  ~FuzzExecutor();
+  FuzzExecutor(const FuzzExecutor&) = delete;
+  FuzzExecutor& operator=(const FuzzExecutor&) = delete;
+
+  // Opens the target (and boots it when forking); an error message (a bad
+  // model or profile, an unreadable firmware, a target on a real clock, a
+  // target without coverage when coverage was asked for) or nullopt.
   std::optional<std::string> Open();
   FuzzVerdict Run(const Messages& messages);
 
   // Virtual time a run leaves between two host messages (the protocol's
   // FuzzHooks::gap_ns).
   TimeNs gap_ns() const;
+  // The last run's edge counts (empty without coverage).
+  std::span<const uint8_t> coverage() const;
+  // The target's name, as reports show it.
+  std::string target_name() const;
 
  private:
+  FuzzVerdict RunHere(const Messages& messages, const wire::Bytes& boot_out);
+  FuzzVerdict RunForked(const Messages& messages);
+
   Protocol protocol_;
   const FuzzHooks* hooks_;  // nullptr: the protocol has none
-  std::unique_ptr<InProcessTarget> target_;
+  std::unique_ptr<Target> target_;
+  Options options_;
+  wire::Bytes boot_out_;  // what the device wrote while it booted (fork mode)
+  // Memory shared with the forked children: the coverage map, then the
+  // verdict a child writes back (see executor.cpp).
+  uint8_t* shared_ = nullptr;
+  size_t shared_bytes_ = 0;
 };
 
 }  // namespace moco::conformance

@@ -155,6 +155,7 @@ std::optional<std::string> SimavrTarget::Build() {
   xoff_ = false;
   rx_line_free_cycle_ = tx_line_free_cycle_ = 0;
   wake_cycle_ = 0;
+  previous_pc_id_ = 0;
 
   std::error_code ec;
   if (!std::filesystem::is_regular_file(spec_.elf_path, ec)) {
@@ -476,6 +477,7 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       }
       const uint64_t before = avr_->cycle;
       const int state = avr_run(avr_);
+      if (coverage_ != nullptr) CountEdge();
       if (state != cpu_Running && state != cpu_Sleeping) break;
       // A call may wake the core without a cycle passing; a thousand in a row is a hang.
       stalls = avr_->cycle == before ? stalls + 1 : 0;
@@ -488,6 +490,30 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   }
   ArmWake(0);
   return alive && !stop_requested;
+}
+
+std::optional<std::string> SimavrTarget::FirmwareStopped() const {
+  if (stopped_.empty()) return std::nullopt;
+  return stopped_;
+}
+
+bool SimavrTarget::SetCoverageMap(uint8_t* map, size_t size) {
+  if (map != nullptr && (size == 0 || (size & (size - 1)) != 0)) return false;
+  coverage_ = map;
+  coverage_mask_ = map == nullptr ? 0 : size - 1;
+  previous_pc_id_ = 0;
+  return true;
+}
+
+void SimavrTarget::CountEdge() {
+  // A PC's id: its word address, mixed so that nearby addresses spread over
+  // the map (Fibonacci hashing); the edge is the id xor the previous id
+  // shifted, so A->B and B->A differ.
+  const uint32_t id = (static_cast<uint32_t>(avr_->pc) >> 1) * 2654435761u;
+  const uint32_t id16 = id >> 16;
+  uint8_t& slot = coverage_[(id16 ^ previous_pc_id_) & coverage_mask_];
+  if (slot != 255) ++slot;
+  previous_pc_id_ = id16 >> 1;
 }
 
 }  // namespace moco::conformance

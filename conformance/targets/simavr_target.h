@@ -104,6 +104,11 @@ class SimavrTarget final : public Target {
   // since the last Open() / Restart(), with the reason.
   std::vector<std::string> Caveats() const override;
 
+  std::optional<std::string> FirmwareStopped() const override;
+  // Edges are (previous PC, PC) pairs of the instructions the core executes,
+  // hashed into `map` as AFL does; an interrupt's entry is an edge too.
+  bool SetCoverageMap(uint8_t* map, size_t size) override;
+
  private:
   struct OutByte {
     uint8_t value;
@@ -117,6 +122,7 @@ class SimavrTarget final : public Target {
   TimeNs CyclesToNs(uint64_t cycles) const;
   void StartPacer();
   void ArmWake(uint64_t cycle);
+  void CountEdge();
 
   static uint64_t PacerTick(avr_t* avr, uint64_t when, void* param);
   static uint64_t WakeTick(avr_t* avr, uint64_t when, void* param);
@@ -156,6 +162,9 @@ class SimavrTarget final : public Target {
   size_t trace_edges_ = 0;
   std::vector<std::unique_ptr<PinHook>> pin_hooks_;
   std::unique_ptr<AvrTimers> timers_;
+  uint8_t* coverage_ = nullptr;  // SetCoverageMap(); nullptr: not counted
+  size_t coverage_mask_ = 0;
+  uint32_t previous_pc_id_ = 0;          // the last PC's id, shifted (AFL's prev_loc)
   std::vector<std::string> unmodelled_;  // notes of cores already torn down
 };
 

@@ -87,6 +87,18 @@ class Target {
   // run a target error: what follows proves nothing about the device.
   virtual std::optional<std::string> LinkLost() const { return std::nullopt; }
 
+  // For a target that runs firmware here (simavr): why the firmware stopped
+  // running (it crashed, executed an illegal instruction, halted, or makes no
+  // progress), with its simulated time; nullopt while it runs, and for every
+  // other target. A finding about the device, not a target error.
+  virtual std::optional<std::string> FirmwareStopped() const { return std::nullopt; }
+  // Edge coverage of the firmware's code, for a target that can observe it
+  // (simavr: each pair of consecutive program counters, AFL-style): from now
+  // on the target adds each edge it executes to `map` (`size` a power of two;
+  // a count saturating at 255 per slot); nullptr stops. False when the target
+  // cannot observe its device's code.
+  virtual bool SetCoverageMap(uint8_t* /*map*/, size_t /*size*/) { return false; }
+
   // Watches the firmware's pins that `board` names from the next Open() /
   // Restart() on (a simavr: target only). Returns an error naming the fix, or
   // nullopt.

@@ -92,16 +92,23 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
   m.assign(out.begin(), out.end());
 }
 
-FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) {
-  wire::Bytes out;
-  // The boot greeting (the sketch starts after its boot delay).
+// The boot greeting (the sketch starts after its boot delay).
+void Boot(Target& target, wire::Bytes& out) {
   const TimeNs boot_deadline = target.Now() + kFuzzBootGreetingNs;
-  while (out.empty() && target.Now() < boot_deadline) target.Receive(boot_deadline, out);
+  // A target whose firmware stopped receives nothing more (Receive is false).
+  while (out.empty() && target.Now() < boot_deadline) {
+    if (!target.Receive(boot_deadline, out)) break;
+  }
+}
+
+FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
+                const wire::Bytes& boot_out) {
+  wire::Bytes out = boot_out;
   auto settle = [&] {
     const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
     while (target.Now() < limit) {
       const size_t n = out.size();
-      target.Receive(std::min(limit, target.Now() + kFuzzSettleQuietNs), out);
+      if (!target.Receive(std::min(limit, target.Now() + kFuzzSettleQuietNs), out)) break;
       if (out.size() == n) break;
     }
   };
@@ -116,7 +123,7 @@ FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns
   target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(tail.data()), tail.size()));
   const TimeNs deadline = target.Now() + kFuzzHiAnswerNs;
   while (target.Now() < deadline) {
-    target.Receive(deadline, out);
+    if (!target.Receive(deadline, out)) break;
     if (out.size() > before_hi && out.back() == '\n') {
       // Stop once a hi reply has come after the greeting was sent.
       const std::string_view s(reinterpret_cast<const char*>(out.data()) + before_hi,
@@ -227,6 +234,7 @@ const FuzzHooks kHooks[] = {
         .protocol = Protocol::kDfmoco,
         .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
+        .boot = &Boot,
         .run = &Run,
         .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },
     },

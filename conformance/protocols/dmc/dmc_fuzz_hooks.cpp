@@ -79,7 +79,8 @@ bool HidesAFrame(const wire::Bytes& m) {
   return false;
 }
 
-FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) {
+FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
+                const wire::Bytes& /*boot_out*/) {
   // Whole frames go through the host as requests (renumbered: the ID is
   // echo-only, and distinct IDs let every answer be matched); anything else
   // is noise. A stream with noise or cut frames may legitimately leave a

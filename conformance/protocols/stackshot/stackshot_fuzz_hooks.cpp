@@ -46,7 +46,8 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
   stackshot::EncodePacket(p, m);
 }
 
-FuzzVerdict Run(InProcessTarget& target, const Messages& messages, TimeNs gap_ns) {
+FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
+                const wire::Bytes& /*boot_out*/) {
   using stackshot::Action;
   using stackshot::Command;
   wire::Bytes out;
