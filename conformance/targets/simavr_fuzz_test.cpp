@@ -108,6 +108,26 @@ TEST(SimavrFuzz, FirmwareThatStopsIsAFindingOfItsOwnKind) {
   EXPECT_NE(err->find("the firmware stopped while it booted"), std::string::npos) << *err;
 }
 
+// A stack that grows into .data/.bss stops the firmware: the planted bug
+// clamps an over-fast pulse rate by recursion, a frame per step/s too many.
+// The same session on the firmware without the bug stops nothing.
+TEST(SimavrFuzz, AStackOverflowIsFoundAsTheFirmwareStoppingWithWhere) {
+  const Messages session = Lines({"hi\r\n", "pr 1 30000\r\n", "ms\r\n"});
+  FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_BUG_RECURSIVE_CLAMP_ELF), Forked());
+  ASSERT_EQ(ex.Open(), std::nullopt);
+  const FuzzVerdict v = ex.Run(session);
+  EXPECT_FALSE(v.ok);
+  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kFirmwareStopped);
+  EXPECT_NE(v.violation.find("the stack ran into .data/.bss"), std::string::npos) << v.violation;
+  EXPECT_NE(v.violation.find("pc 0x"), std::string::npos) << v.violation;
+  EXPECT_TRUE(ex.Run(Lines({"hi\r\n", "pr 1 20000\r\n"})).ok) << "a rate within the limit";
+
+  FuzzExecutor good(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), Forked());
+  ASSERT_EQ(good.Open(), std::nullopt);
+  const FuzzVerdict clamped = good.Run(session);
+  EXPECT_TRUE(clamped.ok) << clamped.violation;
+}
+
 // Fuzzing needs a device in virtual time and coverage a target that sees code.
 TEST(SimavrFuzz, AnExecutorRefusesWhatItCannotFuzz) {
   FuzzExecutor::Options o;

@@ -212,6 +212,8 @@ std::optional<std::string> SimavrTarget::Build() {
   std::snprintf(fw.mmcu, sizeof fw.mmcu, "%s", mcu_.c_str());
   fw.frequency = frequency_hz_;
   avr_load_firmware(avr_, &fw);
+  // SRAM starts after the I/O registers; .data and .bss come first in it.
+  data_end_ = static_cast<uint32_t>(avr_->ioend) + 1 + fw.datasize + fw.bsssize;
   FreeFirmware(fw);
   avr_->frequency = frequency_hz_;
   if (options_.timer_model) timers_ = std::make_unique<AvrTimers>(avr_);
@@ -346,14 +348,30 @@ uint64_t SimavrTarget::FrameCycles() const {
   return cycles_per_bit * (1 + data_bits + parity_bits + stop_bits);
 }
 
+std::string SimavrTarget::At() const {
+  char when[64];
+  std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", static_cast<double>(Now()) / 1e9,
+                static_cast<unsigned>(avr_->pc));
+  return when;
+}
+
+bool SimavrTarget::StackCollided() {
+  // SP is the next free byte: the last push wrote at SP + 1.
+  const uint32_t sp = avr_->data[kSpl] | (static_cast<uint32_t>(avr_->data[kSph]) << 8);
+  if (sp + 1 >= data_end_) return false;
+  char what[120];
+  std::snprintf(what, sizeof what,
+                "the stack ran into .data/.bss (SP 0x%04x, below their end 0x%04x)", sp, data_end_);
+  stopped_ = what + At();
+  return true;
+}
+
 bool SimavrTarget::CheckAlive() {
   if (avr_ == nullptr) return false;
   if (!stopped_.empty()) return false;
   const int state = avr_->state;
   if (state == cpu_Running || state == cpu_Sleeping) return true;
-  char when[64];
-  std::snprintf(when, sizeof when, " at %.6f s, pc 0x%04x", static_cast<double>(Now()) / 1e9,
-                static_cast<unsigned>(avr_->pc));
+  const std::string when = At();
   if (state == cpu_Done) {
     stopped_ = "the core halted (it sleeps with interrupts off)";
   } else if (state == cpu_Crashed) {
@@ -479,6 +497,7 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       const int state = avr_run(avr_);
       if (coverage_ != nullptr) CountEdge();
       if (state != cpu_Running && state != cpu_Sleeping) break;
+      if (StackCollided()) break;
       // A call may wake the core without a cycle passing; a thousand in a row is a hang.
       stalls = avr_->cycle == before ? stalls + 1 : 0;
       if (stalls > 1000) {

@@ -40,7 +40,9 @@ namespace moco::conformance {
 //    write hook on UCSR0B raises UDRE0 when TXEN0 goes from 0 to 1, as the
 //    hardware does (the transmit buffer is empty then).
 //  - Firmware that stops (sleep with interrupts off, or a crash) ends the link:
-//    Send() and Receive() return false and Name() says what happened.
+//    Send() and Receive() return false and Name() says what happened. So does
+//    a stack that grows into .data/.bss (SP below their end, from the ELF's
+//    section sizes): the firmware has overwritten its own variables.
 // simavr's own console output is silenced; its error messages go into Open()'s
 // error text.
 //
@@ -123,6 +125,12 @@ class SimavrTarget final : public Target {
   void StartPacer();
   void ArmWake(uint64_t cycle);
   void CountEdge();
+  // " at T s, pc 0x...": where the firmware is now, for stopped_.
+  std::string At() const;
+  // Whether the stack has grown into .data/.bss; stops the firmware when so.
+  bool StackCollided();
+  static constexpr uint16_t kSpl = 0x5D;  // SPL and SPH in data space (every ATmega)
+  static constexpr uint16_t kSph = 0x5E;
 
   static uint64_t PacerTick(avr_t* avr, uint64_t when, void* param);
   static uint64_t WakeTick(avr_t* avr, uint64_t when, void* param);
@@ -162,6 +170,7 @@ class SimavrTarget final : public Target {
   size_t trace_edges_ = 0;
   std::vector<std::unique_ptr<PinHook>> pin_hooks_;
   std::unique_ptr<AvrTimers> timers_;
+  uint32_t data_end_ = 0;        // the first SRAM byte after .data and .bss
   uint8_t* coverage_ = nullptr;  // SetCoverageMap(); nullptr: not counted
   size_t coverage_mask_ = 0;
   uint32_t previous_pc_id_ = 0;          // the last PC's id, shifted (AFL's prev_loc)
