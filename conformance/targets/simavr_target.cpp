@@ -214,6 +214,9 @@ std::optional<std::string> SimavrTarget::Build() {
   avr_load_firmware(avr_, &fw);
   // SRAM starts after the I/O registers; .data and .bss come first in it.
   data_end_ = static_cast<uint32_t>(avr_->ioend) + 1 + fw.datasize + fw.bsssize;
+  // The program image: the code, then .data's initial values; past it the
+  // flash is erased (0xFFFF), which simavr would run as instructions.
+  code_end_ = fw.flashbase + fw.flashsize;
   FreeFirmware(fw);
   avr_->frequency = frequency_hz_;
   if (options_.timer_model) timers_ = std::make_unique<AvrTimers>(avr_);
@@ -366,6 +369,15 @@ bool SimavrTarget::StackCollided() {
   return true;
 }
 
+bool SimavrTarget::LeftTheProgram() {
+  if (avr_->pc < code_end_) return false;
+  char what[120];
+  std::snprintf(what, sizeof what,
+                "the program counter left the program (its image ends at 0x%04x)", code_end_);
+  stopped_ = what + At();
+  return true;
+}
+
 bool SimavrTarget::CheckAlive() {
   if (avr_ == nullptr) return false;
   if (!stopped_.empty()) return false;
@@ -497,7 +509,7 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
       const int state = avr_run(avr_);
       if (coverage_ != nullptr) CountEdge();
       if (state != cpu_Running && state != cpu_Sleeping) break;
-      if (StackCollided()) break;
+      if (StackCollided() || LeftTheProgram()) break;
       // A call may wake the core without a cycle passing; a thousand in a row is a hang.
       stalls = avr_->cycle == before ? stalls + 1 : 0;
       if (stalls > 1000) {

@@ -40,9 +40,10 @@ namespace moco::conformance {
 //    write hook on UCSR0B raises UDRE0 when TXEN0 goes from 0 to 1, as the
 //    hardware does (the transmit buffer is empty then).
 //  - Firmware that stops (sleep with interrupts off, or a crash) ends the link:
-//    Send() and Receive() return false and Name() says what happened. So does
-//    a stack that grows into .data/.bss (SP below their end, from the ELF's
-//    section sizes): the firmware has overwritten its own variables.
+//    Send() and Receive() return false and Name() says what happened. So do a
+//    stack that grows into .data/.bss (SP below their end, from the ELF's
+//    section sizes: the firmware has overwritten its own variables) and a
+//    program counter past the program image (erased flash, after a bad jump).
 // simavr's own console output is silenced; its error messages go into Open()'s
 // error text.
 //
@@ -129,6 +130,9 @@ class SimavrTarget final : public Target {
   std::string At() const;
   // Whether the stack has grown into .data/.bss; stops the firmware when so.
   bool StackCollided();
+  // Whether the PC has run past the program image into erased flash; stops
+  // the firmware when so.
+  bool LeftTheProgram();
   static constexpr uint16_t kSpl = 0x5D;  // SPL and SPH in data space (every ATmega)
   static constexpr uint16_t kSph = 0x5E;
 
@@ -171,6 +175,7 @@ class SimavrTarget final : public Target {
   std::vector<std::unique_ptr<PinHook>> pin_hooks_;
   std::unique_ptr<AvrTimers> timers_;
   uint32_t data_end_ = 0;        // the first SRAM byte after .data and .bss
+  uint32_t code_end_ = 0;        // the first flash byte after the program image
   uint8_t* coverage_ = nullptr;  // SetCoverageMap(); nullptr: not counted
   size_t coverage_mask_ = 0;
   uint32_t previous_pc_id_ = 0;          // the last PC's id, shifted (AFL's prev_loc)
