@@ -15,6 +15,7 @@ namespace moco::conformance {
 namespace {
 
 using dfmoco_cases::kFuzzBootGreetingNs;
+using dfmoco_cases::kFuzzDrainMaxNs;
 using dfmoco_cases::kFuzzGapNs;
 using dfmoco_cases::kFuzzHiAnswerNs;
 using dfmoco_cases::kFuzzSettleMaxNs;
@@ -92,11 +93,11 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
   m.assign(out.begin(), out.end());
 }
 
-// The boot greeting (the sketch starts after its boot delay).
+// The boot greeting, its whole line (the sketch starts after its boot delay).
 void Boot(Target& target, wire::Bytes& out) {
   const TimeNs boot_deadline = target.Now() + kFuzzBootGreetingNs;
   // A target whose firmware stopped receives nothing more (Receive is false).
-  while (out.empty() && target.Now() < boot_deadline) {
+  while ((out.empty() || out.back() != '\n') && target.Now() < boot_deadline) {
     if (!target.Receive(boot_deadline, out)) break;
   }
 }
@@ -131,7 +132,14 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
       if (s.find("hi ") != std::string_view::npos) break;
     }
   }
-  target.Receive(target.Now() + kFuzzTailNs, out);
+  // What is still on its way, until the line has been quiet for kFuzzTailNs:
+  // a firmware's transmitter may hold a backlog of replies at the line rate.
+  const TimeNs drain_limit = target.Now() + kFuzzDrainMaxNs;
+  while (target.Now() < drain_limit) {
+    const size_t n = out.size();
+    if (!target.Receive(std::min(drain_limit, target.Now() + kFuzzTailNs), out)) break;
+    if (out.size() == n) break;
+  }
 
   const std::string_view text(reinterpret_cast<const char*>(out.data()), out.size());
   dfmoco::Dialect dialect;

@@ -93,6 +93,9 @@ inline constexpr sim::TimeNs kFuzzBootGreetingNs = 3000 * kMs;
 inline constexpr sim::TimeNs kFuzzHiAnswerNs = 2000 * kMs;
 // Plan choice: what is read after that answer, for lines still on their way.
 inline constexpr sim::TimeNs kFuzzTailNs = 20 * kMs;
+// Plan choice: the longest the end of a run waits for output still on its way
+// (quiet for kFuzzTailNs ends it sooner); a backlog of about 11 kB at 57600 baud.
+inline constexpr sim::TimeNs kFuzzDrainMaxNs = 2000 * kMs;
 
 }  // namespace moco::conformance::dfmoco_cases
 
