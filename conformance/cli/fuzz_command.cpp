@@ -109,7 +109,7 @@ int Fuzz(const FuzzArgs& a) {
   }
   std::cout << (r.failures.empty()
                     ? "result: no invariant broken\n"
-                    : "result: " + std::to_string(r.failures.size()) + " invariant failure(s)\n");
+                    : "result: " + std::to_string(r.failures.size()) + " finding(s)\n");
   return r.failures.empty() ? 0 : 1;
 }
 

@@ -173,8 +173,11 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     const FuzzVerdict v = executor.Run(mutant);
     ++report.execs;
     report.messages += v.messages;
-    if (v.ok) note_coverage(mutant);
-    if (!v.ok) record(mutant, mutator.last_mutations(), v.violation, v.kind);
+    if (v.ok) {
+      note_coverage(mutant);
+    } else {
+      record(mutant, mutator.last_mutations(), v.violation, v.kind);
+    }
     if (progress && (report.execs & 255) == 0) {
       const auto now = Clock::now();
       if (now - last_progress >= std::chrono::seconds(1)) {
