@@ -19,9 +19,12 @@ cd "$(dirname "$0")/.."
 : "${CC:=clang}"
 : "${CXX:=clang++}"
 : "${LIB_FUZZING_ENGINE:=-fsanitize=fuzzer}"
+# Outside the builder the flags follow OSS-Fuzz's own defaults: -O1 and line
+# tables only (-gline-tables-only: a crash's stack still names file:line; the
+# full debug information of -g costs compile time and nothing a report shows).
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fsanitize=fuzzer-no-link"
-: "${CFLAGS:=-O1 -g -fno-omit-frame-pointer $sanitize}"
-: "${CXXFLAGS:=-O1 -g -fno-omit-frame-pointer $sanitize}"
+: "${CFLAGS:=-O1 -gline-tables-only -fno-omit-frame-pointer $sanitize}"
+: "${CXXFLAGS:=-O1 -gline-tables-only -fno-omit-frame-pointer $sanitize}"
 work="${WORK:-$PWD/build}/clusterfuzzlite"
 # The Debian/Ubuntu libraries the targets link (Bullet) are built against
 # libstdc++; the builder's -stdlib=libc++ (needed only for MemorySanitizer,
