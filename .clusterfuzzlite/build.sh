@@ -1,7 +1,8 @@
 #!/bin/bash -eu
 # Builds every libFuzzer target of the project (the codecs: dmc_fuzz,
 # dfmoco_fuzz, stackshot_fuzz; the sessions against in-process devices:
-# dmc_session_fuzz, dfmoco_session_fuzz, stackshot_session_fuzz) into $OUT,
+# dmc_session_fuzz, dfmoco_session_fuzz, stackshot_session_fuzz; where simavr
+# and avr-gcc are installed, firmware_fuzz with our DFMoco firmware) into $OUT,
 # each with its seed corpus from fixtures/fuzz-seeds/<target without _fuzz>
 # as $OUT/<target>_seed_corpus.zip.
 #
@@ -61,3 +62,13 @@ for t in "${targets[@]}"; do
   fi
   echo "build.sh: $OUT/$t"
 done
+
+# The firmware target fuzzes the AVR image beside it ($OUT/firmware_fuzz.elf):
+# here our own DFMoco test firmware. A firmware project copies its own ELF
+# there (docs/firmware-ci.md "ClusterFuzzLite").
+if [ -x "$OUT/firmware_fuzz" ]; then
+  elf=$(find "$work" -type f -name dfmoco.elf -path '*dfmoco_avr*' | head -1)
+  [ -n "$elf" ] || { echo "build.sh: the DFMoco test firmware was not built" >&2; exit 1; }
+  cp "$elf" "$OUT/firmware_fuzz.elf"
+  echo "build.sh: $OUT/firmware_fuzz.elf (from $elf)"
+fi

@@ -24,6 +24,14 @@ wait_for() {
     sleep 0.1
   done
 }
+# signal_and_wait SIGNAL PID: sends SIGNAL to PID, waits (bounded) until it has
+# ended and sets rc to its exit status; fails when it is still running.
+signal_and_wait() {
+  kill "-$1" "$2"
+  wait_for sh -c "! kill -0 $2 2>/dev/null" || fail "still running 60 s after SIG$1"
+  wait "$2"
+  rc=$?
+}
 # expect_rc WANT CMD...: runs CMD (stdout out.txt, stderr err.txt), checks its status.
 expect_rc() {
   want=$1

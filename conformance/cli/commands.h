@@ -25,6 +25,13 @@ inline constexpr int kExitUsage = 2;
 // Prints "mococheck: MESSAGE" to stderr; returns kExitUsage.
 int Fail(const std::string& message);
 
+// From now on SIGINT, SIGTERM and SIGHUP ask the command to stop
+// (RequestStop, targets/target.h): every wait of a target ends at once (a
+// firmware spinning under simavr included) and the command writes what it has
+// (`run` its reports, `fuzz` its summary and findings). A second signal changes
+// nothing; a third ends mococheck at once.
+void InstallStopHandlers();
+
 // What a command knows when it picks its target.
 struct TargetRequest {
   std::string text;            // --target as given; "" takes the session's device

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <memory>
 
@@ -63,6 +64,9 @@ int Fuzz(const FuzzArgs& a) {
   run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
   FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
+  // From here a signal ends the campaign; its summary and findings are still
+  // printed (each finding's file is already complete).
+  InstallStopHandlers();
   // Saved mutants name the device the sessions were recorded with; for
   // firmware, replay them with the same --target.
   const std::string model = firmware ? seeds.front().device : target.spec.address;
@@ -100,12 +104,44 @@ int Fuzz(const FuzzArgs& a) {
               << r.corpus << " session(s), " << r.corpus - seeds.size()
               << " of them mutants that reached new edges\n";
   }
+  if (r.code) {
+    const CodeCoverage& c = *r.code;
+    auto pct = [](size_t n, size_t of) {
+      char t[16];
+      std::snprintf(t, sizeof t, "%.1f%%",
+                    of == 0 ? 0.0 : 100.0 * static_cast<double>(n) / static_cast<double>(of));
+      return std::string(t);
+    };
+    std::cout << "code: " << c.instructions_reached << " of " << c.instructions
+              << " instructions ran (" << pct(c.instructions_reached, c.instructions) << "), "
+              << c.edges_reached << " of " << c.edges << " static edges taken ("
+              << pct(c.edges_reached, c.edges) << "), " << c.functions - c.never_entered.size()
+              << " of " << c.functions << " functions entered\n";
+    if (!c.never_entered.empty()) {
+      std::cout << "never entered:";
+      for (const std::string& name : c.never_entered) std::cout << " " << name;
+      std::cout << "\n";
+    }
+  }
   for (const FuzzFailure& f : r.failures) {
     std::cout << "FAIL [" << FindingKindName(f.kind) << "] " << f.violation << "\n  mutations:";
     for (const std::string& m : f.mutations) std::cout << " " << m;
-    std::cout << "\n  shrunk to " << f.messages.size() << " host message(s)";
+    std::cout << "\n";
+    for (size_t i = 0; i < f.backtrace.size(); ++i) {
+      std::cout << (i == 0 ? "  at " : "  called from ") << f.backtrace[i] << "\n";
+    }
+    std::cout << "  shrunk to " << f.messages.size() << " host message(s)";
     if (!f.saved_path.empty()) std::cout << "; saved: " << f.saved_path;
     std::cout << "\n";
+    if (firmware && f.saved_path.rfind("not saved", 0) != 0 && !f.saved_path.empty()) {
+      std::cout << "  rerun: mococheck replay " << f.saved_path << " --target " << a.target << "\n";
+    }
+  }
+  if (r.interrupted_by != 0) {
+    std::cout << "result: INTERRUPTED by signal " << r.interrupted_by << " ("
+              << strsignal(r.interrupted_by) << ") after " << r.execs << " execs, "
+              << r.failures.size() << " finding(s)\n";
+    return r.failures.empty() ? kExitUsage : 1;
   }
   std::cout << (r.failures.empty()
                     ? "result: no invariant broken\n"

@@ -1,11 +1,14 @@
 // `mococheck replay`: a recorded session's host side resent to a device, the
 // device side compared (docs/sessions.md).
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "cli_numbers.h"
 #include "conformance/cli/commands.h"
+#include "conformance/fuzz/campaign.h"
+#include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/replay.h"
 #include "session/session.h"
 
@@ -17,6 +20,32 @@ struct ReplayArgs {
   int64_t steps = -1, ms = -1;
   uint32_t baud = 0;
 };
+
+// A session with host traffic only (a finding `mococheck fuzz` saved): there is
+// nothing recorded to compare, so it is run as the fuzzer runs a mutant, from a
+// fresh boot, one message per recorded write, and the device's invariants are
+// judged; under simavr the run is the fuzzer's, cycle for cycle.
+int Rejudge(const std::string& path, FuzzExecutor& executor) {
+  auto loaded = LoadSeed(path, /*as_written=*/true);
+  if (const auto* err = std::get_if<std::string>(&loaded)) return Fail(*err);
+  if (auto err = executor.Open()) return Fail(*err);
+  const FuzzVerdict v = executor.Run(std::get<Seed>(loaded).messages);
+  std::cout << "mococheck replay: " << path << " -> " << executor.target_name() << "\n"
+            << "the session records no device side: its " << v.messages
+            << " host write(s) run as `mococheck fuzz` runs a mutant, the device's invariants "
+               "judged ("
+            << v.replies << " device line(s) or message(s))\n";
+  if (v.ok) {
+    std::cout << "result: PASS (no invariant broken)\n";
+    return 0;
+  }
+  std::cout << "FAIL [" << FindingKindName(v.kind) << "] " << v.violation << "\n";
+  for (size_t i = 0; i < v.backtrace.size(); ++i) {
+    std::cout << (i == 0 ? "  at " : "  called from ") << v.backtrace[i] << "\n";
+  }
+  std::cout << "result: FINDING\n";
+  return 1;
+}
 
 int Replay(const ReplayArgs& a) {
   auto loaded = session::LoadSession(a.session);
@@ -44,6 +73,16 @@ int Replay(const ReplayArgs& a) {
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
   std::unique_ptr<Target> target = std::move(std::get<ResolvedTarget>(resolved).target);
+  const bool host_only =
+      std::none_of(session.entries.begin(), session.entries.end(),
+                   [](const auto& e) { return !e.is_event && e.from == session::Origin::kDevice; });
+  if (host_only && target->VirtualClock() && target->CanRestart()) {
+    FuzzExecutor executor(proto, std::move(target));
+    if (executor.CanRun()) return Rejudge(a.session, executor);
+    return Fail(a.session + ": the session records no device side to compare, and " +
+                std::string(ProtocolName(proto)) +
+                " sessions are not run by the fuzzer; record the device side too");
+  }
   if (auto err = target->Open()) return Fail(*err);
   ReplayOptions options;
   if (a.steps >= 0) options.position_steps = a.steps;
@@ -65,11 +104,14 @@ Runner AddReplayCommand(CLI::App& app, CLI::App*& sub) {
   auto a = std::make_shared<ReplayArgs>();
   CLI::App* replay = app.add_subcommand(
       "replay",
-      "Resend a recorded session's host side and compare the device side (docs/sessions.md)");
+      "Resend a recorded session's host side and compare the device side (docs/sessions.md); "
+      "a session with no device side (a fuzz finding) is rerun and the device's invariants "
+      "judged");
   sub = replay;
   replay->add_option("session", a->session, "Session file (JSON Lines)")->required();
   replay->add_option("--target", a->target,
-                     "in-process:MODEL (default: the session's device), pty:PATH, serial:PATH or "
+                     "in-process:MODEL (default: the session's device), simavr:FIRMWARE.elf, "
+                     "pty:PATH, serial:PATH or "
                      "tcp:HOST:PORT");
   replay->add_option("--profile", a->profile, "Device profile for an in-process target")
       ->check(CLI::ExistingFile);

@@ -48,29 +48,6 @@ std::vector<std::string> SplitGlobs(const std::string& text) {
   return globs;
 }
 
-// SIGINT, SIGTERM and SIGHUP during `mococheck run`: the run stops at once
-// (every wait of the host ends; the case under way is dropped, as half a case
-// proves nothing) and the reports of what ran are written. A second signal
-// changes nothing (the reports are being written, which takes milliseconds);
-// a third ends the program at once, reports or not.
-std::atomic<int> g_signals_seen{0};
-extern "C" void OnStopSignal(int sig) {
-  if (g_signals_seen.fetch_add(1) >= 2) {
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
-    return;
-  }
-  if (StopRequested() == 0) RequestStop(sig);
-}
-
-void InstallStopHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = OnStopSignal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;  // no SA_RESTART: a waiting poll() returns EINTR and sees the request
-  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
-}
-
 struct RunArgs {
   std::string target_text, protocol, profile, rules_glob, cases_glob, junit, json_path, html_path,
       shard = "1/1", session_path, board_path, driver, vcd_path, dialect = "auto";

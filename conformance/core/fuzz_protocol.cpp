@@ -84,13 +84,41 @@ void MutationSource::MutateDataBytes(wire::Bytes& data) {
 }
 
 std::string_view FindingKindName(FuzzVerdict::Kind kind) {
+  using K = FuzzVerdict::Kind;
   switch (kind) {
-    case FuzzVerdict::Kind::kInvariant:
+    case K::kInvariant:
       return "invariant";
-    case FuzzVerdict::Kind::kFirmwareStopped:
-      return "firmware-stopped";
+    case K::kHang:
+      return "hang";
+    case K::kCrash:
+      return "crash";
+    case K::kStackOverflow:
+      return "stack-overflow";
+    case K::kStackSmash:
+      return "stack-smash";
+    case K::kDivisionByZero:
+      return "division-by-zero";
+    case K::kReset:
+      return "reset";
   }
   return "invariant";
+}
+
+FuzzVerdict::Kind FindingKindOf(FirmwareFaultKind kind) {
+  using K = FuzzVerdict::Kind;
+  switch (kind) {
+    case FirmwareFaultKind::kCrash:
+      return K::kCrash;
+    case FirmwareFaultKind::kStackOverflow:
+      return K::kStackOverflow;
+    case FirmwareFaultKind::kStackSmash:
+      return K::kStackSmash;
+    case FirmwareFaultKind::kDivisionByZero:
+      return K::kDivisionByZero;
+    case FirmwareFaultKind::kReset:
+      return K::kReset;
+  }
+  return K::kCrash;
 }
 
 std::unique_ptr<ReplayMatcher> ExactMatcher(std::string why) {

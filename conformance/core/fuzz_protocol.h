@@ -32,19 +32,51 @@ struct FuzzVerdict {
   std::string violation;  // the invariant broken and what was seen; empty when ok
   size_t messages = 0;    // host messages sent
   size_t replies = 0;     // device messages received
-  // What kind of finding a failed run is: kInvariant (the protocol's stream
-  // laws: framing, every request answered once, liveness afterwards), or the
-  // firmware stopping (kFirmwareStopped: a crash, an illegal instruction, a
-  // halt; Target::FirmwareStopped says which).
-  enum class Kind { kInvariant, kFirmwareStopped };
+  // What kind of finding a failed run is:
+  //  - kInvariant: the protocol's stream laws (framing, every request
+  //    answered, replies well formed);
+  //  - kHang: the device answers nothing, not even a greeting afterwards,
+  //    while its firmware still runs;
+  //  - the firmware stopped (Target::FirmwareFaulted): kCrash (an illegal
+  //    instruction, the PC past the program, the core halted or stuck),
+  //    kStackOverflow (the stack grew into .data/.bss), kStackSmash (a return
+  //    address overwritten), kDivisionByZero, kReset (a jump to the reset
+  //    vector after start).
+  enum class Kind {
+    kInvariant,
+    kHang,
+    kCrash,
+    kStackOverflow,
+    kStackSmash,
+    kDivisionByZero,
+    kReset
+  };
   Kind kind = Kind::kInvariant;
+  // Where the firmware was (a stopped or hung firmware under a target that
+  // runs it): the PC, then the open frames' call sites, innermost first.
+  std::vector<std::string> backtrace;
 };
 
-// "invariant", "firmware-stopped": the finding kinds as reports name them.
+// "invariant", "hang", "crash", "stack-overflow", "stack-smash",
+// "division-by-zero", "reset": the finding kinds as reports name them.
 std::string_view FindingKindName(FuzzVerdict::Kind kind);
+// The finding kind of a firmware fault.
+FuzzVerdict::Kind FindingKindOf(FirmwareFaultKind kind);
+
+inline FuzzVerdict Passed(size_t messages, size_t replies) {
+  FuzzVerdict v;
+  v.messages = messages;
+  v.replies = replies;
+  return v;
+}
 
 inline FuzzVerdict Violation(std::string what, size_t messages, size_t replies) {
-  return FuzzVerdict{false, std::move(what), messages, replies};
+  FuzzVerdict v;
+  v.ok = false;
+  v.violation = std::move(what);
+  v.messages = messages;
+  v.replies = replies;
+  return v;
 }
 
 // The seeded generator (splitmix64) a mutator draws from, and the names of the

@@ -41,20 +41,23 @@ bool MergeCoverage(std::span<const uint8_t> run, std::vector<uint8_t>& seen, siz
   return fresh;
 }
 
-// Drops messages while the mutant still fails, keeping at least one.
-Messages Shrink(FuzzExecutor& executor, Messages messages, std::string& violation) {
+// Drops messages while the mutant still fails with a finding of the same kind,
+// keeping at least one; `verdict` becomes the shrunk mutant's.
+Messages Shrink(FuzzExecutor& executor, Messages messages, FuzzVerdict& verdict) {
   constexpr int kNoBudget = 1 << 30;
   return ShrinkSequence(std::move(messages), kNoBudget, [&](const Messages& fewer) {
-    if (fewer.empty()) return false;
-    const FuzzVerdict v = executor.Run(fewer);
-    if (!v.ok) violation = v.violation;
-    return !v.ok;
+    if (fewer.empty() || StopRequested() != 0) return false;
+    FuzzVerdict v = executor.Run(fewer);
+    // A run a stop request cut short proves nothing.
+    if (v.ok || v.kind != verdict.kind || StopRequested() != 0) return false;
+    verdict = std::move(v);
+    return true;
   });
 }
 
 }  // namespace
 
-std::variant<Seed, std::string> LoadSeed(const std::string& path) {
+std::variant<Seed, std::string> LoadSeed(const std::string& path, bool as_written) {
   auto loaded = session::LoadSession(path);
   if (const auto* err = std::get_if<session::SessionError>(&loaded)) {
     return path + (err->line ? ":" + std::to_string(err->line) : std::string()) + ": " +
@@ -67,16 +70,19 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path) {
            " is not fuzzed; record the session in the device's packet protocol";
   }
   wire::Bytes host;
+  Messages writes;
   for (const session::SessionEntry& e : s.entries) {
     if (!e.is_event && e.from == session::Origin::kHost) {
       host.insert(host.end(), e.bytes.begin(), e.bytes.end());
+      writes.push_back(e.bytes);
     }
   }
   Seed seed;
   seed.path = path;
   seed.protocol = *protocol;
   seed.device = s.header.device;
-  seed.messages = wire::SplitMessages(*protocol, wire::Side::kHost, host);
+  seed.messages =
+      as_written ? std::move(writes) : wire::SplitMessages(*protocol, wire::Side::kHost, host);
   seed.warning = session::SessionWarning(s);
   if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
   return seed;
@@ -131,20 +137,40 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
   };
 
   auto record = [&](Messages messages, const std::vector<std::string>& mutations,
-                    std::string violation, FuzzVerdict::Kind kind) {
-    messages = Shrink(executor, std::move(messages), violation);
-    const std::string key = violation.substr(0, 60);
+                    FuzzVerdict verdict) {
+    messages = Shrink(executor, std::move(messages), verdict);
+    // One finding per kind, law and place: the violation up to its first ':'
+    // (the law it names: "reply grammar", "every request answered", "the
+    // firmware stopped"), and for a firmware the function it stopped in. Many
+    // mutants break one law the same way (lines run into each other), and
+    // listing each would hide the other findings.
+    std::string key = std::string(FindingKindName(verdict.kind)) + " " +
+                      verdict.violation.substr(0, verdict.violation.find(':'));
+    if (!verdict.backtrace.empty()) {
+      const std::string& pc = verdict.backtrace.front();
+      const size_t open = pc.find('('), plus = pc.find('+', open);
+      key += " in " + (open == std::string::npos
+                           ? pc
+                           : pc.substr(open + 1, std::min(plus, pc.find(')', open)) - open - 1));
+    }
     if (!seen.insert(key).second) return;
-    FuzzFailure f{std::move(messages), mutations, std::move(violation), "", kind};
+    FuzzFailure f{
+        std::move(messages),         mutations, std::move(verdict.violation), "", verdict.kind,
+        std::move(verdict.backtrace)};
     if (!options.crash_dir.empty()) {
       std::error_code ec;
       std::filesystem::create_directories(options.crash_dir, ec);
       const std::string path = options.crash_dir + "/mutant-" + std::to_string(options.seed) + "-" +
                                std::to_string(report.execs) + ".jsonl";
-      std::string note = "mococheck fuzz seed " + std::to_string(options.seed) + ": " +
-                         f.violation + " (mutations:";
+      std::string note = "mococheck fuzz seed " + std::to_string(options.seed) + ": [" +
+                         std::string(FindingKindName(f.kind)) + "] " + f.violation + " (mutations:";
       for (const std::string& m : f.mutations) note += " " + m;
       note += ")";
+      if (!f.backtrace.empty()) {
+        note += "; backtrace:";
+        for (const std::string& frame : f.backtrace) note += " " + frame + ";";
+        note.pop_back();
+      }
       const std::string err =
           SaveMessages(path, protocol, options.device, note, f.messages, executor.gap_ns());
       f.saved_path = err.empty() ? path : "not saved: " + err;
@@ -152,17 +178,23 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     report.failures.push_back(std::move(f));
   };
 
+  // A stop request (a signal) ends the campaign; the run it cut short is not judged.
+  auto stopped = [&] {
+    report.interrupted_by = StopRequested();
+    return report.interrupted_by != 0;
+  };
   for (const Seed& s : seeds) {
     const FuzzVerdict v = executor.Run(s.messages);
+    if (stopped()) break;
     ++report.execs;
     report.messages += v.messages;
     if (report.coverage) MergeCoverage(executor.coverage(), covered, report.edges);
     report.corpus = corpus.size();
-    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v.violation, v.kind);
+    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v);
   }
 
   Messages mutant;
-  while (report.failures.size() < options.max_failures) {
+  while (report.failures.size() < options.max_failures && report.interrupted_by == 0) {
     if (options.runs > 0
             ? report.execs >= options.runs + seeds.size()
             : std::chrono::duration<double>(Clock::now() - t0).count() >= options.seconds) {
@@ -171,14 +203,15 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     mutant = corpus[mutator.Below(corpus.size())];
     mutator.Mutate(mutant, donors);
     const FuzzVerdict v = executor.Run(mutant);
+    if (stopped()) break;
     ++report.execs;
     report.messages += v.messages;
     if (v.ok) {
       note_coverage(mutant);
     } else {
-      record(mutant, mutator.last_mutations(), v.violation, v.kind);
+      record(mutant, mutator.last_mutations(), v);
     }
-    if (progress && (report.execs & 255) == 0) {
+    if (progress) {
       const auto now = Clock::now();
       if (now - last_progress >= std::chrono::seconds(1)) {
         last_progress = now;
@@ -188,6 +221,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     }
   }
   report.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  report.code = executor.code_coverage();
   return report;
 }
 

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -29,9 +30,10 @@ struct Seed {
   std::string warning;  // session::SessionWarning of the file (a cut last line), or empty
 };
 
-// Reads a session file and cuts its host traffic into messages. On failure
-// the message names the file, the line and the fix.
-std::variant<Seed, std::string> LoadSeed(const std::string& path);
+// Reads a session file and cuts its host traffic into messages (as_written:
+// one message per recorded host write, as a saved finding holds them). On
+// failure the message names the file, the line and the fix.
+std::variant<Seed, std::string> LoadSeed(const std::string& path, bool as_written = false);
 
 struct FuzzOptions {
   uint64_t seed = 1;
@@ -48,6 +50,7 @@ struct FuzzFailure {
   std::string violation;
   std::string saved_path;  // empty when not saved
   FuzzVerdict::Kind kind = FuzzVerdict::Kind::kInvariant;
+  std::vector<std::string> backtrace;  // FuzzVerdict::backtrace of the shrunk mutant
 };
 
 struct FuzzReport {
@@ -57,7 +60,9 @@ struct FuzzReport {
   bool coverage = false;  // the executor observed the code
   size_t edges = 0;       // distinct edges reached over all runs
   size_t corpus = 0;      // sessions mutants are made from: the seeds and every new-coverage mutant
+  std::optional<CodeCoverage> code;  // of a firmware image: FuzzExecutor::code_coverage()
   std::vector<FuzzFailure> failures;
+  int interrupted_by = 0;  // the signal that stopped the campaign (StopRequested), or 0
   double ExecsPerSecond() const { return wall_s > 0 ? static_cast<double>(execs) / wall_s : 0; }
 };
 

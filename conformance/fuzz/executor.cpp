@@ -23,8 +23,17 @@ struct SharedVerdict {
   uint32_t violation_bytes;
   uint64_t messages;
   uint64_t replies;
+  uint32_t backtrace_bytes;  // the frames, one per line
   char violation[4096];
+  char backtrace[2048];
 };
+
+// Copies as much of `text` as fits into `to`; the bytes copied.
+uint32_t CopyOut(const std::string& text, char* to, size_t room) {
+  const size_t n = std::min(text.size(), room);
+  std::memcpy(to, text.data(), n);
+  return static_cast<uint32_t>(n);
+}
 
 std::string WaitStatusText(int status) {
   if (WIFSIGNALED(status)) {
@@ -48,6 +57,7 @@ FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target, Op
 
 FuzzExecutor::~FuzzExecutor() {
   if (shared_ != nullptr) munmap(shared_, shared_bytes_);
+  if (code_ != nullptr) munmap(code_, code_bytes_);
 }
 
 std::optional<std::string> FuzzExecutor::Open() {
@@ -70,11 +80,23 @@ std::optional<std::string> FuzzExecutor::Open() {
     }
     shared_ = static_cast<uint8_t*>(p);
   }
+  // Every fault a firmware can show is a finding here, whatever it costs per
+  // instruction (a target without firmware watches nothing).
+  target_->WatchFirmwareFaults();
   if (auto err = target_->Open()) return err;
   if (map != 0 && !target_->SetCoverageMap(shared_, map)) {
     return target_->Name() +
            " cannot observe its device's code: no coverage (fuzz it without "
            "coverage, or run its firmware under simavr)";
+  }
+  if (const size_t code = target_->InstructionMapBytes(); map != 0 && code != 0) {
+    void* p = mmap(nullptr, code, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) {
+      return std::string("cannot map the fuzzer's shared memory: ") + std::strerror(errno);
+    }
+    code_ = static_cast<uint8_t*>(p);
+    code_bytes_ = code;
+    target_->SetInstructionMap(code_, code_bytes_);
   }
   if (options_.fork) {
     target_->Restart();
@@ -87,6 +109,8 @@ std::optional<std::string> FuzzExecutor::Open() {
   return std::nullopt;
 }
 
+bool FuzzExecutor::CanRun() const { return hooks_ != nullptr && hooks_->run != nullptr; }
+
 TimeNs FuzzExecutor::gap_ns() const { return hooks_ == nullptr ? 0 : hooks_->gap_ns; }
 
 std::span<const uint8_t> FuzzExecutor::coverage() const {
@@ -94,14 +118,20 @@ std::span<const uint8_t> FuzzExecutor::coverage() const {
   return {shared_, options_.coverage_bytes};
 }
 
+std::optional<CodeCoverage> FuzzExecutor::code_coverage() const {
+  if (code_ == nullptr) return std::nullopt;
+  return target_->CodeCoverageOf({code_, code_bytes_});
+}
+
 std::string FuzzExecutor::target_name() const { return target_->Name(); }
 
 FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& boot_out) {
   FuzzVerdict v = hooks_->run(*target_, messages, gap_ns(), boot_out);
-  if (auto why = target_->FirmwareStopped()) {
+  if (auto fault = target_->FirmwareFaulted()) {
     v.ok = false;
-    v.kind = FuzzVerdict::Kind::kFirmwareStopped;
-    v.violation = "the firmware stopped: " + *why;
+    v.kind = FindingKindOf(fault->kind);
+    v.violation = "the firmware stopped: " + fault->what;
+    v.backtrace = std::move(fault->backtrace);
   }
   return v;
 }
@@ -135,9 +165,10 @@ FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
     back->kind = static_cast<uint32_t>(v.kind);
     back->messages = v.messages;
     back->replies = v.replies;
-    const size_t n = std::min(v.violation.size(), sizeof back->violation);
-    std::memcpy(back->violation, v.violation.data(), n);
-    back->violation_bytes = static_cast<uint32_t>(n);
+    back->violation_bytes = CopyOut(v.violation, back->violation, sizeof back->violation);
+    std::string frames;
+    for (const std::string& f : v.backtrace) frames += f + "\n";
+    back->backtrace_bytes = CopyOut(frames, back->backtrace, sizeof back->backtrace);
     back->done = 1;
     _exit(0);
   }
@@ -155,6 +186,12 @@ FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
   v.messages = back->messages;
   v.replies = back->replies;
   v.violation.assign(back->violation, back->violation_bytes);
+  const std::string frames(back->backtrace, back->backtrace_bytes);
+  for (size_t at = 0; at < frames.size();) {
+    const size_t nl = std::min(frames.find('\n', at), frames.size());
+    v.backtrace.push_back(frames.substr(at, nl - at));
+    at = nl + 1;
+  }
   return v;
 }
 

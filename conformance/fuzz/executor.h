@@ -48,12 +48,17 @@ class FuzzExecutor {
   // target without coverage when coverage was asked for) or nullopt.
   std::optional<std::string> Open();
   FuzzVerdict Run(const Messages& messages);
+  // Whether the protocol's sessions can be run at all (its FuzzHooks::run).
+  bool CanRun() const;
 
   // Virtual time a run leaves between two host messages (the protocol's
   // FuzzHooks::gap_ns).
   TimeNs gap_ns() const;
   // The last run's edge counts (empty without coverage).
   std::span<const uint8_t> coverage() const;
+  // With coverage, for a target that runs a firmware image: what every run
+  // since Open() reached of its code (Target::CodeCoverageOf); else nullopt.
+  std::optional<CodeCoverage> code_coverage() const;
   // The target's name, as reports show it.
   std::string target_name() const;
 
@@ -70,6 +75,9 @@ class FuzzExecutor {
   // verdict a child writes back (see executor.cpp).
   uint8_t* shared_ = nullptr;
   size_t shared_bytes_ = 0;
+  // Shared too: the instruction map every run adds to (Target::SetInstructionMap).
+  uint8_t* code_ = nullptr;
+  size_t code_bytes_ = 0;
 };
 
 }  // namespace moco::conformance

@@ -2,6 +2,8 @@
 // hooks, or the session rearranged.
 #include "conformance/fuzz/mutator.h"
 
+#include <cstring>
+
 #include "conformance/protocols/registry.h"
 
 namespace moco::conformance {
@@ -14,6 +16,17 @@ void SessionMutator::Mutate(Messages& messages, const std::vector<Messages>& don
   const uint64_t rounds = 1 + Below(4);
   for (uint64_t r = 0; r < rounds; ++r) MutateOne(messages, donors);
   if (messages.size() > kMaxMessages) messages.resize(kMaxMessages);
+}
+
+size_t SessionMutator::MutateStream(Protocol protocol, uint8_t* data, size_t size,
+                                    size_t max_size, unsigned int seed) {
+  Messages messages = wire::SplitMessages(protocol, wire::Side::kHost, {data, size});
+  SessionMutator mutator(protocol, seed);
+  mutator.Mutate(messages, {});
+  wire::Bytes out = wire::JoinMessages(messages);
+  if (out.size() > max_size) out.resize(max_size);
+  if (!out.empty()) std::memcpy(data, out.data(), out.size());
+  return out.size();
 }
 
 void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& donors) {
@@ -31,7 +44,13 @@ void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& 
   } else if (pick < 85) {  // swap two
     std::swap(messages[at], messages[Below(messages.size())]);
     Note("swap");
-  } else if (pick < 95) {  // splice a message from another session (or this one)
+  } else if (pick < 91) {  // two messages in one write (a read that takes both)
+    if (at + 1 < messages.size()) {
+      messages[at].insert(messages[at].end(), messages[at + 1].begin(), messages[at + 1].end());
+      messages.erase(messages.begin() + static_cast<ptrdiff_t>(at) + 1);
+    }
+    Note("burst");
+  } else if (pick < 97) {  // splice a message from another session (or this one)
     const Messages* from = &messages;
     if (!donors.empty()) {
       const Messages& d = donors[Below(donors.size())];

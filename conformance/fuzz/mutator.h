@@ -4,7 +4,8 @@
 // truncation, extension, then the length and checksum repaired so that most
 // mutants reach the device's message logic; a small share keeps broken
 // framing on purpose) and across messages here (splices between messages and
-// sessions, duplication, deletion, reordering, a message cut short).
+// sessions, duplication, deletion, reordering, two messages sent in one write,
+// a message cut short).
 #ifndef MOCO_CONFORMANCE_FUZZ_MUTATOR_H_
 #define MOCO_CONFORMANCE_FUZZ_MUTATOR_H_
 
@@ -37,6 +38,12 @@ class SessionMutator : public MutationSource {
   // rare mutations that break it on purpose (a wrong checksum, a cut message,
   // a missing line end).
   void Mutate(Messages& messages, const std::vector<Messages>& donors);
+
+  // libFuzzer's custom mutator over a host byte stream of `protocol`: cut into
+  // messages, mutated with `seed`, joined again into `data` (at most
+  // `max_size` bytes); the new size.
+  static size_t MutateStream(Protocol protocol, uint8_t* data, size_t size, size_t max_size,
+                             unsigned int seed);
 
   // The names of the mutations applied by the last Mutate(), for reports.
   const std::vector<std::string>& last_mutations() const { return applied(); }

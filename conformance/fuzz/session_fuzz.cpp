@@ -7,7 +7,6 @@
 // the device's message logic.
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <string>
 
 #include "conformance/fuzz/executor.h"
@@ -78,11 +77,5 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
 extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max_size,
                                           unsigned int seed) {
-  Messages messages = moco::wire::SplitMessages(kProtocol, moco::wire::Side::kHost, {data, size});
-  SessionMutator mutator(kProtocol, seed);
-  mutator.Mutate(messages, {});
-  moco::wire::Bytes out = moco::wire::JoinMessages(messages);
-  if (out.size() > max_size) out.resize(max_size);
-  if (!out.empty()) std::memcpy(data, out.data(), out.size());
-  return out.size();
+  return SessionMutator::MutateStream(kProtocol, data, size, max_size, seed);
 }

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -85,6 +87,17 @@ TEST(SimavrFuzz, ACampaignOnOurFirmwareGrowsItsCorpusAndFindsNothing) {
   EXPECT_TRUE(r.coverage);
   EXPECT_GT(r.edges, 100u);
   EXPECT_GT(r.corpus, 1u) << "no mutant of 60 reached an edge the seed did not";
+  // What the campaign reached of the image, against the ELF's functions.
+  ASSERT_TRUE(r.code.has_value());
+  EXPECT_GT(r.code->instructions, 500u);
+  EXPECT_GT(r.code->instructions_reached, r.code->instructions / 4);
+  EXPECT_LT(r.code->instructions_reached, r.code->instructions);
+  EXPECT_GT(r.code->edges_reached, r.code->instructions_reached / 2);
+  EXPECT_LT(r.code->edges_reached, r.code->edges);
+  const std::vector<std::string>& never = r.code->never_entered;
+  for (const char* f : {"main", "HandleLine", "SendLine", "StartMove"}) {
+    EXPECT_EQ(std::count(never.begin(), never.end(), f), 0) << f;
+  }
 }
 
 // Firmware that stops (here: it says "bye" and sleeps with interrupts off) is
@@ -98,10 +111,10 @@ TEST(SimavrFuzz, FirmwareThatStopsIsAFindingOfItsOwnKind) {
   ASSERT_EQ(ex.Open(), std::nullopt);
   const FuzzVerdict v = ex.Run(Lines({"hi\r\n"}));
   EXPECT_FALSE(v.ok);
-  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kFirmwareStopped);
+  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kCrash);
   EXPECT_NE(v.violation.find("the firmware stopped: the core halted"), std::string::npos)
       << v.violation;
-  EXPECT_EQ(FindingKindName(v.kind), "firmware-stopped");
+  EXPECT_EQ(FindingKindName(v.kind), "crash");
 
   FuzzExecutor forked(Protocol::kDfmoco, Firmware(MOCO_HALT_ELF), Forked());
   const auto err = forked.Open();
@@ -113,13 +126,13 @@ TEST(SimavrFuzz, FirmwareThatStopsIsAFindingOfItsOwnKind) {
 // A stack that grows into .data/.bss stops the firmware: the planted bug
 // clamps an over-fast pulse rate by recursion, a frame per step/s too many.
 // The same session on the firmware without the bug stops nothing.
-TEST(SimavrFuzz, AStackOverflowIsFoundAsTheFirmwareStoppingWithWhere) {
+TEST(SimavrFuzz, AStackOverflowIsFoundAsItsOwnKindWithWhere) {
   const Messages session = Lines({"hi\r\n", "pr 1 30000\r\n", "ms\r\n"});
   FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_BUG_RECURSIVE_CLAMP_ELF), Forked());
   ASSERT_EQ(ex.Open(), std::nullopt);
   const FuzzVerdict v = ex.Run(session);
   EXPECT_FALSE(v.ok);
-  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kFirmwareStopped);
+  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kStackOverflow);
   EXPECT_NE(v.violation.find("the stack ran into .data/.bss"), std::string::npos) << v.violation;
   EXPECT_NE(v.violation.find("pc 0x"), std::string::npos) << v.violation;
   EXPECT_TRUE(ex.Run(Lines({"hi\r\n", "pr 1 20000\r\n"})).ok) << "a rate within the limit";
@@ -128,6 +141,114 @@ TEST(SimavrFuzz, AStackOverflowIsFoundAsTheFirmwareStoppingWithWhere) {
   ASSERT_EQ(good.Open(), std::nullopt);
   const FuzzVerdict clamped = good.Run(session);
   EXPECT_TRUE(clamped.ok) << clamped.violation;
+}
+
+// The planted bugs of fixtures/firmware/dfmoco_avr/dfmoco.c ("Planted bug
+// switches"), each with a session that reaches it: each is a finding of the kind
+// fixtures/firmware/CMakeLists.txt gives it, where the firmware without the bug
+// passes the same session.
+struct PlantedBug {
+  std::string name, elf, kind;
+};
+
+std::vector<PlantedBug> PlantedBugs() {
+  std::vector<PlantedBug> out;
+  const std::string list = MOCO_DFMOCO_BUGS;
+  for (size_t at = 0; at < list.size();) {
+    const size_t end = std::min(list.find(',', at), list.size());
+    const std::string entry = list.substr(at, end - at);
+    const size_t a = entry.find('='), b = entry.rfind('=');
+    out.push_back({entry.substr(0, a), entry.substr(a + 1, b - a - 1), entry.substr(b + 1)});
+    at = end + 1;
+  }
+  return out;
+}
+
+std::string BugElf(const std::string& name) {
+  for (const PlantedBug& b : PlantedBugs()) {
+    if (b.name == name) return b.elf;
+  }
+  ADD_FAILURE() << "no planted bug " << name;
+  return "";
+}
+
+TEST(SimavrFuzz, EachPlantedBugIsAFindingOfItsKindAndTheGoodFirmwarePasses) {
+  const std::map<std::string, std::pair<Messages, std::string>> reach = {
+      {"recursive_clamp", {Lines({"hi\r\n", "pr 1 30000\r\n"}), "the stack ran into"}},
+      {"args_overflow",
+       {Lines({"hi\r\n",
+               "mm 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 "
+               "26 27 28 29 30 31 32\r\n"}),
+        "a return address was overwritten"}},
+      {"zero_rate", {Lines({"hi\r\n", "pr 1 0\r\n"}), "__udivmodsi4 entered with a zero"}},
+      {"motor_index", {Lines({"hi\r\n", "mm 5 100\r\n"}), "an access outside the data memory"}},
+      {"one_reply_slot",
+       {Lines({"hi\r\n", "mp 1\r\nmp 2\r\n"}), "every request answered: message 2 (\"mp 1\""}},
+      {"hang_stop_all",
+       {Lines({"hi\r\n", "pr 1 1000\r\n", "mm 1 20000\r\n", "sa\r\n"}), "hang: the device"}},
+  };
+  const std::vector<PlantedBug> bugs = PlantedBugs();
+  ASSERT_EQ(bugs.size(), reach.size());
+  FuzzExecutor good(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), Forked());
+  ASSERT_EQ(good.Open(), std::nullopt);
+  for (const PlantedBug& bug : bugs) {
+    SCOPED_TRACE(bug.name);
+    ASSERT_TRUE(reach.contains(bug.name)) << "no session reaches the planted bug";
+    const auto& [session, what] = reach.at(bug.name);
+    FuzzExecutor ex(Protocol::kDfmoco, Firmware(bug.elf.c_str()), Forked());
+    ASSERT_EQ(ex.Open(), std::nullopt);
+    const FuzzVerdict v = ex.Run(session);
+    EXPECT_FALSE(v.ok);
+    EXPECT_EQ(FindingKindName(v.kind), bug.kind) << v.violation;
+    EXPECT_NE(v.violation.find(what), std::string::npos) << v.violation;
+    if (bug.kind != "invariant") {
+      ASSERT_FALSE(v.backtrace.empty()) << "a firmware finding says where";
+      EXPECT_NE(v.backtrace.front().find(" ("), std::string::npos)
+          << "named by the ELF's symbols: " << v.backtrace.front();
+    }
+    const FuzzVerdict fine = good.Run(session);
+    EXPECT_TRUE(fine.ok) << fine.violation;
+  }
+  // The off-by-one motor check also shows in a reply, where no memory access
+  // stops the firmware: a position for a motor the greeting did not announce.
+  FuzzExecutor index(Protocol::kDfmoco, Firmware(BugElf("motor_index").c_str()), Forked());
+  ASSERT_EQ(index.Open(), std::nullopt);
+  const FuzzVerdict reported = index.Run(Lines({"hi\r\n", "mp 5\r\n"}));
+  EXPECT_EQ(reported.kind, FuzzVerdict::Kind::kInvariant) << reported.violation;
+  EXPECT_NE(reported.violation.find("motor range: \"mp 5 "), std::string::npos)
+      << reported.violation;
+  EXPECT_TRUE(good.Run(Lines({"hi\r\n", "mp 5\r\n"})).ok)
+      << "the good firmware answers parse error";
+}
+
+// A saved finding, replayed from a fresh boot without forking, is the fuzzer's
+// run again, cycle for cycle: the same violation at the same time and PC, the
+// same backtrace; burst writes stay one write each.
+TEST(SimavrFuzz, ASavedFindingRerunsCycleForCycle) {
+  const Messages session = Lines({"hi\r\n", "pr 1 4000\r\n", "mp 1\r\nmp 2\r\n",
+                                  "mm 1 2 3 4 5 6 7 8 9 10 11 12 "
+                                  "13 14 15 16 17 18 19 20 21 22 23 24\r\n"});
+  const std::string elf = BugElf("args_overflow");
+  FuzzExecutor forked(Protocol::kDfmoco, Firmware(elf.c_str()), Forked());
+  ASSERT_EQ(forked.Open(), std::nullopt);
+  const FuzzVerdict found = forked.Run(session);
+  ASSERT_FALSE(found.ok);
+  ASSERT_EQ(found.kind, FuzzVerdict::Kind::kStackSmash) << found.violation;
+
+  const std::string path = ::testing::TempDir() + "finding.jsonl";
+  ASSERT_EQ(
+      SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "a finding", session, forked.gap_ns()),
+      "");
+  auto loaded = LoadSeed(path, /*as_written=*/true);
+  ASSERT_TRUE(std::holds_alternative<Seed>(loaded)) << std::get<std::string>(loaded);
+  EXPECT_EQ(std::get<Seed>(loaded).messages, session);
+  FuzzExecutor fresh(Protocol::kDfmoco, Firmware(elf.c_str()));
+  ASSERT_EQ(fresh.Open(), std::nullopt);
+  const FuzzVerdict again = fresh.Run(std::get<Seed>(loaded).messages);
+  EXPECT_EQ(again.kind, found.kind);
+  EXPECT_EQ(again.violation, found.violation);
+  EXPECT_EQ(again.backtrace, found.backtrace);
+  std::remove(path.c_str());
 }
 
 // Fuzzing needs a device in virtual time and coverage a target that sees code.

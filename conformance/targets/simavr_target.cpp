@@ -2,6 +2,8 @@
 // (ARCHITECTURE "conformance", "One clock"; FACTS "simavr (Debian 1.6)").
 #include "conformance/targets/simavr_target.h"
 
+#include "conformance/targets/avr_elf.h"
+
 #include <algorithm>
 #include <cstdarg>
 #include <cstdio>
@@ -38,12 +40,31 @@ constexpr uint64_t kNsPerSecond = 1'000'000'000;
 // errors logged while a core is built are kept for the error message.
 thread_local std::string* log_capture = nullptr;
 
+// Set while a core runs (Receive): simavr reports an illegal instruction (and
+// goes on as if it were a NOP) and an access outside the data memory (and
+// stops the core) only through its logger. The first such error is kept.
+thread_local std::string* core_error_seen = nullptr;
+
 void QuietLogger(avr_t* /*avr*/, const int level, const char* format, va_list ap) {
-  if (log_capture == nullptr || level > LOG_ERROR) return;
+  if (level > LOG_ERROR || (log_capture == nullptr && core_error_seen == nullptr)) return;
   char text[512];
   std::vsnprintf(text, sizeof text, format, ap);
   std::string line(text);
-  while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+  // simavr colours its errors (ANSI escapes) and starts them with "CORE: *** ".
+  for (size_t esc; (esc = line.find('\x1b')) != std::string::npos;) {
+    const size_t end = line.find('m', esc);
+    line.erase(esc, end == std::string::npos ? std::string::npos : end - esc + 1);
+  }
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ')) {
+    line.pop_back();
+  }
+  if (core_error_seen != nullptr) {
+    if (core_error_seen->empty() && line.find("Invalid") != std::string::npos) {
+      const size_t at = line.find("*** ");
+      *core_error_seen = at == std::string::npos ? line : line.substr(at + 4);
+    }
+    return;
+  }
   if (line.empty()) return;
   if (!log_capture->empty()) *log_capture += "; ";
   *log_capture += line;
@@ -65,21 +86,6 @@ void FreeFirmware(elf_firmware_t& fw) {
   }
 #endif
   fw.flash = fw.eeprom = fw.fuse = fw.lockbits = nullptr;
-}
-
-// Checks the ELF header before simavr reads the file: simavr 1.6 takes any file
-// and crashes on ELFs for other machines. Returns a problem, or empty.
-std::string CheckAvrElf(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char h[20] = {};
-  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return "too short for an ELF";
-  if (h[0] != 0x7f || h[1] != 'E' || h[2] != 'L' || h[3] != 'F') return "not an ELF file";
-  constexpr unsigned kElfClass32 = 1, kElfDataLsb = 1, kMachineAvr = 83;
-  const unsigned machine = h[18] | (static_cast<unsigned>(h[19]) << 8);
-  if (h[4] != kElfClass32 || h[5] != kElfDataLsb || machine != kMachineAvr) {
-    return "an ELF for another machine (e_machine " + std::to_string(machine) + ", AVR is 83)";
-  }
-  return "";
 }
 
 // simavr's USART0 module: the avr_io_t that hands out its IRQs is the first member
@@ -111,7 +117,14 @@ std::string SimavrTarget::Name() const {
 std::optional<std::string> SimavrTarget::Open() {
   Teardown();
   unmodelled_.clear();
+  // A stripped or odd symbol table only costs the reports their function names.
+  symbols_ = AvrSymbols::Read(spec_.elf_path, nullptr);
   return Build();
+}
+
+bool SimavrTarget::WatchFirmwareFaults() {
+  watch_faults_ = true;
+  return true;
 }
 
 void SimavrTarget::Restart() {
@@ -149,6 +162,14 @@ void SimavrTarget::Teardown() {
 std::optional<std::string> SimavrTarget::Build() {
   Teardown();
   stopped_.clear();
+  stop_kind_ = FirmwareFaultKind::kCrash;
+  stop_backtrace_.clear();
+  core_error_.clear();
+  if (watch_faults_) {
+    faults_ = std::make_unique<AvrFaultWatch>(symbols_);
+  } else {
+    faults_.reset();
+  }
   to_device_.clear();
   from_device_.clear();
   pacer_armed_ = false;
@@ -217,6 +238,7 @@ std::optional<std::string> SimavrTarget::Build() {
   // The program image: the code, then .data's initial values; past it the
   // flash is erased (0xFFFF), which simavr would run as instructions.
   code_end_ = fw.flashbase + fw.flashsize;
+  code_map_.Prepare(avr_, code_end_);
   FreeFirmware(fw);
   avr_->frequency = frequency_hz_;
   if (options_.timer_model) timers_ = std::make_unique<AvrTimers>(avr_);
@@ -365,7 +387,7 @@ bool SimavrTarget::StackCollided() {
   char what[120];
   std::snprintf(what, sizeof what,
                 "the stack ran into .data/.bss (SP 0x%04x, below their end 0x%04x)", sp, data_end_);
-  stopped_ = what + At();
+  Stop(FirmwareFaultKind::kStackOverflow, what);
   return true;
 }
 
@@ -374,7 +396,7 @@ bool SimavrTarget::LeftTheProgram() {
   char what[120];
   std::snprintf(what, sizeof what,
                 "the program counter left the program (its image ends at 0x%04x)", code_end_);
-  stopped_ = what + At();
+  Stop(FirmwareFaultKind::kCrash, what);
   return true;
 }
 
@@ -383,15 +405,14 @@ bool SimavrTarget::CheckAlive() {
   if (!stopped_.empty()) return false;
   const int state = avr_->state;
   if (state == cpu_Running || state == cpu_Sleeping) return true;
-  const std::string when = At();
   if (state == cpu_Done) {
-    stopped_ = "the core halted (it sleeps with interrupts off)";
+    Stop(FirmwareFaultKind::kCrash, "the core halted (it sleeps with interrupts off)");
   } else if (state == cpu_Crashed) {
-    stopped_ = "the core crashed";
+    Stop(FirmwareFaultKind::kCrash, "the core crashed");
   } else {
-    stopped_ = "the core does not run (simavr state " + std::to_string(state) + ")";
+    Stop(FirmwareFaultKind::kCrash,
+         "the core does not run (simavr state " + std::to_string(state) + ")");
   }
-  stopped_ += when;
   return false;
 }
 
@@ -475,6 +496,10 @@ void SimavrTarget::OnControlWrite(avr_t* avr, uint16_t addr, uint8_t value, void
 bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   if (avr_ == nullptr) return false;
   const uint64_t deadline = NsToCycles(deadline_ns);
+  core_error_seen = &core_error_;
+  struct Unwatch {
+    ~Unwatch() { core_error_seen = nullptr; }
+  } unwatch;
   bool alive = true;
   uint32_t polls = 0;
   bool stop_requested = false;
@@ -506,14 +531,27 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
         break;
       }
       const uint64_t before = avr_->cycle;
+      const uint32_t pc_before = static_cast<uint32_t>(avr_->pc);
+      const uint8_t serving = avr_->interrupts.running_ptr;
+      const bool was_running = avr_->state == cpu_Running;
+      if (faults_ != nullptr && StopAt(faults_->Before(avr_))) break;
       const int state = avr_run(avr_);
       if (coverage_ != nullptr) CountEdge();
+      if (instruction_map_ != nullptr && was_running) {
+        code_map_.Record(instruction_map_, pc_before, avr_, avr_->interrupts.running_ptr > serving);
+      }
+      if (faults_ != nullptr && StopAt(faults_->After(avr_))) break;
+      if (!core_error_.empty()) {
+        StopForCoreError(pc_before);
+        break;
+      }
       if (state != cpu_Running && state != cpu_Sleeping) break;
       if (StackCollided() || LeftTheProgram()) break;
       // A call may wake the core without a cycle passing; a thousand in a row is a hang.
       stalls = avr_->cycle == before ? stalls + 1 : 0;
       if (stalls > 1000) {
-        stopped_ = "the core makes no progress (simavr state " + std::to_string(state) + ")";
+        Stop(FirmwareFaultKind::kCrash,
+             "the core makes no progress (simavr state " + std::to_string(state) + ")");
         break;
       }
     }
@@ -528,12 +566,68 @@ std::optional<std::string> SimavrTarget::FirmwareStopped() const {
   return stopped_;
 }
 
+std::optional<FirmwareFault> SimavrTarget::FirmwareFaulted() const {
+  if (stopped_.empty()) return std::nullopt;
+  return FirmwareFault{stop_kind_, stopped_, stop_backtrace_};
+}
+
+std::vector<std::string> SimavrTarget::FirmwareBacktrace() const {
+  if (avr_ == nullptr) return {};
+  const uint32_t pc = static_cast<uint32_t>(avr_->pc);
+  if (faults_ != nullptr) return faults_->Backtrace(pc);
+  return {symbols_.Describe(pc)};
+}
+
+void SimavrTarget::StopForCoreError(uint32_t pc_before) {
+  char what[200];
+  if (core_error_.find("Invalid Opcode") != std::string::npos) {
+    // simavr has already moved past it: the instruction was at the PC before.
+    std::snprintf(what, sizeof what, "an illegal instruction (0x%04x) at %s",
+                  static_cast<unsigned>(avr_->flash[pc_before] | (avr_->flash[pc_before + 1] << 8)),
+                  symbols_.Describe(pc_before).c_str());
+  } else {
+    // simavr stops the core at a read or write outside the data memory.
+    std::snprintf(what, sizeof what, "an access outside the data memory at %s (simavr: %s)",
+                  symbols_.Describe(pc_before).c_str(), core_error_.c_str());
+  }
+  Stop(FirmwareFaultKind::kCrash, what);
+}
+
+void SimavrTarget::Stop(FirmwareFaultKind kind, const std::string& what) {
+  if (!stopped_.empty()) return;  // the first fault stands
+  stop_kind_ = kind;
+  stop_backtrace_ = FirmwareBacktrace();
+  stopped_ = what + At();
+}
+
+bool SimavrTarget::StopAt(std::optional<AvrFault> fault) {
+  if (!fault) return false;
+  FirmwareFaultKind kind = FirmwareFaultKind::kStackSmash;
+  if (fault->kind == AvrFaultKind::kDivisionByZero) kind = FirmwareFaultKind::kDivisionByZero;
+  if (fault->kind == AvrFaultKind::kReset) kind = FirmwareFaultKind::kReset;
+  Stop(kind, fault->what);
+  return true;
+}
+
 bool SimavrTarget::SetCoverageMap(uint8_t* map, size_t size) {
   if (map != nullptr && (size == 0 || (size & (size - 1)) != 0)) return false;
   coverage_ = map;
   coverage_mask_ = map == nullptr ? 0 : size - 1;
   previous_pc_id_ = 0;
   return true;
+}
+
+size_t SimavrTarget::InstructionMapBytes() const { return code_map_.bytes(); }
+
+bool SimavrTarget::SetInstructionMap(uint8_t* map, size_t size) {
+  if (map != nullptr && size < code_map_.bytes()) return false;
+  instruction_map_ = map;
+  return true;
+}
+
+std::optional<CodeCoverage> SimavrTarget::CodeCoverageOf(std::span<const uint8_t> map) const {
+  if (code_map_.bytes() == 0) return std::nullopt;
+  return code_map_.Summarise(map, symbols_);
 }
 
 void SimavrTarget::CountEdge() {

@@ -12,6 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "conformance/targets/avr_code_map.h"
+#include "conformance/targets/avr_elf.h"
+#include "conformance/targets/avr_faults.h"
 #include "conformance/targets/avr_timers.h"
 #include "conformance/targets/target.h"
 
@@ -107,10 +110,20 @@ class SimavrTarget final : public Target {
   // since the last Open() / Restart(), with the reason.
   std::vector<std::string> Caveats() const override;
 
+  // Also stops on an illegal instruction (simavr would run it as a NOP). With
+  // WatchFirmwareFaults(), an AvrFaultWatch (avr_faults.h) checks every
+  // instruction; backtraces name the ELF's functions.
   std::optional<std::string> FirmwareStopped() const override;
+  std::optional<FirmwareFault> FirmwareFaulted() const override;
+  bool WatchFirmwareFaults() override;
+  std::vector<std::string> FirmwareBacktrace() const override;
   // Edges are (previous PC, PC) pairs of the instructions the core executes,
   // hashed into `map` as AFL does; an interrupt's entry is an edge too.
   bool SetCoverageMap(uint8_t* map, size_t size) override;
+  // One byte per flash word of the image (AvrCodeMap).
+  size_t InstructionMapBytes() const override;
+  bool SetInstructionMap(uint8_t* map, size_t size) override;
+  std::optional<CodeCoverage> CodeCoverageOf(std::span<const uint8_t> map) const override;
 
  private:
   struct OutByte {
@@ -128,6 +141,14 @@ class SimavrTarget final : public Target {
   void CountEdge();
   // " at T s, pc 0x...": where the firmware is now, for stopped_.
   std::string At() const;
+  // Ends the firmware's run for `what` (the first call stands), with the time,
+  // the PC and the backtrace.
+  void Stop(FirmwareFaultKind kind, const std::string& what);
+  // Stop()s for core_error_: the instruction at `pc_before` was illegal or
+  // accessed no data memory.
+  void StopForCoreError(uint32_t pc_before);
+  // Stop()s for a fault the watch saw; whether there was one.
+  bool StopAt(std::optional<AvrFault> fault);
   // Whether the stack has grown into .data/.bss; stops the firmware when so.
   bool StackCollided();
   // Whether the PC has run past the program image into erased flash; stops
@@ -158,9 +179,15 @@ class SimavrTarget final : public Target {
   avr_t* avr_ = nullptr;
   avr_uart_t* uart_ = nullptr;
   avr_irq_t* uart_input_ = nullptr;
-  bool txen_ = false;              // TXEN0 as last written
-  std::string stopped_;            // why the core ended; empty while it runs
-  std::deque<uint8_t> to_device_;  // host bytes not yet started
+  bool txen_ = false;    // TXEN0 as last written
+  std::string stopped_;  // why the core ended; empty while it runs
+  FirmwareFaultKind stop_kind_ = FirmwareFaultKind::kCrash;
+  std::vector<std::string> stop_backtrace_;
+  std::string core_error_;  // simavr logged an illegal instruction or a bad access
+  AvrSymbols symbols_;      // the ELF's code symbols (Open())
+  bool watch_faults_ = false;
+  std::unique_ptr<AvrFaultWatch> faults_;  // with watch_faults_, one per core
+  std::deque<uint8_t> to_device_;          // host bytes not yet started
   bool pacer_armed_ = false;
   bool xoff_ = false;
   uint64_t rx_line_free_cycle_ = 0;  // the host's line is idle from here
@@ -174,9 +201,11 @@ class SimavrTarget final : public Target {
   size_t trace_edges_ = 0;
   std::vector<std::unique_ptr<PinHook>> pin_hooks_;
   std::unique_ptr<AvrTimers> timers_;
-  uint32_t data_end_ = 0;        // the first SRAM byte after .data and .bss
-  uint32_t code_end_ = 0;        // the first flash byte after the program image
-  uint8_t* coverage_ = nullptr;  // SetCoverageMap(); nullptr: not counted
+  uint32_t data_end_ = 0;               // the first SRAM byte after .data and .bss
+  uint32_t code_end_ = 0;               // the first flash byte after the program image
+  uint8_t* coverage_ = nullptr;         // SetCoverageMap(); nullptr: not counted
+  AvrCodeMap code_map_;                 // the image's instruction lengths (Build())
+  uint8_t* instruction_map_ = nullptr;  // SetInstructionMap(); nullptr: not marked
   size_t coverage_mask_ = 0;
   uint32_t previous_pc_id_ = 0;          // the last PC's id, shifted (AFL's prev_loc)
   std::vector<std::string> unmodelled_;  // notes of cores already torn down

@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -25,6 +26,30 @@
 namespace moco::conformance {
 
 using sim::TimeNs;
+
+// What stopped a firmware a target runs (Target::FirmwareFaulted): a crash (an
+// illegal instruction, a jump past the program image, the core halted or
+// stuck), the stack grown into .data/.bss, and with WatchFirmwareFaults() a
+// return address overwritten, a division by zero, a jump to the reset vector.
+enum class FirmwareFaultKind { kCrash, kStackOverflow, kStackSmash, kDivisionByZero, kReset };
+
+struct FirmwareFault {
+  FirmwareFaultKind kind = FirmwareFaultKind::kCrash;
+  std::string what;                    // as FirmwareStopped() says it
+  std::vector<std::string> backtrace;  // the PC, then the open frames' call sites
+};
+
+// What of a firmware's code the runs reached (Target::CodeCoverageOf): its
+// instructions in the functions its symbols size, its static control-flow
+// edges (each instruction's fall-through or taken outcome; a conditional
+// branch or skip has both) and how many of each ran or were taken, and the
+// functions never entered.
+struct CodeCoverage {
+  size_t instructions = 0, instructions_reached = 0;
+  size_t edges = 0, edges_reached = 0;
+  size_t functions = 0;
+  std::vector<std::string> never_entered;
+};
 
 // The outputs of a device that the runner can read where it reaches the
 // device (in-process): its DMX universe, general I/O outputs and camera lines
@@ -92,12 +117,33 @@ class Target {
   // progress), with its simulated time; nullopt while it runs, and for every
   // other target. A finding about the device, not a target error.
   virtual std::optional<std::string> FirmwareStopped() const { return std::nullopt; }
+  // The same, with what kind of fault it was and where: the program counter
+  // and the call sites of the frames still open, innermost first, named by the
+  // firmware's symbols where it has them.
+  virtual std::optional<FirmwareFault> FirmwareFaulted() const { return std::nullopt; }
+  // From the next Open() / Restart() on, also stops the firmware at the faults
+  // only a fuzzer looks for (FirmwareFaultKind kStackSmash, kDivisionByZero,
+  // kReset: each costs a check per instruction). False when the target runs no
+  // firmware it can watch.
+  virtual bool WatchFirmwareFaults() { return false; }
+  // Where the firmware runs now, as FirmwareFault::backtrace (a hang's
+  // report); empty for a target that runs none.
+  virtual std::vector<std::string> FirmwareBacktrace() const { return {}; }
   // Edge coverage of the firmware's code, for a target that can observe it
   // (simavr: each pair of consecutive program counters, AFL-style): from now
   // on the target adds each edge it executes to `map` (`size` a power of two;
   // a count saturating at 255 per slot); nullptr stops. False when the target
   // cannot observe its device's code.
   virtual bool SetCoverageMap(uint8_t* /*map*/, size_t /*size*/) { return false; }
+  // Which instructions ran and which way each went, for a target that runs a
+  // firmware image (after Open()): the bytes the map needs (0: none), then
+  // from now on marking each instruction in `map` (kept across runs; never
+  // cleared), and what a map shows of the image's code.
+  virtual size_t InstructionMapBytes() const { return 0; }
+  virtual bool SetInstructionMap(uint8_t* /*map*/, size_t /*size*/) { return false; }
+  virtual std::optional<CodeCoverage> CodeCoverageOf(std::span<const uint8_t> /*map*/) const {
+    return std::nullopt;
+  }
 
   // Watches the firmware's pins that `board` names from the next Open() /
   // Restart() on (a simavr: target only). Returns an error naming the fix, or

@@ -18,16 +18,19 @@ using dfmoco_cases::kFuzzBootGreetingNs;
 using dfmoco_cases::kFuzzDrainMaxNs;
 using dfmoco_cases::kFuzzGapNs;
 using dfmoco_cases::kFuzzHiAnswerNs;
+using dfmoco_cases::kFuzzJudgedWriteBytes;
+using dfmoco_cases::kFuzzReplyQuietNs;
 using dfmoco_cases::kFuzzSettleMaxNs;
 using dfmoco_cases::kFuzzSettleQuietNs;
 using dfmoco_cases::kFuzzTailNs;
+using dfmoco_cases::kMs;
 
 constexpr std::string_view kWords[] = {"hi", "ms", "mm", "mp", "sm", "sa", "jm",
                                        "im", "pr", "zm", "np", "bf", "go", "mp *"};
 constexpr std::string_view kNumbers[] = {
     "0",    "1",     "-1",    "2",          "4",           "8",          "9",
     "100",  "20000", "40000", "2147483647", "-2147483648", "2147483648", "99999999999",
-    "1000", "-0",    "+5",    "0x10",       "1e3",         "3.5"};
+    "1000", "-0",    "+5",    "0x10",       "1e3",         "3.5",        "5"};
 
 void Mutate(MutationSource& s, wire::Bytes& m) {
   constexpr size_t kMaxLine = DfmocoProtocol::kMaxFuzzLine;
@@ -102,36 +105,154 @@ void Boot(Target& target, wire::Bytes& out) {
   }
 }
 
-FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
-                const wire::Bytes& boot_out) {
-  wire::Bytes out = boot_out;
-  auto settle = [&] {
-    const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
-    while (target.Now() < limit) {
-      const size_t n = out.size();
-      if (!target.Receive(std::min(limit, target.Now() + kFuzzSettleQuietNs), out)) break;
-      if (out.size() == n) break;
-    }
-  };
-  for (const wire::Bytes& m : messages) {
-    target.Send(m);
-    target.Receive(target.Now() + gap_ns, out);
-    settle();
+// Whether `line` (its CR LF taken off) is a command every DFMoco sketch answers
+// with at least one line (FACTS "DFMoco": each of these words is answered, even
+// with a bad motor or on a moving motor; only unknown words are not): the word,
+// then exactly its arguments, each a decimal of at most 9 digits (the first a
+// motor of the greeting's count), one space apart. Anything else a sketch may
+// answer or not.
+bool MustBeAnswered(std::string_view line, int32_t motor_count) {
+  static constexpr struct {
+    std::string_view word;
+    size_t args;
+  } kAnswered[] = {{"hi", 0}, {"ms", 0}, {"sa", 0}, {"mp", 1}, {"sm", 1}, {"zm", 1},
+                   {"mm", 2}, {"jm", 2}, {"im", 2}, {"pr", 2}, {"np", 2}};
+  if (line.size() < 2) return false;
+  size_t want = SIZE_MAX;
+  for (const auto& w : kAnswered) {
+    if (line.substr(0, 2) == w.word) want = w.args;
   }
-  // End any unterminated line, then greet.
-  const std::string_view tail = "\r\nhi\r\n";
-  const size_t before_hi = out.size();
-  target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(tail.data()), tail.size()));
+  if (want == SIZE_MAX) return false;
+  size_t at = 2;
+  for (size_t arg = 0; arg < want; ++arg) {
+    if (at >= line.size() || line[at] != ' ') return false;
+    ++at;
+    const size_t start = at;
+    if (arg > 0 && at < line.size() && line[at] == '-') ++at;
+    const size_t digits_from = at;
+    while (at < line.size() && line[at] >= '0' && line[at] <= '9') ++at;
+    if (at == digits_from || at - digits_from > 9) return false;
+    if (arg == 0) {
+      const long motor =
+          std::strtol(std::string(line.substr(start, at - start)).c_str(), nullptr, 10);
+      if (motor < 1 || motor > motor_count) return false;
+    }
+  }
+  return at == line.size();
+}
+
+// The host's side of the line: which complete lines a write finishes, across
+// writes (a message without its line end runs into the next one).
+class HostLines {
+ public:
+  // How many lines `bytes` completes that must be answered.
+  size_t MustAnswer(wire::ByteView bytes, int32_t motor_count, std::string* first) {
+    size_t n = 0;
+    for (const uint8_t b : bytes) {
+      // The sketch takes a command only where CR LF ends it; a bare LF is one
+      // more byte of the line (FACTS "DFMoco").
+      if (b != '\n' || pending_.empty() || pending_.back() != '\r') {
+        pending_.push_back(static_cast<char>(b));
+        continue;
+      }
+      pending_.pop_back();
+      if (MustBeAnswered(pending_, motor_count)) {
+        if (n == 0 && first != nullptr) *first = pending_;
+        ++n;
+      }
+      pending_.clear();
+    }
+    return n;
+  }
+
+ private:
+  std::string pending_;
+};
+
+size_t CountLines(const wire::Bytes& out) {
+  return static_cast<size_t>(std::count(out.begin(), out.end(), uint8_t{'\n'}));
+}
+
+// Reads until the device has written `want` more lines and then
+// kept quiet for kFuzzReplyQuietNs (want > 0), or kept quiet for
+// kFuzzSettleQuietNs (want == 0); at most kFuzzSettleMaxNs. Whether the lines came.
+bool AwaitReplies(Target& target, wire::Bytes& out, size_t want) {
+  const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
+  size_t seen = out.size();
+  size_t got = 0;
+  const TimeNs quiet = want > 0 ? kFuzzReplyQuietNs : kFuzzSettleQuietNs;
+  while (target.Now() < limit) {
+    if (got < want) {
+      if (!target.Receive(limit, out)) break;
+    } else if (!target.Receive(std::min(limit, target.Now() + quiet), out) || out.size() == seen) {
+      break;  // quiet (or the firmware stopped)
+    }
+    got += static_cast<size_t>(
+        std::count(out.begin() + static_cast<ptrdiff_t>(seen), out.end(), uint8_t{'\n'}));
+    seen = out.size();
+  }
+  return got >= want;
+}
+
+// Sends `hi` and reads until a `hi` reply has come after it (within
+// kFuzzHiAnswerNs); whether it did.
+bool Greet(Target& target, wire::Bytes& out) {
+  const std::string_view hi = "hi\r\n";
+  const size_t before = out.size();
+  target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(hi.data()), hi.size()));
   const TimeNs deadline = target.Now() + kFuzzHiAnswerNs;
   while (target.Now() < deadline) {
     if (!target.Receive(deadline, out)) break;
-    if (out.size() > before_hi && out.back() == '\n') {
-      // Stop once a hi reply has come after the greeting was sent.
-      const std::string_view s(reinterpret_cast<const char*>(out.data()) + before_hi,
-                               out.size() - before_hi);
-      if (s.find("hi ") != std::string_view::npos) break;
+    if (out.size() > before && out.back() == '\n') {
+      const std::string_view s(reinterpret_cast<const char*>(out.data()) + before,
+                               out.size() - before);
+      if (s.find("hi ") != std::string_view::npos) return true;
     }
   }
+  return false;
+}
+
+FuzzVerdict Judge(const wire::Bytes& out, size_t before_hi, size_t sent, const std::string& lost);
+
+// The motors of the boot greeting's `hi` line (4 when there is none).
+int32_t GreetingMotors(const wire::Bytes& boot_out) {
+  const std::string_view text(reinterpret_cast<const char*>(boot_out.data()), boot_out.size());
+  const size_t at = text.find("hi ");
+  if (at == std::string_view::npos) return 4;
+  const size_t end = text.find('\r', at);
+  auto parsed = dfmoco::ParseDeviceLine(
+      text.substr(at, end == std::string_view::npos ? end : end - at), dfmoco::Dialect());
+  if (!parsed.ok()) return 4;
+  const auto* h = std::get_if<dfmoco::HelloReply>(&parsed.value());
+  return h == nullptr ? 4 : dfmoco::DialectFrom(*h, false).motor_count;
+}
+
+FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
+                const wire::Bytes& boot_out) {
+  (void)gap_ns;  // a run waits for the answers instead (kFuzzSettleMaxNs)
+  wire::Bytes out = boot_out;
+  const int32_t motors = GreetingMotors(boot_out);
+  HostLines host;
+  std::string lost;  // the first request left without a reply
+  for (size_t i = 0; i < messages.size(); ++i) {
+    const wire::Bytes& m = messages[i];
+    target.Send(m);
+    std::string first;
+    size_t want = host.MustAnswer(m, motors, &first);
+    if (m.size() > kFuzzJudgedWriteBytes) want = 0;
+    if (!AwaitReplies(target, out, want) && lost.empty() && !target.FirmwareStopped()) {
+      lost = "every request answered: message " + std::to_string(i + 1) + " (\"" + first + "\"" +
+             (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
+             ") got " + (want > 1 ? "fewer reply lines than commands" : "no reply") + " within " +
+             std::to_string(kFuzzSettleMaxNs / kMs) + " ms";
+    }
+  }
+  // End any unterminated line, then greet; greet again when no answer came.
+  const std::string_view line_end = "\r\n";
+  target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
+  AwaitReplies(target, out, 0);
+  const size_t before_hi = out.size();
+  const bool answered = Greet(target, out) || Greet(target, out);
   // What is still on its way, until the line has been quiet for kFuzzTailNs:
   // a firmware's transmitter may hold a backlog of replies at the line rate.
   const TimeNs drain_limit = target.Now() + kFuzzDrainMaxNs;
@@ -140,7 +261,24 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     if (!target.Receive(std::min(drain_limit, target.Now() + kFuzzTailNs), out)) break;
     if (out.size() == n) break;
   }
+  if (!answered && !target.FirmwareStopped()) {
+    FuzzVerdict v = Violation(
+        "hang: the device answered neither of two `hi` sent after the "
+        "session (" +
+            std::to_string(kFuzzHiAnswerNs / kMs) + " ms each), while its firmware runs",
+        messages.size(), CountLines(out));
+    v.kind = FuzzVerdict::Kind::kHang;
+    v.backtrace = target.FirmwareBacktrace();
+    return v;
+  }
+  return Judge(out, before_hi, messages.size(), lost);
+}
 
+// The stream laws over everything the device wrote: CR LF lines of printable
+// ASCII, each a DFMoco reply, `ms` as wide as the greeting's motor count, a `hi`
+// reply after `before_hi`; then `lost` (a request left without a reply), if any.
+FuzzVerdict Judge(const wire::Bytes& out, size_t before_hi, size_t sent, const std::string& lost) {
+  const size_t messages_size = sent;
   const std::string_view text(reinterpret_cast<const char*>(out.data()), out.size());
   dfmoco::Dialect dialect;
   bool have_dialect = false;
@@ -152,37 +290,52 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     if (nl == std::string_view::npos) {
       return Violation("line grammar: the device left an unterminated line \"" +
                            std::string(text.substr(start)) + "\"",
-                       messages.size(), replies);
+                       messages_size, replies);
     }
     if (nl == start || text[nl - 1] != '\r') {
       return Violation(
           "line grammar: a device line does not end in CR LF at byte " + std::to_string(nl),
-          messages.size(), replies);
+          messages_size, replies);
     }
     const std::string_view line = text.substr(start, nl - 1 - start);
     for (char c : line) {
       if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7e) {
         return Violation(
             "line grammar: a control or non-ASCII byte in \"" + std::string(line) + "\"",
-            messages.size(), replies);
+            messages_size, replies);
       }
     }
     auto parsed = dfmoco::ParseDeviceLine(line, dialect);
     if (!parsed.ok()) {
       return Violation("reply grammar: \"" + std::string(line) + "\" is no DFMoco reply (" +
                            parsed.error().detail + ")",
-                       messages.size(), replies);
+                       messages_size, replies);
     }
     if (const auto* h = std::get_if<dfmoco::HelloReply>(&parsed.value())) {
       dialect = dfmoco::DialectFrom(*h, false);
       have_dialect = true;
       if (start >= before_hi) hi_after = true;
+    } else if (const int32_t motor = std::visit(
+                   [](const auto& r) -> int32_t {
+                     if constexpr (requires { r.motor; }) {
+                       return r.motor;
+                     } else {
+                       return 1;
+                     }
+                   },
+                   parsed.value());
+               have_dialect && (motor < 1 || motor > dialect.motor_count)) {
+      // FACTS "DFMoco": a command naming no motor of the device answers `parse error`.
+      return Violation("motor range: \"" + std::string(line) + "\" names motor " +
+                           std::to_string(motor) + " of a device with " +
+                           std::to_string(dialect.motor_count) + " motors",
+                       messages_size, replies);
     } else if (const auto* ms = std::get_if<dfmoco::MotorStatusReply>(&parsed.value())) {
       if (have_dialect && static_cast<int32_t>(ms->moving.size()) != dialect.motor_count) {
         return Violation("ms width: \"" + std::string(line) + "\" has " +
                              std::to_string(ms->moving.size()) + " digits for " +
                              std::to_string(dialect.motor_count) + " motors",
-                         messages.size(), replies);
+                         messages_size, replies);
       }
     }
     ++replies;
@@ -190,9 +343,10 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
   }
   if (!hi_after) {
     return Violation("liveness: no `hi` reply to the greeting sent after the session",
-                     messages.size(), replies);
+                     messages_size, replies);
   }
-  return FuzzVerdict{true, "", messages.size(), replies};
+  if (!lost.empty()) return Violation(lost, messages_size, replies);
+  return Passed(messages_size, replies);
 }
 
 // Whether two DFMoco lines differ only in numbers within `tol` (positions).

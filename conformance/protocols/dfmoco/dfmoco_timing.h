@@ -79,23 +79,35 @@ inline constexpr sim::TimeNs kSsGoMotionListenNs = 1500 * kMs;
 inline constexpr sim::TimeNs kRandomRestTimeoutNs = 600'000 * kMs;
 
 // --- the fuzz hooks (dfmoco_fuzz_hooks.cpp) --------------------------------------------
-// Plan choice: between two host messages.
+// Plan choice: the spacing a saved finding's messages are written with.
 inline constexpr sim::TimeNs kFuzzGapNs = 1 * kMs;
-// A host waits for the answer before the next command (the sketch's 57600 baud line
-// and 16-message queue cannot keep up with more): after each message it reads until
-// the device has been quiet for kFuzzSettleQuietNs, at most kFuzzSettleMaxNs (plan
-// choice).
+// A host waits for the answer before the next command, as Dragonframe does (the
+// sketch's 57600 baud line and 16-message queue cannot keep up with more). A
+// message with commands every sketch answers is followed as soon as their reply
+// lines have come, and the line has then been quiet for kFuzzReplyQuietNs: two
+// byte frames at the baud rate, so that a line queued behind a reply (`zm`'s
+// second `mp`) comes within it. A message with none is followed once the line
+// has been quiet for kFuzzSettleQuietNs. Either waits at most kFuzzSettleMaxNs,
+// and a reply not come by then counts as lost (plan choices).
+inline constexpr sim::TimeNs kFuzzReplyQuietNs =
+    2 * 10 * sim::kNsPerSecond / moco::dfmoco::kBaudRate;
 inline constexpr sim::TimeNs kFuzzSettleQuietNs = 5 * kMs;
 inline constexpr sim::TimeNs kFuzzSettleMaxNs = 100 * kMs;
 // Plan choice: the sketch's boot greeting comes within this of power-on.
 inline constexpr sim::TimeNs kFuzzBootGreetingNs = 3000 * kMs;
-// Plan choice: the `hi` after the session is answered within this.
-inline constexpr sim::TimeNs kFuzzHiAnswerNs = 2000 * kMs;
-// Plan choice: what is read after that answer, for lines still on their way.
-inline constexpr sim::TimeNs kFuzzTailNs = 20 * kMs;
+// Plan choice: each of the two `hi` after the session is answered within this;
+// no answer to either, while the firmware runs, is a hang.
+inline constexpr sim::TimeNs kFuzzHiAnswerNs = 1000 * kMs;
+// Plan choice: what is read after that answer, for lines still on their way, until
+// the line has been quiet this long: a transmitter's backlog goes out byte after
+// byte at the line rate, so a quiet of some byte frames means nothing is left.
+inline constexpr sim::TimeNs kFuzzTailNs = 2 * kMs;
 // Plan choice: the longest the end of a run waits for output still on its way
 // (quiet for kFuzzTailNs ends it sooner); a backlog of about 11 kB at 57600 baud.
 inline constexpr sim::TimeNs kFuzzDrainMaxNs = 2000 * kMs;
+// Plan choice: a write the every-request-answered law judges holds at most this
+// many bytes (less than the Arduino core's 64-byte receive buffer).
+inline constexpr size_t kFuzzJudgedWriteBytes = 60;
 
 }  // namespace moco::conformance::dfmoco_cases
 

@@ -131,7 +131,7 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     return Violation("liveness: CC_PING after the session got no reply", messages.size(),
                      replies.size());
   }
-  return FuzzVerdict{true, "", messages.size(), replies.size()};
+  return Passed(messages.size(), replies.size());
 }
 
 const FuzzHooks kHooks[] = {{

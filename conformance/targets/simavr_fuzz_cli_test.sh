@@ -1,0 +1,57 @@
+#!/bin/sh
+# `mococheck fuzz` and `mococheck replay` against firmware under simavr, through
+# the command line:
+#   simavr_fuzz_cli_test.sh TEST MOCOCHECK WORKDIR SOURCE_DIR GOOD_ELF BUG_ELF
+# finding_replays: a finding (here the session itself: `pr 1 0` on the firmware
+#   with BUG_ZERO_RATE) is reported with its kind and backtrace, saved, and
+#   `mococheck replay` of the saved file finds it again, the same kind at the
+#   same place; the good firmware passes the same file.
+# sigterm_ends_campaign: SIGTERM ends a long campaign with its summary printed
+#   and exit 2 (no finding).
+set -u
+test_name=$1
+m=$2
+work=$3/$test_name
+src=$4
+good=$5
+bug=$6
+rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+# shellcheck source=../../tools/cli_test_lib.sh
+. "$src/tools/cli_test_lib.sh"
+
+case "$test_name" in
+finding_replays)
+  printf '%s\n' '{"mocosim_session":1,"protocol":"dfmoco","device":"dfmoco-uno","clock":"virtual"}' \
+    '{"t_ns":0,"from":"host","hex":"68690d0a"}' \
+    '{"t_ns":1000000,"from":"host","hex":"7072203120300d0a"}' >zero.jsonl
+  expect_rc 1 "$m" fuzz zero.jsonl --target "simavr:$bug" --runs 5 --crashes found
+  grep -q '^FAIL \[division-by-zero\] the firmware stopped: a division by zero: __udivmodsi4' out.txt ||
+    fail "no division-by-zero finding"
+  at=$(grep -m1 '^  at 0x' out.txt) || fail "no backtrace"
+  grep -q '^  called from 0x.*(main+0x' out.txt || fail "the backtrace does not reach main"
+  saved=$(sed -n 's/.*; saved: \(found\/mutant-[0-9-]*\.jsonl\)$/\1/p' out.txt | head -1)
+  [ -s "$saved" ] || fail "no saved finding ($saved)"
+  grep -q "^  rerun: mococheck replay $saved --target simavr:$bug" out.txt || fail "no rerun line"
+  expect_rc 1 "$m" replay "$saved" --target "simavr:$bug"
+  grep -q '^FAIL \[division-by-zero\]' out.txt || fail "the replay does not find it again"
+  grep -qF "$at" out.txt || fail "the replay stops elsewhere than the fuzzer ($at)"
+  expect_rc 0 "$m" replay "$saved" --target "simavr:$good"
+  grep -q '^result: PASS' out.txt || fail "the good firmware does not pass the finding's session"
+  ;;
+sigterm_ends_campaign)
+  "$m" fuzz "$src/fixtures/sessions/dfmoco-uno-workflow.jsonl" --target "simavr:$good" \
+    --seconds 600 --crashes found >out.txt 2>err.txt &
+  check=$!
+  pids="${pids:-} $check"
+  wait_for grep -q 'execs' err.txt || fail "the campaign did not start"
+  signal_and_wait TERM "$check"
+  [ "$rc" = 2 ] || fail "exit $rc, not 2: $(cat out.txt err.txt)"
+  grep -q '^mococheck fuzz: simavr:.* execs in ' out.txt || fail "no summary"
+  grep -q '^result: INTERRUPTED by signal 15 (Terminated) after [0-9]* execs, 0 finding' out.txt ||
+    fail "no INTERRUPTED result: $(cat out.txt)"
+  ;;
+*)
+  fail "unknown test $test_name"
+  ;;
+esac
+exit 0
