@@ -228,6 +228,19 @@ std::optional<std::string> SimavrTarget::Build() {
            "\"; give one it models, e.g. @atmega328p (Uno) or @atmega2560 (Mega)";
   }
   avr_init(avr_);
+  // simavr 1.6 logs a read or write past the end of the data memory, marks the
+  // core crashed, and still accesses avr->data at that address, past the
+  // ramend + 1 bytes it allocated. A buffer for every 16-bit data address
+  // keeps such an access in memory the core owns (avr_terminate frees it);
+  // the run then stops on the logged error.
+  if (avr_->ramend < 0xFFFF) {
+    auto* wide = static_cast<uint8_t*>(std::calloc(0x10000, 1));
+    if (wide != nullptr) {
+      std::memcpy(wide, avr_->data, size_t{avr_->ramend} + 1);
+      std::free(avr_->data);
+      avr_->data = wide;
+    }
+  }
   avr_->log = LOG_ERROR;
   avr_->sleep = &NoHostSleep;
   std::snprintf(fw.mmcu, sizeof fw.mmcu, "%s", mcu_.c_str());
