@@ -13,6 +13,7 @@
 #include "conformance/fuzz/mutator.h"
 #include "conformance/fuzz/replay.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/registry.h"
 #include "devices/faulty_sink.h"
 #include "devices/registry.h"
 #include "session/session.h"
@@ -149,7 +150,14 @@ TEST(SessionMutator, MutantsStayWithinTheirBounds) {
     Messages m = s.messages;
     for (int k = 0; k < 5; ++k) mut.Mutate(m, {s.messages});
     ASSERT_LE(m.size(), SessionMutator::kMaxMessages);
-    for (const wire::Bytes& line : m) ASSERT_LE(line.size(), DfmocoProtocol::kMaxFuzzLine + 2);
+    for (const wire::Bytes& write : m) ASSERT_LE(write.size(), SessionMutator::kMaxBurstBytes);
+  }
+  // The protocol's own mutation keeps one line within the line bound.
+  MutationSource source(3);
+  for (int i = 0; i < 2000; ++i) {
+    wire::Bytes line = s.messages[source.Below(s.messages.size())];
+    for (int k = 0; k < 5; ++k) FindFuzzHooks(Protocol::kDfmoco)->mutate(source, line);
+    ASSERT_LE(line.size(), DfmocoProtocol::kMaxFuzzLine + 2);
   }
 }
 

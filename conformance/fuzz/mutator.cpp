@@ -18,8 +18,8 @@ void SessionMutator::Mutate(Messages& messages, const std::vector<Messages>& don
   if (messages.size() > kMaxMessages) messages.resize(kMaxMessages);
 }
 
-size_t SessionMutator::MutateStream(Protocol protocol, uint8_t* data, size_t size,
-                                    size_t max_size, unsigned int seed) {
+size_t SessionMutator::MutateStream(Protocol protocol, uint8_t* data, size_t size, size_t max_size,
+                                    unsigned int seed) {
   Messages messages = wire::SplitMessages(protocol, wire::Side::kHost, {data, size});
   SessionMutator mutator(protocol, seed);
   mutator.Mutate(messages, {});
@@ -45,7 +45,8 @@ void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& 
     std::swap(messages[at], messages[Below(messages.size())]);
     Note("swap");
   } else if (pick < 91) {  // two messages in one write (a read that takes both)
-    if (at + 1 < messages.size()) {
+    if (at + 1 < messages.size() &&
+        messages[at].size() + messages[at + 1].size() <= kMaxBurstBytes) {
       messages[at].insert(messages[at].end(), messages[at + 1].begin(), messages[at + 1].end());
       messages.erase(messages.begin() + static_cast<ptrdiff_t>(at) + 1);
     }

@@ -29,6 +29,9 @@ class SessionMutator : public MutationSource {
  public:
   // Upper bound a mutant respects.
   static constexpr size_t kMaxMessages = 256;
+  // Two messages are sent in one write ("burst") only while the write stays
+  // within this many bytes.
+  static constexpr size_t kMaxBurstBytes = 256;
 
   SessionMutator(Protocol protocol, uint64_t seed);
 
