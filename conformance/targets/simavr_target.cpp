@@ -118,7 +118,11 @@ std::optional<std::string> SimavrTarget::Open() {
   Teardown();
   unmodelled_.clear();
   // A stripped or odd symbol table only costs the reports their function names.
-  symbols_ = AvrSymbols::Read(spec_.elf_path, nullptr);
+  // Only a regular file is read (Build() refuses the rest): a FIFO would block.
+  std::error_code ec;
+  symbols_ = std::filesystem::is_regular_file(spec_.elf_path, ec)
+                 ? AvrSymbols::Read(spec_.elf_path, nullptr)
+                 : AvrSymbols();
   return Build();
 }
 
