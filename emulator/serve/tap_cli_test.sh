@@ -167,8 +167,13 @@ mocosim_tap_cli_suite_verdict_same_as_direct_stackshot)
   wait "$direct_pid"
   direct_rc=$?
   [ "$tapped_rc" = "$direct_rc" ] || fail "exit $tapped_rc through the tap, $direct_rc direct"
-  verdict direct.json >direct-verdict.txt
-  verdict tapped.json >tapped-verdict.txt
+  # DMC-RT-007 is the one rule judged by an interval the host measures on its
+  # own wall clock (frame reports about 1/FPS apart, with slack on a real
+  # clock): through the tap every report takes one more thread hop, so on a
+  # loaded machine it may fall either side of its bound. It must have been
+  # judged both ways; every other case and rule must give the same verdict.
+  verdict direct.json | sed 's/^\(rule DMC-RT-007\) \(pass\|fail\)$/\1 judged/' >direct-verdict.txt
+  verdict tapped.json | sed 's/^\(rule DMC-RT-007\) \(pass\|fail\)$/\1 judged/' >tapped-verdict.txt
   diff direct-verdict.txt tapped-verdict.txt >verdict-diff.txt || fail "verdicts differ"
   grep -q "^rule " tapped-verdict.txt || fail "no rule judged"
   stop_tap

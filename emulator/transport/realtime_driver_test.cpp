@@ -52,16 +52,21 @@ TEST(RealtimeDriverTest, KickArmsForEventsAddedOutsideTheScheduler) {
   d.Start();
   bool ran = false;
   bool ahead = false;
+  bool ran_in_kick = false;
   asio::post(io, [&] {
-    s.After(3 * kNsPerMs, [&] {
+    d.Sync();  // sim time catches up with the wall clock, however late this runs
+    s.After(20 * kNsPerMs, [&] {
       ran = true;
       ahead = s.Now() > WallNs(d);
     });
     d.Kick();
+    // On a loaded machine 20 ms may pass before Kick: then Kick runs the due
+    // event itself. Otherwise only the timer Kick armed can run it.
+    ran_in_kick = ran;
   });
   ASSERT_TRUE(RunUntil(io, [&] { return ran; }));
   EXPECT_FALSE(ahead);
-  EXPECT_GE(d.wakeups(), 1u);
+  if (!ran_in_kick) EXPECT_GE(d.wakeups(), 1u);
 }
 
 TEST(RealtimeDriverTest, EventsScheduledFromCallbacksRunWithoutKick) {
