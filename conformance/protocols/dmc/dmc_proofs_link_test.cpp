@@ -759,10 +759,11 @@ TEST(DmcLinkProofs, VirtualMessagesCarriedOutWithoutTheCapabilityAreCaughtByErr0
   const char* root = std::getenv("MOCO_SOURCE_DIR");
   const std::string profile =
       std::string(root != nullptr ? root : ".") + "/fixtures/profiles/dmc16-virtual.json";
-  const uint32_t virtual_caps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
-                                dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz | dmc::kCapAimPoint;
+  static constexpr uint32_t kVirtualCaps = dmc::kCapVirtBoomSwingTrack | dmc::kCapVirtSwingPan |
+                                           dmc::kCapVirtYSwingTrack | dmc::kCapVirtXyz |
+                                           dmc::kCapAimPoint;
   const RunReport r =
-      RunBroken(RewriteHi([virtual_caps](dmc::HiResponse& h) { h.capabilities &= ~virtual_caps; }),
+      RunBroken(RewriteHi([](dmc::HiResponse& h) { h.capabilities &= ~kVirtualCaps; }),
                 Only("errors/unadvertised"), profile);
   ExpectCaught(r, "DMC-ERR-010");
   ExpectMustsFailed(r, {});
