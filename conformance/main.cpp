@@ -29,6 +29,10 @@ int main(int argc, char** argv) {
       "  mococheck run --target tcp:127.0.0.1:5000 --rules 'DMC-ACK-*,DMC-CSUM-*'\n"
       "  mococheck replay fixtures/sessions/dmc16-workflow.jsonl --target in-process:dmc16\n"
       "  mococheck fuzz fixtures/sessions/*.jsonl --target in-process:dmc16 --seconds 30\n"
+      "  mococheck keygen --out vendor.key\n"
+      "  mococheck certify --target pty:/dev/ttyACM0 --protocol dfmoco --key vendor.key --out "
+      "cert.json\n"
+      "  mococheck verify cert.json --key vendor.key.pub --replay\n"
       "  mococheck rules --markdown > docs/rules.md\n"
       "  mococheck cases"};
   app.require_subcommand(1);
@@ -36,12 +40,15 @@ int main(int argc, char** argv) {
     CLI::App* sub = nullptr;
     cli::Runner run;
   };
-  Command commands[5];
+  Command commands[8];
   commands[0].run = cli::AddRunCommand(app, commands[0].sub);
   commands[1].run = cli::AddRulesCommand(app, commands[1].sub);
   commands[2].run = cli::AddCasesCommand(app, commands[2].sub);
   commands[3].run = cli::AddReplayCommand(app, commands[3].sub);
   commands[4].run = cli::AddFuzzCommand(app, commands[4].sub);
+  commands[5].run = cli::AddCertifyCommand(app, commands[5].sub);
+  commands[6].run = cli::AddKeygenCommand(app, commands[6].sub);
+  commands[7].run = cli::AddVerifyCommand(app, commands[7].sub);
   if (const auto exit_code = moco::cli::ParseCommandLine(app, argc, argv, cli::kExitUsage)) {
     return *exit_code;
   }

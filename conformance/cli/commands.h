@@ -1,5 +1,5 @@
 // mococheck's command line (docs/exit-codes.md): one file per subcommand
-// (run, replay, fuzz, and the rules/cases listings), each adding its options
+// (run, replay, fuzz, certify/keygen/verify, and the rules/cases listings), each adding its options
 // to the program's CLI11 app and running once they are parsed, and the one
 // place a --target text becomes an open target.
 #ifndef MOCO_CONFORMANCE_CLI_COMMANDS_H_
@@ -77,6 +77,9 @@ Runner AddReplayCommand(CLI::App& app, CLI::App*& sub);
 Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub);
 Runner AddRulesCommand(CLI::App& app, CLI::App*& sub);
 Runner AddCasesCommand(CLI::App& app, CLI::App*& sub);
+Runner AddCertifyCommand(CLI::App& app, CLI::App*& sub);
+Runner AddKeygenCommand(CLI::App& app, CLI::App*& sub);
+Runner AddVerifyCommand(CLI::App& app, CLI::App*& sub);
 
 }  // namespace moco::conformance::cli
 
