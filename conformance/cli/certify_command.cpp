@@ -316,8 +316,14 @@ std::vector<std::string> Replay(const json& cert, std::string& summary,
     diffs.push_back("the replay ended with calls of the transcript unplayed (" +
                     std::to_string(playback->calls_played()) + " played)");
   }
+  const auto counts = report->RuleCounts();
+  auto count = [&](Status st) {
+    const auto it = counts.find(st);
+    return it == counts.end() ? size_t{0} : it->second;
+  };
   summary = std::to_string(playback->calls_played()) + " recorded calls played; " +
-            std::to_string(report->rules.size()) + " rules judged again";
+            std::to_string(count(Status::kPass) + count(Status::kFail) + count(Status::kNoted)) +
+            " rules judged again";
   return diffs;
 }
 
