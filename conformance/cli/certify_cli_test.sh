@@ -83,6 +83,13 @@ in_process_dmc16 | in_process_dfmoco | in_process_stackshot3x)
     fail "the page has no certificate section"
   expect_rc 2 "$m" verify cert.json --key k.pub --html c2.html
   grep -q "needs --replay" err.txt || fail "--html without --replay is not refused"
+  # The suite run again against the same model gives the same verdicts; a
+  # device of another protocol is refused before anything runs.
+  expect_rc 0 "$m" verify cert.json --key k.pub --target "in-process:$model"
+  grep -q "^device: *same verdicts" out.txt || fail "another run differs: $(cat out.txt)"
+  other=dfmoco
+  [ "$model" = dfmoco ] && other=dmc16
+  expect_rc 2 "$m" verify cert.json --key k.pub --target "in-process:$other"
   # Each change is named.
   tamper cert.json verdict.json '
 for r in c["report"]["rules"]:
@@ -109,9 +116,15 @@ simavr)
   "$m" keygen --out k >/dev/null 2>&1 || fail "keygen"
   board="$src/fixtures/boards/own-dfmoco.json"
   expect_rc 1 "$m" certify --target "simavr:$fault" --protocol dfmoco --board "$board" \
-    --key k --out bad.json -q
+    --driver a4988 --key k --out bad.json -q --json run.json
   [ -s bad.json ] || fail "a failing run got no certificate"
-  grep -q '"id": "DFM-PIN-001"' bad.json || fail "no DFM-PIN-001 in the certificate"
+  # The fault fails DFM-PIN-001 and no other rule (as `run` would report it).
+  failing=$(python3 -c 'import json, sys
+print(" ".join(sorted(r["id"] for r in json.load(open(sys.argv[1]))["rules"] if r["status"] == "fail")))' run.json)
+  [ "$failing" = DFM-PIN-001 ] || fail "failing: '$failing', not exactly DFM-PIN-001"
+  sealed=$(python3 -c 'import json, sys
+print(" ".join(sorted(r["id"] for r in json.load(open(sys.argv[1]))["report"]["rules"] if r["status"] == "fail")))' bad.json)
+  [ "$sealed" = DFM-PIN-001 ] || fail "the certificate says '$sealed' failed"
   expect_rc 0 "$m" verify bad.json --key k.pub --replay --firmware "$fault"
   grep -q "^verdict: *FAIL" out.txt || fail "the sealed verdict is not FAIL"
   grep -q "^replay: *same verdicts" out.txt || fail "the replay differs: $(cat out.txt)"

@@ -169,7 +169,7 @@ int Certify(const CertifyArgs& c) {
   parts.made_at = UtcNow();
   json cert = MakeCertificate(parts);
   if (auto err = SealCertificate(cert, key)) return Fail("could not seal: " + *err);
-  const std::string text = cert.dump(1) + "\n";
+  const std::string text = cert.dump(1, ' ', false, json::error_handler_t::replace) + "\n";
   if (auto err = base::WriteFileAtomically(c.out_path, text)) {
     return Fail("could not write the certificate: " + *err);
   }
@@ -243,7 +243,7 @@ int Keygen(const std::string& out) {
 // --- verify --------------------------------------------------------------------------------
 
 struct VerifyArgs {
-  std::string cert_path, key_path, firmware_path, badge_path, html_path;
+  std::string cert_path, key_path, firmware_path, badge_path, html_path, target, profile;
   bool replay = false, summary = false;
 };
 
@@ -327,6 +327,46 @@ std::vector<std::string> Replay(const json& cert, std::string& summary,
   return diffs;
 }
 
+// Runs the certificate's suite, with its options, against the device
+// `v.target` and compares each rule's and case's verdict with the sealed
+// ones (their evidence differs from run to run on a real clock). The
+// differences, or why the run has no verdict; `target_error` set (and the
+// message printed) when the target could not be made or opened.
+std::vector<std::string> RunAgainst(const json& cert, const VerifyArgs& v, std::string& summary,
+                                    bool& target_error) {
+  PreparedRun p;
+  RunArgs a;
+  a.quiet = true;
+  const json run = cert.value("run", json::object());
+  if (auto err = PrepareReplay(run, p, a)) return {"the run cannot be made again: " + *err};
+  TargetRequest request;
+  request.text = v.target;
+  request.profile = v.profile;
+  request.baud = run.value("baud", uint32_t{0});
+  request.protocol = p.resolved.protocol;
+  auto resolved = ResolveTarget(request);
+  if (const auto* err = std::get_if<std::string>(&resolved)) {
+    target_error = true;
+    Fail(*err);
+    return {};
+  }
+  p.resolved = std::move(std::get<ResolvedTarget>(resolved));
+  InstallStopHandlers();
+  // Judged as the certifying run was: through the link and pins only (a
+  // recording target hides an in-process device's outputs).
+  RecordingTarget target(std::move(p.resolved.target));
+  const std::optional<RunReport> report = ExecuteRun(a, p, target, false);
+  if (!report) {
+    target_error = true;  // ExecuteRun printed why
+    return {};
+  }
+  if (const std::string why = report->NoVerdictReason(); !why.empty()) {
+    return {"the run against " + target.Name() + " has no verdict (" + why + ")"};
+  }
+  summary = "the suite run again against " + target.Name();
+  return CompareVerdicts(cert.value("report", json::object()), JsonReport(*report), false);
+}
+
 int Verify(const VerifyArgs& v) {
   if (!v.html_path.empty() && !v.replay) {
     return Fail(
@@ -401,6 +441,14 @@ int Verify(const VerifyArgs& v) {
     if (diffs.empty()) std::cout << "replay:      same verdicts (" << summary << ")\n";
   } else if (v.replay) {
     std::cout << "replay:      not made (the certificate does not verify)\n";
+  }
+  if (!v.target.empty() && check.problems.empty()) {
+    std::string summary;
+    bool target_error = false;
+    const std::vector<std::string> diffs = RunAgainst(cert, v, summary, target_error);
+    if (target_error) return kExitUsage;
+    for (const std::string& d : diffs) check.problems.push_back("device: " + d);
+    if (diffs.empty()) std::cout << "device:      same verdicts (" << summary << ")\n";
   }
   if (!check.problems.empty()) {
     for (const std::string& p : check.problems) std::cout << "problem:     " << p << "\n";
@@ -477,6 +525,11 @@ Runner AddVerifyCommand(CLI::App& app, CLI::App*& sub) {
       ->check(moco::cli::NonEmptyPath());
   sub->add_flag("--summary", v->summary,
                 "Once verified, print a paragraph (Markdown) of the result for a README");
+  sub->add_option("--target", v->target,
+                  "Also run the certificate's suite, with its options, against this device "
+                  "(as `run --target`) and compare every rule's and case's verdict");
+  sub->add_option("--profile", v->profile, "Device profile (JSON) for an in-process --target")
+      ->check(CLI::ExistingFile);
   sub->add_flag("--replay", v->replay,
                 "Judge the recorded traffic again with this mococheck's rules, without a device, "
                 "and compare every verdict");

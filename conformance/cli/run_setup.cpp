@@ -330,7 +330,9 @@ int WriteReports(const RunArgs& a, const RunReport& report) {
   write("--junit", a.junit, [&] { return JunitReport(report); });
   write("--html", a.html_path, [&] { return HtmlReport(report); });
   write("--vcd", a.vcd_path, [&] { return PinsVcd(report); });
-  write("--json", a.json_path, [&] { return JsonReport(report).dump(2) + "\n"; });
+  write("--json", a.json_path, [&] {
+    return JsonReport(report).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+  });
   if (!failed.empty()) {
     for (const std::string& f : failed) std::cerr << "mococheck: could not write " << f << "\n";
     std::string others;

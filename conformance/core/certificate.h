@@ -51,7 +51,8 @@ nlohmann::json MakeCertificate(const CertificateParts& parts);
 std::optional<std::string> SealCertificate(nlohmann::json& cert, std::string_view private_pem);
 
 // The text a digest or signature is taken over: `j` dumped with sorted keys,
-// no spaces, UTF-8 as is.
+// no spaces, UTF-8 as is (bytes that are not UTF-8 as U+FFFD, as the
+// certificate file holds them).
 std::string CanonicalText(const nlohmann::json& j);
 
 // The short id of a raw public key: the first 16 hex digits of its SHA-256.
@@ -79,10 +80,13 @@ std::optional<std::string> CallLogOf(const nlohmann::json& cert, std::string* er
 // How a replayed run's JSON report differs from the sealed one in what the
 // rules decided: each rule's verdict and counts, each case's status and its
 // rules' outcomes and evidence, the exit code (times on the wall clock are
-// not verdicts and are left out). One sentence per difference; empty when
-// the verdicts are the same.
+// not verdicts and are left out). `evidence` false (another run of a device,
+// whose times and positions differ run to run): each rule's and case's
+// status only. One sentence per difference; empty when the verdicts are the
+// same.
 std::vector<std::string> CompareVerdicts(const nlohmann::json& sealed_report,
-                                         const nlohmann::json& replayed_report);
+                                         const nlohmann::json& replayed_report,
+                                         bool evidence = true);
 
 // What a certificate's report says, counted: the rules by level that passed
 // and failed, and the run's result.

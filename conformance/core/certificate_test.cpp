@@ -222,6 +222,26 @@ RC_GTEST_PROP(CallLogProp, AnyBytesAfterTheHeaderAreReadWithoutACrash, (const st
   RC_ASSERT(!r.NoVerdictReason().empty() || playback->LinkLost().has_value());
 }
 
+TEST(CompareVerdicts, AnotherRunOfADeviceIsComparedByVerdictsNotEvidence) {
+  RunOptions options;
+  options.cases = "connect/*,motor/*";
+  const json a = JsonReport(Record(Dfmoco(), options, RunDfmoco).report);
+  json b = a;
+  for (json& c : b["cases"]) {
+    for (json& r : c["rules"]) {
+      for (json& e : r["evidence"]) e["t_ns"] = e.value("t_ns", int64_t{0}) + 1000;
+    }
+    c["target_ms"] = 1.0;
+  }
+  EXPECT_FALSE(CompareVerdicts(a, b).empty());  // a replay must match to the nanosecond
+  EXPECT_EQ(CompareVerdicts(a, b, false), std::vector<std::string>{});
+  b["rules"][0]["status"] = "fail";
+  const auto diffs = CompareVerdicts(a, b, false);
+  ASSERT_FALSE(diffs.empty());
+  EXPECT_EQ(diffs[0].rfind("rule " + a["rules"][0].value("id", "?") + ": sealed", 0), 0u)
+      << diffs[0];
+}
+
 // --- certificates --------------------------------------------------------------------------
 
 class Certificates : public ::testing::Test {
@@ -276,6 +296,16 @@ TEST_F(Certificates, AnIntactCertificateVerifiesAndSurvivesAJsonRoundTrip) {
   EXPECT_EQ((*cert_)["catalogue"]["sha256"], CatalogueSha256());
   std::string error;
   EXPECT_TRUE(CallLogOf(reparsed, &error)) << error;
+}
+
+TEST_F(Certificates, TextThatIsNotUtf8SealsAndVerifiesThroughTheFile) {
+  // A device may introduce itself with any bytes; the file holds them as
+  // U+FFFD, and the seal is over that same text.
+  json c = *cert_;
+  c["device"]["introduced"] = std::string("hi \xff\xfe 1", 7);
+  ASSERT_EQ(SealCertificate(c, keys_->private_pem), std::nullopt);
+  const json back = json::parse(c.dump(1, ' ', false, json::error_handler_t::replace));
+  EXPECT_EQ(Joined(CheckCertificate(back, keys_->public_pem).problems), "");
 }
 
 TEST_F(Certificates, AChangedVerdictIsNamedByItsRule) {
