@@ -155,6 +155,13 @@ usage)
   echo '{}' >nothing.json
   expect_rc 1 "$m" verify nothing.json --key k.pub
   grep -q "not a mococheck certificate" out.txt || fail "{} is called a certificate"
+  # Fields of the wrong type are a problem, never a crash.
+  echo '[]' >array.json
+  expect_rc 1 "$m" verify array.json --key k.pub --firmware array.json
+  grep -q "^result: NOT VERIFIED" out.txt || fail "[] is not refused"
+  echo '{"format": "mococheck-certificate/1", "device": "x", "seal": 5}' >types.json
+  expect_rc 1 "$m" verify types.json --key k.pub --replay
+  grep -q "^result: NOT VERIFIED" out.txt || fail "a certificate of wrong types is not refused"
   ;;
 *)
   fail "unknown test $test_name"

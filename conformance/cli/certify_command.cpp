@@ -367,25 +367,27 @@ std::vector<std::string> RunAgainst(const json& cert, const VerifyArgs& v, std::
   return CompareVerdicts(cert.value("report", json::object()), JsonReport(*report), false);
 }
 
+int VerifyCertificate(const VerifyArgs& v, const json& cert, const std::string& key);
+
 int Verify(const VerifyArgs& v) {
   if (!v.html_path.empty() && !v.replay) {
     return Fail(
         "--html needs --replay: the page is rendered from the certificate's transcript, "
         "judged again");
   }
-  for (const auto& [option, path] : {std::pair<std::string, std::string>{"--html", v.html_path}}) {
+  // Each output checked before anything is read: writable, neither input,
+  // not the other output.
+  const std::pair<std::string, std::string> outputs[] = {{"--html", v.html_path},
+                                                         {"--badge", v.badge_path}};
+  for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
     if (auto err = base::CheckOutputPath(path, option)) return Fail(*err);
     if (base::SameFile(path, v.cert_path) || base::SameFile(path, v.key_path)) {
       return Fail(option + " " + path + " is the certificate or the key; choose another path");
     }
   }
-  if (!v.badge_path.empty()) {
-    if (auto err = base::CheckOutputPath(v.badge_path, "--badge")) return Fail(*err);
-    if (base::SameFile(v.badge_path, v.cert_path) || base::SameFile(v.badge_path, v.key_path)) {
-      return Fail("--badge " + v.badge_path +
-                  " is the certificate or the key; choose another path for the badge");
-    }
+  if (!v.html_path.empty() && !v.badge_path.empty() && base::SameFile(v.html_path, v.badge_path)) {
+    return Fail("--html and --badge are the same file; give each its own");
   }
   std::string text, key;
   if (auto err = ReadInput("certificate", v.cert_path, kMaxCertificateBytes, text)) {
@@ -401,6 +403,17 @@ int Verify(const VerifyArgs& v) {
     return Fail("certificate " + v.cert_path + " is not JSON (" + e.what() +
                 "); give a file 'mococheck certify' wrote");
   }
+  try {
+    return VerifyCertificate(v, cert, key);
+  } catch (const json::exception& e) {
+    // A certificate whose seal holds but whose fields have the wrong types.
+    std::cout << "problem:     the certificate is malformed: " << e.what() << "\n"
+              << "result: NOT VERIFIED" << std::endl;
+    return 1;
+  }
+}
+
+int VerifyCertificate(const VerifyArgs& v, const json& cert, const std::string& key) {
   CertificateCheck check = CheckCertificate(cert, key);
   if (!v.firmware_path.empty()) {
     std::string image;
@@ -418,19 +431,33 @@ int Verify(const VerifyArgs& v) {
                                ")");
     }
   }
-  const json device = cert.value("device", json::object());
-  const json report = cert.value("report", json::object());
+  if (!cert.is_object() || cert.value("format", "") != kCertificateFormat) {
+    for (const std::string& p : check.problems) std::cout << "problem:     " << p << "\n";
+    std::cout << "result: NOT VERIFIED" << std::endl;
+    return 1;
+  }
+  // What the certificate says of itself, read without trusting its types
+  // (the seal is checked above; a wrong type is only shown as "?").
+  auto part = [&](const char* key) {
+    const auto it = cert.find(key);
+    return it != cert.end() && it->is_object() ? *it : json::object();
+  };
+  auto text = [](const json& j, const char* key) {
+    const auto it = j.find(key);
+    return it != j.end() && it->is_string() ? it->get<std::string>() : std::string("?");
+  };
+  const json device = part("device"), fw = part("firmware"), report = part("report");
+  const std::string introduced = text(device, "introduced");
   std::cout << "certificate: " << v.cert_path << "\n"
             << "device:      "
-            << (device.value("introduced", "").empty() ? device.value("target", "?")
-                                                       : device.value("introduced", ""))
-            << " (" << device.value("protocol", "?") << ")\n";
-  const json fw = cert.value("firmware", json());
-  if (fw.is_object()) {
-    std::cout << "firmware:    " << fw.value("file", "?") << " sha256 " << fw.value("sha256", "?")
-              << "\n";
+            << (introduced.empty() || introduced == "?" ? text(device, "target") : introduced)
+            << " (" << text(device, "protocol") << ")\n";
+  if (!fw.empty()) {
+    std::cout << "firmware:    " << text(fw, "file") << " sha256 " << text(fw, "sha256") << "\n";
   }
-  const int sealed_exit = report.value("exit_code", 2);
+  const auto exit_it = report.find("exit_code");
+  const int sealed_exit =
+      exit_it != report.end() && exit_it->is_number_integer() ? exit_it->get<int>() : 2;
   std::cout << "verdict:     " << (sealed_exit == 0 ? "PASS" : "FAIL") << " (exit code "
             << sealed_exit << ")\n";
   std::optional<RunReport> replayed;

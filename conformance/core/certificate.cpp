@@ -208,7 +208,9 @@ std::optional<std::string> SealCertificate(json& cert, std::string_view private_
   return std::nullopt;
 }
 
-CertificateCheck CheckCertificate(const json& cert, std::string_view public_pem) {
+namespace {
+
+CertificateCheck CheckFields(const json& cert, std::string_view public_pem) {
   CertificateCheck check;
   auto& problems = check.problems;
   if (!cert.is_object() || cert.value("format", "") != kCertificateFormat) {
@@ -262,6 +264,19 @@ CertificateCheck CheckCertificate(const json& cert, std::string_view public_pem)
   }
   if (!CallLogOf(cert, &error)) problems.push_back("the transcript: " + error);
   return check;
+}
+
+}  // namespace
+
+CertificateCheck CheckCertificate(const json& cert, std::string_view public_pem) {
+  try {
+    return CheckFields(cert, public_pem);
+  } catch (const json::exception& e) {
+    // A field of the wrong type (a number where an object or text belongs).
+    CertificateCheck check;
+    check.problems.push_back(std::string("the certificate is malformed: ") + e.what());
+    return check;
+  }
 }
 
 std::optional<std::string> CallLogOf(const json& cert, std::string* error) {

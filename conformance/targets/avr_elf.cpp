@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
@@ -32,6 +33,13 @@ uint32_t U32(const std::string& b, size_t at) {
 }  // namespace
 
 std::string CheckAvrElf(const std::string& path) {
+  // Only a regular file is opened: a FIFO or device would block or never end.
+  std::error_code ec;
+  const auto kind = std::filesystem::status(path, ec).type();
+  if (kind != std::filesystem::file_type::regular &&
+      kind != std::filesystem::file_type::not_found) {
+    return "not a regular file";
+  }
   std::ifstream in(path, std::ios::binary);
   unsigned char h[20] = {};
   if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return "too short for an ELF";

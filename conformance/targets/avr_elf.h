@@ -15,8 +15,8 @@
 
 namespace moco::conformance {
 
-// Checks the ELF header: a problem ("not an ELF file", "an ELF for another
-// machine ..."), or empty for an AVR ELF.
+// Checks the ELF header: a problem ("not a regular file", "not an ELF file",
+// "an ELF for another machine ..."), or empty for an AVR ELF.
 std::string CheckAvrElf(const std::string& path);
 
 // The code symbols of an AVR ELF (.symtab entries of STT_FUNC or STT_NOTYPE in an

@@ -117,12 +117,9 @@ std::string SimavrTarget::Name() const {
 std::optional<std::string> SimavrTarget::Open() {
   Teardown();
   unmodelled_.clear();
-  // A stripped or odd symbol table only costs the reports their function names.
-  // Only a regular file is read (Build() refuses the rest): a FIFO would block.
-  std::error_code ec;
-  symbols_ = std::filesystem::is_regular_file(spec_.elf_path, ec)
-                 ? AvrSymbols::Read(spec_.elf_path, nullptr)
-                 : AvrSymbols();
+  // A stripped or odd symbol table only costs the reports their function names
+  // (a path that is no regular file is refused by Build()).
+  symbols_ = AvrSymbols::Read(spec_.elf_path, nullptr);
   return Build();
 }
 
