@@ -7,7 +7,9 @@
 # in_process_MODEL: a certificate of the emulated device verifies with its
 #   maker's key, `verify --replay` judges its traffic again to the same
 #   verdicts, and each tampering (a verdict, one transcript byte, the
-#   catalogue's or the firmware's digest, another key) fails naming it.
+#   catalogue's or the firmware's digest, another key) fails naming it; the
+#   replayed run's page, loaded in headless Chromium, shows what the
+#   certificate holds (tools/report-dom-check).
 # simavr: a build of our DFMoco firmware that loses steps, its pins watched:
 #   the certificate replays to its verdicts, the DFM-PIN-001 failure
 #   included, and --firmware tells its image from the good build's.
@@ -79,8 +81,20 @@ in_process_dmc16 | in_process_dfmoco | in_process_stackshot3x)
   grep -q "certified [0-9]*/[0-9]* MUST" badge.svg || fail "the badge gives no MUST count"
   grep -q "passed the mococheck .* conformance suite on 20[0-9-]*: [0-9]* MUST rules passed and 0 failed" out.txt ||
     fail "no summary paragraph: $(cat out.txt)"
-  grep -q '<section id="certificate"><h2>Certificate cert.json: PASS, verified' c.html ||
-    fail "the page has no certificate section"
+  # The page as headless Chromium builds it holds what the certificate holds;
+  # the same page with one rule's row taken out does not.
+  "$src/tools/report-dom-check" c.html cert.json --certificate cert.json cert.json >dom.txt 2>&1 ||
+    fail "the page in Chromium: $(cat dom.txt)"
+  python3 - c.html cut.html <<'PY'
+import re, sys
+page = open(sys.argv[1]).read()
+cut = re.sub(r'<tr><td class="id">[^\n]*</tr>\n', "", page, count=1)
+assert cut != page, "no rule row to take out"
+open(sys.argv[2], "w").write(cut)
+PY
+  "$src/tools/report-dom-check" cut.html cert.json >dom.txt 2>&1 &&
+    fail "a page missing a rule's row passes the check"
+  grep -q "has no row in the Rules table" dom.txt || fail "the missing row is not named: $(cat dom.txt)"
   expect_rc 2 "$m" verify cert.json --key k.pub --html c2.html
   grep -q "needs --replay" err.txt || fail "--html without --replay is not refused"
   # The suite run again against the same model gives the same verdicts; a
@@ -116,7 +130,7 @@ simavr)
   "$m" keygen --out k >/dev/null 2>&1 || fail "keygen"
   board="$src/fixtures/boards/own-dfmoco.json"
   expect_rc 1 "$m" certify --target "simavr:$fault" --protocol dfmoco --board "$board" \
-    --driver a4988 --key k --out bad.json -q --json run.json
+    --driver a4988 --key k --out bad.json -q --json run.json --html run.html
   [ -s bad.json ] || fail "a failing run got no certificate"
   # The fault fails DFM-PIN-001 and no other rule (as `run` would report it).
   failing=$(python3 -c 'import json, sys
@@ -130,6 +144,15 @@ print(" ".join(sorted(r["id"] for r in json.load(open(sys.argv[1]))["report"]["r
   grep -q "^replay: *same verdicts" out.txt || fail "the replay differs: $(cat out.txt)"
   grep -q "^firmware: *$(basename "$fault") sha256 $(sha256sum "$fault" | cut -c1-64)" out.txt ||
     fail "the firmware digest is not shown: $(cat out.txt)"
+  # Both pages of the failing run, the run's own and the replayed
+  # certificate's, as headless Chromium builds them: the failure shown open,
+  # its rule linked to it.
+  "$src/tools/report-dom-check" run.html run.json >dom.txt 2>&1 ||
+    fail "the run's page in Chromium: $(cat dom.txt)"
+  expect_rc 0 "$m" verify bad.json --key k.pub --replay --html bad.html
+  "$src/tools/report-dom-check" bad.html bad.json --certificate bad.json bad.json >dom.txt 2>&1 ||
+    fail "the certificate's page in Chromium: $(cat dom.txt)"
+  grep -q '<a href="#DFM-PIN-001">' bad.html || fail "the failing rule is not linked to its finding"
   expect_rc 1 "$m" verify bad.json --key k.pub --firmware "$good"
   grep -q "is not the certified image" out.txt || fail "another image is not named"
   ;;

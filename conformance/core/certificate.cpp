@@ -182,7 +182,7 @@ json MakeCertificate(const CertificateParts& parts) {
   cert["run"] = parts.run;
   cert["report"] = parts.report;
   const std::string packed = Deflate(parts.call_log);
-  cert["transcript"] = {{"encoding", "mococheck-call-log/1+zlib+base64"},
+  cert["transcript"] = {{"encoding", "mococheck-call-log/2+zlib+base64"},
                         {"bytes", parts.call_log.size()},
                         {"sha256", Sha256Hex(parts.call_log)},
                         {"data", Base64(packed)}};

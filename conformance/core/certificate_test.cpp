@@ -13,6 +13,8 @@
 #include "conformance/core/report.h"
 #include "conformance/core/seal.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dmc/dmc_broken_device.h"
+#include "conformance/protocols/dmc/dmc_protocol.h"
 #include "conformance/protocols/stackshot/stackshot_protocol.h"
 #include "conformance/targets/recorded_target.h"
 #include "devices/dfmoco_arduino/dfmoco_arduino.h"
@@ -169,6 +171,94 @@ TEST(CallLog, AnotherSeedDivergesAndSaysWhere) {
   EXPECT_NE(again.target_error.find(divergence), std::string::npos) << again.target_error;
 }
 
+// The runs of an in-process DMC-16 that read its outputs (DMX levels, I/O
+// outputs, camera lines): every read is in the log, so the rules judged on
+// them are judged again from it, a broken camera stage's failure included.
+TEST(CallLog, AnInProcessDevicesOutputsAreJudgedAgainFromTheLog) {
+  RunOptions options;
+  options.cases = "rt/*";
+  const std::vector<std::string> output_rules = {"DMC-DMX-009", "DMC-DMX-010", "DMC-RT-019",
+                                                 "DMC-RT-020",  "DMC-RT-022",  "DMC-RT-023",
+                                                 "DMC-RT-025"};
+  const Recorded rec = Record(InProcessTarget::ForModel("dmc16", ""), options, RunDmc);
+  std::string divergence;
+  const RunReport again = PlayBack(rec.log, options, RunDmc, &divergence);
+  EXPECT_EQ(divergence, "");
+  EXPECT_EQ(CompareVerdicts(JsonReport(rec.report), JsonReport(again)), std::vector<std::string>{});
+  for (const std::string& id : output_rules) {
+    EXPECT_EQ(rec.report.rules.at(id).status, Status::kPass) << id;
+    EXPECT_EQ(again.rules.at(id).status, Status::kPass) << id;
+  }
+
+  // A DMC-16 that reads a stills run's shutter angles as 180..270 degrees
+  // exposes each frame at the wrong time: DMC-RT-023 fails, and again from
+  // the log.
+  const dmc_testing::InputBreakage late_shutter = [](wire::ByteView bytes) {
+    wire::Bytes out(bytes.begin(), bytes.end());
+    const auto f = dmc::DecodeFrame(bytes);
+    if (!f.ok()) return out;
+    const auto m = dmc::DecodeHostMessage(f.value());
+    if (!m.ok()) return out;
+    const auto* run = std::get_if<dmc::RtRunMove>(&m.value());
+    if (run == nullptr || !run->camera_open_angle_deg) return out;
+    dmc::RtRunMove late = *run;
+    late.camera_open_angle_deg = 180;
+    return dmc::Encode(f.value().id, dmc::HostMessage{late});
+  };
+  auto broken = std::make_unique<InProcessTarget>(
+      "dmc16-broken", [late_shutter](sim::Scheduler& s, devices::ByteSink& out) {
+        return std::make_unique<dmc_testing::BrokenDmc16>(s, out, dmc_testing::PassThrough, "",
+                                                          late_shutter);
+      });
+  const Recorded bad = Record(std::move(broken), options, RunDmc);
+  ASSERT_EQ(bad.report.rules.at("DMC-RT-023").status, Status::kFail);
+  const RunReport bad_again = PlayBack(bad.log, options, RunDmc, &divergence);
+  EXPECT_EQ(divergence, "");
+  EXPECT_EQ(bad_again.rules.at("DMC-RT-023").status, Status::kFail);
+  EXPECT_EQ(CompareVerdicts(JsonReport(bad.report), JsonReport(bad_again)),
+            std::vector<std::string>{});
+}
+
+// A target whose name changes once it is open (as a simavr: target names its
+// MCU): the playback gives each name where the recorded run read it.
+TEST(CallLog, TheTargetsNameIsPlayedBackAsItChanged) {
+  class Renamed final : public Target {
+   public:
+    std::string Name() const override { return open_ ? "renamed @ 16 MHz" : "renamed"; }
+    bool VirtualClock() const override { return true; }
+    bool CanRestart() const override { return false; }
+    std::optional<std::string> Open() override {
+      open_ = true;
+      return std::nullopt;
+    }
+    void Restart() override {}
+    TimeNs Now() const override { return 0; }
+    bool Send(wire::ByteView) override { return true; }
+    bool Receive(TimeNs, wire::Bytes&) override { return false; }
+
+   private:
+    bool open_ = false;
+  };
+  RecordingTarget rec(std::make_unique<Renamed>());
+  EXPECT_EQ(rec.Name(), "renamed");
+  ASSERT_EQ(rec.Open(), std::nullopt);
+  EXPECT_EQ(rec.Name(), "renamed @ 16 MHz");
+  rec.Now();
+  std::string error;
+  auto playback = PlaybackTarget::FromLog(rec.log(), &error);
+  ASSERT_TRUE(playback) << error;
+  EXPECT_EQ(playback->Name(), "renamed");
+  EXPECT_EQ(playback->Open(), std::nullopt);
+  EXPECT_EQ(playback->Name(), "renamed @ 16 MHz");
+  playback->Now();
+  EXPECT_TRUE(playback->Exhausted());
+  EXPECT_EQ(playback->divergence(), "");
+  const auto sum = SummarizeCallLog(rec.log(), &error);
+  ASSERT_TRUE(sum) << error;
+  EXPECT_EQ(sum->target, "renamed @ 16 MHz");
+  EXPECT_EQ(sum->calls, 2u);
+}
+
 TEST(CallLog, AStackshotRunWithRestartsPlaysBack) {
   RunOptions options;
   const Recorded rec = Record(InProcessTarget::ForModel("stackshot3x", ""), options, RunStackshot);
@@ -201,11 +291,15 @@ TEST(CallLog, ACutOrDamagedLogIsRefusedWithoutACrash) {
 }
 
 RC_GTEST_PROP(CallLogProp, AnyBytesAfterTheHeaderAreReadWithoutACrash, (const std::string& tail)) {
-  // "MOCOLOG1", a 3-byte name, a virtual clock that can restart, then anything.
-  const std::string log = std::string(
-                              "MOCOLOG1\x03"
-                              "abc\x01\x01",
-                              14) +
+  // Either format's magic (this one's, and mococheck 0.1.0's), a 3-byte
+  // name, a virtual clock that can restart, then anything.
+  const std::string magic = *rc::gen::element<std::string>("MOCOLOG2", "MOCOLOG1");
+  const std::string log = magic +
+                          std::string(
+                              "\x03"
+                              "abc"
+                              "\x01\x01",
+                              6) +
                           tail;
   std::string error;
   SummarizeCallLog(log, &error);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string_view>
 
 #include "base/format.h"
@@ -170,7 +171,7 @@ std::string HtmlReport(const RunReport& report) {
        "border-radius:4px}.ok{background:#dafbe1}.ko{background:#ffebe9}\n"
        "pre.tx{background:#f6f8fa;padding:.5em;overflow-x:auto;font-size:12px}"
        "b.bad{color:#c62828}blockquote{margin:.3em 0 .3em 1em;color:#555}"
-       "details{margin:.3em 0}\n</style></head><body>\n";
+       "details{margin:.3em 0}td.id{white-space:nowrap}\n</style></head><body>\n";
   s += "<h1>mococheck conformance report</h1>\n";
   const std::string verdict =
       !report.target_error.empty()
@@ -199,7 +200,15 @@ std::string HtmlReport(const RunReport& report) {
     s += "</ul>\n";
   }
 
-  // Rules: failures first.
+  // Rules: failures first. A rule links to its first finding below; a rule with
+  // none (passed, or not judged) has nothing to link to.
+  std::set<std::string> findings;
+  for (const CaseResult& c : report.cases) {
+    if (!c.applicable) continue;
+    for (const auto& [id, o] : c.outcomes) {
+      if (o.status != Status::kPass) findings.insert(id);
+    }
+  }
   s += "<h2>Rules</h2>\n<table><tr><th>id</th><th>level</th><th>status</th><th>cases "
        "failed/passed</th><th>rule</th></tr>\n";
   std::vector<std::pair<std::string, RuleSummary>> rules(report.rules.begin(), report.rules.end());
@@ -212,15 +221,18 @@ std::string HtmlReport(const RunReport& report) {
                             : sum.status == Status::kPass  ? "pass"
                             : sum.status == Status::kNoted ? "note"
                                                            : "na";
-    s += "<tr><td><a href=\"#" + Esc(id) + "\">" + Esc(id) + "</a></td><td>" +
-         Esc(r ? LevelName(r->level) : "?") + "</td><td class=\"" + cls + "\">" +
-         Esc(StatusName(sum.status)) + "</td><td>" + std::to_string(sum.cases_failed) + "/" +
-         std::to_string(sum.cases_passed) + "</td><td>" + Esc(r ? r->title : "") + "</td></tr>\n";
+    const std::string cell =
+        findings.contains(id) ? "<a href=\"#" + Esc(id) + "\">" + Esc(id) + "</a>" : Esc(id);
+    s += "<tr><td class=\"id\">" + cell + "</td><td>" + Esc(r ? LevelName(r->level) : "?") +
+         "</td><td class=\"" + cls + "\">" + Esc(StatusName(sum.status)) + "</td><td>" +
+         std::to_string(sum.cases_failed) + "/" + std::to_string(sum.cases_passed) + "</td><td>" +
+         Esc(r ? r->title : "") + "</td></tr>\n";
   }
   s += "</table>\n";
 
-  // Cases.
+  // Cases. The first finding of each rule carries the rule's id as its anchor.
   s += "<h2>Cases</h2>\n";
+  std::set<std::string> anchored;
   for (const CaseResult& c : report.cases) {
     const std::string full = c.suite + "/" + c.name;
     if (!c.applicable) {
@@ -239,9 +251,11 @@ std::string HtmlReport(const RunReport& report) {
     for (const auto& [id, o] : c.outcomes) {
       if (o.status == Status::kPass) continue;
       const Rule* r = FindRule(id);
-      s += "<h3 id=\"" + Esc(id) + "\" class=\"" + (o.status == Status::kFail ? "fail" : "note") +
-           "\">" + Esc(StatusName(o.status)) + " " + Esc(id) + " [" +
-           Esc(r ? LevelName(r->level) : "?") + "] " + Esc(r ? r->title : "") + "</h3>\n";
+      const std::string anchor =
+          anchored.insert(id).second ? " id=\"" + Esc(id) + "\"" : std::string();
+      s += "<h3" + anchor + " class=\"" + (o.status == Status::kFail ? "fail" : "note") + "\">" +
+           Esc(StatusName(o.status)) + " " + Esc(id) + " [" + Esc(r ? LevelName(r->level) : "?") +
+           "] " + Esc(r ? r->title : "") + "</h3>\n";
       if (r) {
         s += "<blockquote>&ldquo;" + Esc(r->clause) + "&rdquo; (" + Esc(r->source) +
              ")</blockquote>\n";

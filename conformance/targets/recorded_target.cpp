@@ -1,106 +1,18 @@
-// The call log of a run (recorded_target.h). Format: "MOCOLOG1", the target's
-// name (a string), its clock and restart ability (one byte each), then one
-// entry per call: an op byte and its arguments and result. Integers are
-// LEB128 varints, signed ones zigzag-coded; times are deltas from the clock
-// value last logged; strings are a varint length and the bytes.
+// The call log of a run, recorded and played back (recorded_target.h); its
+// format and decoder are in call_log.h.
 #include "conformance/targets/recorded_target.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <utility>
 
+#include "conformance/targets/call_log.h"
+
 namespace moco::conformance {
+
+using namespace call_log;  // NOLINT: the format's ops and primitives, used throughout
+
 namespace {
-
-constexpr std::string_view kMagic = "MOCOLOG1";
-
-enum Op : uint8_t {
-  kNow = 1,
-  kSend = 2,
-  kReceive = 3,
-  kRestart = 4,
-  kOpen = 5,
-  kSetEStop = 6,
-  kSetLimit = 7,
-  kSetGio = 8,
-  kCanPress = 9,
-  kPress = 10,
-  kLinkLost = 11,
-  kFirmwareStopped = 12,
-  kFirmwareFaulted = 13,
-  kBacktrace = 14,
-  kPins = 15,
-  kCaveats = 16,
-};
-
-const char* OpName(uint8_t op) {
-  switch (op) {
-    case kNow:
-      return "read the clock";
-    case kSend:
-      return "sent bytes";
-    case kReceive:
-      return "waited for bytes";
-    case kRestart:
-      return "restarted the device";
-    case kOpen:
-      return "opened the device";
-    case kSetEStop:
-      return "set the e-stop";
-    case kSetLimit:
-      return "set a limit input";
-    case kSetGio:
-      return "set an I/O input";
-    case kCanPress:
-      return "asked for a button";
-    case kPress:
-      return "pressed a button";
-    case kLinkLost:
-      return "asked whether the link was lost";
-    case kFirmwareStopped:
-    case kFirmwareFaulted:
-    case kBacktrace:
-      return "asked whether the firmware stopped";
-    case kPins:
-      return "read the pins";
-    case kCaveats:
-      return "asked for the target's caveats";
-    default:
-      return "made an unknown call";
-  }
-}
-
-void PutVarint(std::string& s, uint64_t v) {
-  while (v >= 0x80) {
-    s.push_back(static_cast<char>((v & 0x7F) | 0x80));
-    v >>= 7;
-  }
-  s.push_back(static_cast<char>(v));
-}
-void PutSigned(std::string& s, int64_t v) {
-  PutVarint(s, (static_cast<uint64_t>(v) << 1) ^ static_cast<uint64_t>(v >> 63));
-}
-void PutString(std::string& s, std::string_view v) {
-  PutVarint(s, v.size());
-  s.append(v);
-}
-void PutOptional(std::string& s, const std::optional<std::string>& v) {
-  s.push_back(v ? 1 : 0);
-  if (v) PutString(s, *v);
-}
-void PutStrings(std::string& s, const std::vector<std::string>& v) {
-  PutVarint(s, v.size());
-  for (const std::string& one : v) PutString(s, one);
-}
-
-// a + b, wrapping: a crafted log's deltas never overflow (and never make the
-// sanitizers stop verify).
-TimeNs Plus(TimeNs a, int64_t b) {
-  return static_cast<TimeNs>(static_cast<uint64_t>(a) + static_cast<uint64_t>(b));
-}
-int64_t Minus(TimeNs a, TimeNs b) {
-  return static_cast<int64_t>(static_cast<uint64_t>(a) - static_cast<uint64_t>(b));
-}
 
 // "3 bytes: 68 69 0d" (at most the first 24 bytes shown).
 std::string Shown(std::string_view bytes) {
@@ -115,63 +27,6 @@ std::string Shown(std::string_view bytes) {
   return s;
 }
 
-// Reads entries from a log; every read is bounds-checked, and a damaged log
-// leaves ok() false (reads then give zeros and empty strings).
-class Reader {
- public:
-  Reader(std::string_view log, size_t& at) : log_(log), at_(at) {}
-  bool ok() const { return ok_; }
-  bool AtEnd() const { return at_ >= log_.size(); }
-  uint8_t Byte() {
-    if (at_ >= log_.size()) return Bad();
-    return static_cast<uint8_t>(log_[at_++]);
-  }
-  uint64_t Varint() {
-    uint64_t v = 0;
-    for (int shift = 0; shift < 64; shift += 7) {
-      const uint8_t b = Byte();
-      if (!ok_) return 0;
-      v |= static_cast<uint64_t>(b & 0x7F) << shift;
-      if ((b & 0x80) == 0) return v;
-    }
-    return Bad();
-  }
-  int64_t Signed() {
-    const uint64_t z = Varint();
-    return static_cast<int64_t>((z >> 1) ^ (~(z & 1) + 1));
-  }
-  std::string_view String() {
-    const uint64_t n = Varint();
-    if (!ok_ || n > log_.size() - at_) {
-      Bad();
-      return {};
-    }
-    const std::string_view v = log_.substr(at_, n);
-    at_ += n;
-    return v;
-  }
-  std::optional<std::string> Optional() {
-    if (Byte() == 0) return std::nullopt;
-    return std::string(String());
-  }
-  std::vector<std::string> Strings() {
-    const uint64_t n = Varint();
-    std::vector<std::string> v;
-    for (uint64_t i = 0; i < n && ok_; ++i) v.emplace_back(String());
-    return v;
-  }
-
- private:
-  uint8_t Bad() {
-    ok_ = false;
-    at_ = log_.size();
-    return 0;
-  }
-  std::string_view log_;
-  size_t& at_;
-  bool ok_ = true;
-};
-
 }  // namespace
 
 // --- recording ---------------------------------------------------------------------------
@@ -179,10 +34,21 @@ class Reader {
 RecordingTarget::RecordingTarget(std::unique_ptr<Target> inner) : inner_(std::move(inner)) {
   virtual_clock_ = inner_->VirtualClock();
   can_restart_ = inner_->CanRestart();
+  name_ = inner_->Name();
   log_.append(kMagic);
-  PutString(log_, inner_->Name());
+  PutString(log_, name_);
   log_.push_back(virtual_clock_ ? 1 : 0);
   log_.push_back(can_restart_ ? 1 : 0);
+}
+
+std::string RecordingTarget::Name() const {
+  std::string name = inner_->Name();
+  if (name != name_) {
+    log_.push_back(kName);
+    PutString(log_, name);
+    name_ = name;
+  }
+  return name;
 }
 
 std::optional<std::string> RecordingTarget::Open() {
@@ -267,6 +133,50 @@ bool RecordingTarget::PressButton(std::string_view button) {
   return r;
 }
 
+DeviceOutputs RecordingTarget::Outputs() const {
+  // The runner reads through outputs_, which logs each read.
+  OutputReads& reads = outputs_;
+  reads.inner = inner_->Outputs();
+  const uint8_t bits = static_cast<uint8_t>((reads.inner.dmx != nullptr ? kDmxBit : 0) |
+                                            (reads.inner.gio != nullptr ? kGioBit : 0) |
+                                            (reads.inner.camera != nullptr ? kCameraBit : 0));
+  log_.push_back(kOutputs);
+  log_.push_back(static_cast<char>(bits));
+  DeviceOutputs out;
+  if (reads.inner.dmx != nullptr) out.dmx = &outputs_;
+  if (reads.inner.gio != nullptr) out.gio = &outputs_;
+  if (reads.inner.camera != nullptr) out.camera = &outputs_;
+  return out;
+}
+
+int RecordingTarget::OutputReads::Value(int channel) const {
+  const int v = inner.dmx->Value(channel);
+  t_.log_.push_back(kDmxValue);
+  PutSigned(t_.log_, channel);
+  PutSigned(t_.log_, v);
+  return v;
+}
+
+uint32_t RecordingTarget::OutputReads::outputs() const {
+  const uint32_t v = inner.gio->outputs();
+  t_.log_.push_back(kGioOutputs);
+  PutVarint(t_.log_, v);
+  return v;
+}
+
+std::vector<sim::CameraPort::Edge> RecordingTarget::OutputReads::Trace() const {
+  std::vector<sim::CameraPort::Edge> v = inner.camera->Trace();
+  t_.log_.push_back(kCameraTrace);
+  PutVarint(t_.log_, v.size());
+  TimeNs prev = 0;
+  for (const sim::CameraPort::Edge& e : v) {
+    PutSigned(t_.log_, Minus(e.time_ns, prev));
+    t_.log_.push_back(static_cast<char>((e.line & 0x7F) | (e.level ? 0x80 : 0)));
+    prev = e.time_ns;
+  }
+  return v;
+}
+
 std::optional<std::string> RecordingTarget::LinkLost() const {
   auto r = inner_->LinkLost();
   log_.push_back(kLinkLost);
@@ -304,7 +214,7 @@ const PinTrace* RecordingTarget::Pins() const {
   const PinTrace* t = inner_->Pins();
   log_.push_back(kPins);
   if (t == nullptr) {
-    log_.push_back(0);
+    log_.push_back(kPinsNone);
     return t;
   }
   // The edges new since the last read; all of them after a restart (or when
@@ -314,8 +224,9 @@ const PinTrace* RecordingTarget::Pins() const {
     full = t->signals[i].edges.size() < pins_logged_[i];
   }
   if (full) pins_logged_.assign(t->signals.size(), 0);
-  log_.push_back(full ? 2 : 1);
+  log_.push_back(full ? kPinsAllWithFrequency : kPinsSince);
   PutVarint(log_, t->signals.size());
+  if (full) PutVarint(log_, t->frequency_hz);
   for (size_t i = 0; i < t->signals.size(); ++i) {
     const PinSignal& s = t->signals[i];
     if (full) log_.push_back(s.initial ? 1 : 0);
@@ -343,13 +254,15 @@ std::vector<std::string> RecordingTarget::Caveats() const {
 // --- playback ----------------------------------------------------------------------------
 
 std::unique_ptr<PlaybackTarget> PlaybackTarget::FromLog(std::string log, std::string* error) {
-  if (log.compare(0, kMagic.size(), kMagic) != 0) {
-    *error = "not a call log (it does not start with " + std::string(kMagic) + ")";
+  const size_t magic = MagicLength(log);
+  if (magic == 0) {
+    *error = NotALog();
     return nullptr;
   }
   std::unique_ptr<PlaybackTarget> t(new PlaybackTarget());
   t->log_ = std::move(log);
-  t->at_ = kMagic.size();
+  t->at_ = magic;
+  t->entry_ = std::make_unique<LogEntry>();
   Reader r(t->log_, t->at_);
   t->name_ = std::string(r.String());
   t->virtual_clock_ = r.Byte() != 0;
@@ -361,171 +274,191 @@ std::unique_ptr<PlaybackTarget> PlaybackTarget::FromLog(std::string log, std::st
   return t;
 }
 
+PlaybackTarget::~PlaybackTarget() = default;
+
 void PlaybackTarget::Diverge(std::string what) const {
   if (!divergence_.empty()) return;
   divergence_ = "call " + std::to_string(calls_) + ": " + std::move(what);
   at_ = log_.size();
 }
 
-bool PlaybackTarget::Expect(uint8_t op, const char* what) const {
-  if (!divergence_.empty()) return false;
+void PlaybackTarget::TakeNames() const {
+  while (divergence_.empty() && at_ < log_.size() && static_cast<uint8_t>(log_[at_]) == kName) {
+    Reader r(log_, at_);
+    if (!DecodeEntry(r, *entry_)) {
+      Diverge("the call log is cut short or damaged");
+      return;
+    }
+    name_ = std::string(entry_->bytes);
+  }
+}
+
+const LogEntry* PlaybackTarget::Next(uint8_t op) const {
+  TakeNames();
+  if (!divergence_.empty()) return nullptr;
   ++calls_;
   if (at_ >= log_.size()) {
-    Diverge(std::string("the run ") + what + " after the recorded run's last call");
-    return false;
+    Diverge(std::string("the run ") + OpName(op) + " after the recorded run's last call");
+    return nullptr;
   }
   const uint8_t recorded = static_cast<uint8_t>(log_[at_]);
   if (recorded != op) {
-    Diverge(std::string("the run ") + what + " where the recorded run " + OpName(recorded));
-    return false;
+    Diverge(std::string("the run ") + OpName(op) + " where the recorded run " + OpName(recorded));
+    return nullptr;
   }
-  ++at_;
-  return true;
+  Reader r(log_, at_);
+  if (!DecodeEntry(r, *entry_)) {
+    Diverge("the call log is cut short or damaged");
+    return nullptr;
+  }
+  return entry_.get();
+}
+
+std::string PlaybackTarget::Name() const {
+  TakeNames();
+  return name_;
 }
 
 std::optional<std::string> PlaybackTarget::Open() {
-  if (!Expect(kOpen, OpName(kOpen))) return "the recorded run " + divergence_;
-  Reader r(log_, at_);
-  auto v = r.Optional();
-  if (!r.ok()) Diverge("the call log is cut short");
-  return v;
+  const LogEntry* e = Next(kOpen);
+  if (e == nullptr) return "the recorded run " + divergence_;
+  return e->text;
 }
 
 void PlaybackTarget::Restart() {
-  if (!Expect(kRestart, OpName(kRestart))) return;
+  if (Next(kRestart) == nullptr) return;
   if (board_) pins_ = PinTrace::For(*board_);
 }
 
 TimeNs PlaybackTarget::Now() const {
-  if (!Expect(kNow, OpName(kNow))) return last_now_;
-  Reader r(log_, at_);
-  last_now_ = Plus(last_now_, r.Signed());
-  if (!r.ok()) Diverge("the call log is cut short");
+  const LogEntry* e = Next(kNow);
+  if (e == nullptr) return last_now_;
+  last_now_ = Plus(last_now_, e->num);
   return last_now_;
 }
 
 bool PlaybackTarget::Send(wire::ByteView bytes) {
   const std::string_view sent(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-  const size_t entry = at_;
-  if (!Expect(kSend, OpName(kSend))) return false;
-  Reader r(log_, at_);
-  const std::string_view recorded = r.String();
-  const bool result = r.Byte() != 0;
-  if (!r.ok()) {
-    Diverge("the call log is cut short");
+  const LogEntry* e = Next(kSend);
+  if (e == nullptr) return false;
+  if (e->bytes != sent) {
+    Diverge("the run sent " + Shown(sent) + " where the recorded run sent " + Shown(e->bytes));
     return false;
   }
-  if (recorded != sent) {
-    at_ = entry;
-    Diverge("the run sent " + Shown(sent) + " where the recorded run sent " + Shown(recorded));
-    return false;
-  }
-  return result;
+  return e->ok;
 }
 
 bool PlaybackTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
-  if (!Expect(kReceive, OpName(kReceive))) return false;
-  Reader r(log_, at_);
-  const TimeNs recorded_deadline = Plus(last_now_, r.Signed());
-  const bool result = r.Byte() != 0;
-  const std::string_view bytes = r.String();
-  if (!r.ok()) {
-    Diverge("the call log is cut short");
-    return false;
-  }
+  const LogEntry* e = Next(kReceive);
+  if (e == nullptr) return false;
+  const TimeNs recorded_deadline = Plus(last_now_, e->num);
   if (recorded_deadline != deadline_ns) {
     Diverge("the run waited until " + std::to_string(deadline_ns) +
             " ns where the recorded run waited until " + std::to_string(recorded_deadline) + " ns");
     return false;
   }
-  out.insert(out.end(), bytes.begin(), bytes.end());
-  return result;
+  out.insert(out.end(), e->bytes.begin(), e->bytes.end());
+  return e->ok;
 }
 
 bool PlaybackTarget::SetEStop(bool engaged) {
-  if (!Expect(kSetEStop, OpName(kSetEStop))) return false;
-  Reader r(log_, at_);
-  const bool arg = r.Byte() != 0;
-  const bool result = r.Byte() != 0;
-  if (arg != engaged) Diverge("the e-stop was set another way than in the recorded run");
-  return r.ok() && result;
+  const LogEntry* e = Next(kSetEStop);
+  if (e == nullptr) return false;
+  if ((e->flags != 0) != engaged)
+    Diverge("the e-stop was set another way than in the recorded run");
+  return e->ok;
 }
 
 bool PlaybackTarget::SetLimitInput(int set, bool high, bool active) {
-  if (!Expect(kSetLimit, OpName(kSetLimit))) return false;
-  Reader r(log_, at_);
-  const int64_t rec_set = r.Signed();
-  const uint8_t flags = r.Byte();
-  const bool result = r.Byte() != 0;
-  if (rec_set != set || flags != ((high ? 1 : 0) | (active ? 2 : 0))) {
+  const LogEntry* e = Next(kSetLimit);
+  if (e == nullptr) return false;
+  if (e->num != set || e->flags != ((high ? 1 : 0) | (active ? 2 : 0))) {
     Diverge("another limit input was set than in the recorded run");
   }
-  return r.ok() && result;
+  return e->ok;
 }
 
 bool PlaybackTarget::SetGioInput(int bit, bool level) {
-  if (!Expect(kSetGio, OpName(kSetGio))) return false;
-  Reader r(log_, at_);
-  const int64_t rec_bit = r.Signed();
-  const bool rec_level = r.Byte() != 0;
-  const bool result = r.Byte() != 0;
-  if (rec_bit != bit || rec_level != level) {
+  const LogEntry* e = Next(kSetGio);
+  if (e == nullptr) return false;
+  if (e->num != bit || (e->flags != 0) != level) {
     Diverge("another I/O input was set than in the recorded run");
   }
-  return r.ok() && result;
+  return e->ok;
 }
 
 bool PlaybackTarget::CanPressButton(std::string_view button) const {
-  if (!Expect(kCanPress, OpName(kCanPress))) return false;
-  Reader r(log_, at_);
-  const std::string_view rec = r.String();
-  const bool result = r.Byte() != 0;
-  if (rec != button) Diverge("the run asked for another button than the recorded run");
-  return r.ok() && result;
+  const LogEntry* e = Next(kCanPress);
+  if (e == nullptr) return false;
+  if (e->bytes != button) Diverge("the run asked for another button than the recorded run");
+  return e->ok;
 }
 
 bool PlaybackTarget::PressButton(std::string_view button) {
-  if (!Expect(kPress, OpName(kPress))) return false;
-  Reader r(log_, at_);
-  const std::string_view rec = r.String();
-  const bool result = r.Byte() != 0;
-  if (rec != button) Diverge("the run pressed another button than the recorded run");
-  return r.ok() && result;
+  const LogEntry* e = Next(kPress);
+  if (e == nullptr) return false;
+  if (e->bytes != button) Diverge("the run pressed another button than the recorded run");
+  return e->ok;
+}
+
+DeviceOutputs PlaybackTarget::Outputs() const {
+  const LogEntry* e = Next(kOutputs);
+  if (e == nullptr) return {};
+  DeviceOutputs out;
+  if ((e->flags & kDmxBit) != 0) out.dmx = &outputs_;
+  if ((e->flags & kGioBit) != 0) out.gio = &outputs_;
+  if ((e->flags & kCameraBit) != 0) out.camera = &outputs_;
+  return out;
+}
+
+int PlaybackTarget::OutputReads::Value(int channel) const {
+  const LogEntry* e = t_.Next(kDmxValue);
+  if (e == nullptr) return 0;
+  if (e->num != channel) {
+    t_.Diverge("the run read DMX channel " + std::to_string(channel) +
+               " where the recorded run read channel " + std::to_string(e->num));
+    return 0;
+  }
+  return static_cast<int>(std::clamp<int64_t>(e->value, 0, 255));
+}
+
+uint32_t PlaybackTarget::OutputReads::outputs() const {
+  const LogEntry* e = t_.Next(kGioOutputs);
+  return e == nullptr ? 0 : static_cast<uint32_t>(e->num);
+}
+
+std::vector<sim::CameraPort::Edge> PlaybackTarget::OutputReads::Trace() const {
+  const LogEntry* e = t_.Next(kCameraTrace);
+  return e == nullptr ? std::vector<sim::CameraPort::Edge>{} : e->camera;
 }
 
 std::optional<std::string> PlaybackTarget::LinkLost() const {
-  if (!Expect(kLinkLost, OpName(kLinkLost))) {
+  const LogEntry* e = Next(kLinkLost);
+  if (e == nullptr) {
     return "the certificate's traffic does not fit the installed rules: " + divergence_;
   }
-  Reader r(log_, at_);
-  auto v = r.Optional();
-  if (!r.ok()) Diverge("the call log is cut short");
-  return v;
+  return e->text;
 }
 
 std::optional<std::string> PlaybackTarget::FirmwareStopped() const {
-  if (!Expect(kFirmwareStopped, OpName(kFirmwareStopped))) return std::nullopt;
-  Reader r(log_, at_);
-  return r.Optional();
+  const LogEntry* e = Next(kFirmwareStopped);
+  return e == nullptr ? std::nullopt : e->text;
 }
 
 std::optional<FirmwareFault> PlaybackTarget::FirmwareFaulted() const {
-  if (!Expect(kFirmwareFaulted, OpName(kFirmwareFaulted))) return std::nullopt;
-  Reader r(log_, at_);
-  if (r.Byte() == 0) return std::nullopt;
+  const LogEntry* e = Next(kFirmwareFaulted);
+  if (e == nullptr || !e->ok) return std::nullopt;
   FirmwareFault f;
   f.kind = static_cast<FirmwareFaultKind>(
-      std::min<uint8_t>(r.Byte(), static_cast<uint8_t>(FirmwareFaultKind::kReset)));
-  f.what = std::string(r.String());
-  f.backtrace = r.Strings();
-  if (!r.ok()) Diverge("the call log is cut short");
+      std::min<uint8_t>(e->flags, static_cast<uint8_t>(FirmwareFaultKind::kReset)));
+  f.what = std::string(e->bytes);
+  f.backtrace = e->texts;
   return f;
 }
 
 std::vector<std::string> PlaybackTarget::FirmwareBacktrace() const {
-  if (!Expect(kBacktrace, OpName(kBacktrace))) return {};
-  Reader r(log_, at_);
-  return r.Strings();
+  const LogEntry* e = Next(kBacktrace);
+  return e == nullptr ? std::vector<std::string>{} : e->texts;
 }
 
 std::optional<std::string> PlaybackTarget::WatchPins(const Board& board) {
@@ -535,48 +468,44 @@ std::optional<std::string> PlaybackTarget::WatchPins(const Board& board) {
 }
 
 const PinTrace* PlaybackTarget::Pins() const {
-  if (!Expect(kPins, OpName(kPins))) return nullptr;
-  Reader r(log_, at_);
-  const uint8_t kind = r.Byte();
-  if (kind == 0) return nullptr;
+  const LogEntry* e = Next(kPins);
+  if (e == nullptr || e->flags == kPinsNone) return nullptr;
   if (!pins_) {
     Diverge("the recorded run watched pins, and no board was given to watch them with");
     return nullptr;
   }
-  const uint64_t n = r.Varint();
-  if (n != pins_->signals.size()) {
-    Diverge("the recorded run watched " + std::to_string(n) + " pins, the board names " +
-            std::to_string(pins_->signals.size()));
+  if (e->pins.size() != pins_->signals.size()) {
+    Diverge("the recorded run watched " + std::to_string(e->pins.size()) +
+            " pins, the board names " + std::to_string(pins_->signals.size()));
     return nullptr;
   }
-  for (PinSignal& s : pins_->signals) {
-    if (kind == 2) {
+  const bool all = e->flags != kPinsSince;
+  if (e->flags == kPinsAllWithFrequency) {
+    pins_->frequency_hz = static_cast<uint32_t>(e->frequency_hz);
+  }
+  for (size_t i = 0; i < e->pins.size(); ++i) {
+    PinSignal& s = pins_->signals[i];
+    if (all) {
       s.edges.clear();
-      s.initial = r.Byte() != 0;
+      s.initial = e->pins[i].initial;
     }
-    const uint64_t count = r.Varint();
     TimeNs prev = s.edges.empty() ? 0 : s.edges.back().t_ns;
-    for (uint64_t k = 0; k < count && r.ok(); ++k) {
-      PinEdge e;
-      e.t_ns = Plus(prev, r.Signed());
-      e.cycle = r.Varint();
-      e.level = r.Byte() != 0;
-      s.edges.push_back(e);
-      prev = e.t_ns;
+    for (const LogEntry::PinEdgeDelta& d : e->pins[i].edges) {
+      PinEdge edge;
+      edge.t_ns = Plus(prev, d.dt_ns);
+      edge.cycle = d.cycle;
+      edge.level = d.level;
+      s.edges.push_back(edge);
+      prev = edge.t_ns;
     }
   }
-  pins_->complete_until_ns = r.Signed();
-  if (!r.ok()) {
-    Diverge("the call log is cut short");
-    return nullptr;
-  }
+  pins_->complete_until_ns = e->num;
   return &*pins_;
 }
 
 std::vector<std::string> PlaybackTarget::Caveats() const {
-  if (!Expect(kCaveats, OpName(kCaveats))) return {};
-  Reader r(log_, at_);
-  return r.Strings();
+  const LogEntry* e = Next(kCaveats);
+  return e == nullptr ? std::vector<std::string>{} : e->texts;
 }
 
 // --- reading a log without a runner ------------------------------------------------------
@@ -587,81 +516,48 @@ namespace {
 // is damaged (`error` says where).
 template <typename OnChunk>
 bool WalkLog(std::string_view log, CallLogSummary& sum, std::string* error, OnChunk&& chunk) {
-  if (log.substr(0, kMagic.size()) != kMagic) {
-    *error = "not a call log (it does not start with " + std::string(kMagic) + ")";
+  size_t at = MagicLength(log);
+  if (at == 0) {
+    *error = NotALog();
     return false;
   }
-  size_t at = kMagic.size();
   Reader r(log, at);
   sum.target = std::string(r.String());
   sum.virtual_clock = r.Byte() != 0;
   sum.can_restart = r.Byte() != 0;
   TimeNs now = 0;
+  LogEntry e;
   while (r.ok() && !r.AtEnd()) {
-    const uint8_t op = r.Byte();
-    ++sum.calls;
-    switch (op) {
+    const size_t entry_at = at;
+    if (!DecodeEntry(r, e)) {
+      *error =
+          r.ok() ? "unknown entry " + std::to_string(e.op) + " at byte " + std::to_string(entry_at)
+                 : "the call log is cut short or damaged";
+      return false;
+    }
+    switch (e.op) {
+      case kName:
+        sum.target = std::string(e.bytes);
+        continue;  // not a call
       case kNow:
-        now = Plus(now, r.Signed());
+        now = Plus(now, e.num);
         break;
-      case kSend: {
-        const std::string_view b = r.String();
-        r.Byte();
-        sum.host_bytes += b.size();
-        chunk(LoggedChunk{now, true, false, std::string(b)});
+      case kSend:
+        sum.host_bytes += e.bytes.size();
+        chunk(LoggedChunk{now, true, false, std::string(e.bytes)});
         break;
-      }
-      case kReceive: {
-        r.Signed();
-        r.Byte();
-        const std::string_view b = r.String();
-        sum.device_bytes += b.size();
-        if (!b.empty()) chunk(LoggedChunk{now, false, false, std::string(b)});
+      case kReceive:
+        sum.device_bytes += e.bytes.size();
+        if (!e.bytes.empty()) chunk(LoggedChunk{now, false, false, std::string(e.bytes)});
         break;
-      }
       case kRestart:
         ++sum.restarts;
         chunk(LoggedChunk{now, true, true, {}});
         break;
-      case kOpen:
-      case kLinkLost:
-      case kFirmwareStopped:
-        r.Optional();
-        break;
-      case kSetEStop:
-        r.Byte(), r.Byte();
-        break;
-      case kSetLimit:
-      case kSetGio:
-        r.Signed(), r.Byte(), r.Byte();
-        break;
-      case kCanPress:
-      case kPress:
-        r.String(), r.Byte();
-        break;
-      case kFirmwareFaulted:
-        if (r.Byte() != 0) r.Byte(), r.String(), r.Strings();
-        break;
-      case kBacktrace:
-      case kCaveats:
-        r.Strings();
-        break;
-      case kPins: {
-        const uint8_t kind = r.Byte();
-        if (kind == 0) break;
-        const uint64_t n = r.Varint();
-        for (uint64_t i = 0; i < n && r.ok(); ++i) {
-          if (kind == 2) r.Byte();
-          const uint64_t count = r.Varint();
-          for (uint64_t k = 0; k < count && r.ok(); ++k) r.Signed(), r.Varint(), r.Byte();
-        }
-        r.Signed();
-        break;
-      }
       default:
-        *error = "unknown entry " + std::to_string(op) + " at byte " + std::to_string(at - 1);
-        return false;
+        break;
     }
+    ++sum.calls;
     sum.last_ns = now;
   }
   if (!r.ok()) {

@@ -9,11 +9,11 @@
 // told the log diverged, as a lost link.
 //
 // The log holds every byte each way with the target time it crossed, every
-// clock read, the restarts and inputs set (e-stop, limits, I/O, buttons) and
-// the watched pins (a simavr: target with --board). The device outputs that
-// only an in-process target exposes (Target::Outputs(): DMX, I/O, camera)
-// are not part of it: a recorded run judges what crosses the device's link
-// and pins, as it would for a device on a serial port.
+// clock read, the restarts and inputs set (e-stop, limits, I/O, buttons), the
+// watched pins (a simavr: target with --board), every read of the outputs an
+// in-process device exposes (Target::Outputs(): DMX levels, I/O outputs,
+// camera edges) and the target's name whenever it changes (a simavr: target
+// names its MCU once open).
 #ifndef MOCO_CONFORMANCE_TARGETS_RECORDED_TARGET_H_
 #define MOCO_CONFORMANCE_TARGETS_RECORDED_TARGET_H_
 
@@ -53,8 +53,8 @@ struct LoggedChunk {
 
 class RecordingTarget final : public Target {
  public:
-  // Records the calls made to `inner` from now on (its Name(), clock and
-  // restart ability are read once, here).
+  // Records the calls made to `inner` from now on (its clock and restart
+  // ability are read once, here).
   explicit RecordingTarget(std::unique_ptr<Target> inner);
 
   // The call log so far (a binary format only PlaybackTarget and
@@ -62,7 +62,7 @@ class RecordingTarget final : public Target {
   const std::string& log() const { return log_; }
   Target& inner() { return *inner_; }
 
-  std::string Name() const override { return inner_->Name(); }
+  std::string Name() const override;
   bool VirtualClock() const override { return virtual_clock_; }
   bool CanRestart() const override { return can_restart_; }
   std::optional<std::string> Open() override;
@@ -75,8 +75,7 @@ class RecordingTarget final : public Target {
   bool SetGioInput(int bit, bool level) override;
   bool CanPressButton(std::string_view button) const override;
   bool PressButton(std::string_view button) override;
-  // Never the in-process outputs (see the file comment).
-  DeviceOutputs Outputs() const override { return {}; }
+  DeviceOutputs Outputs() const override;
   std::optional<std::string> LinkLost() const override;
   std::optional<std::string> FirmwareStopped() const override;
   std::optional<FirmwareFault> FirmwareFaulted() const override;
@@ -88,19 +87,37 @@ class RecordingTarget final : public Target {
   std::vector<std::string> Caveats() const override;
 
  private:
+  // The inner target's outputs, each read logged.
+  class OutputReads final : public DmxOutput, public GioOutput, public CameraOutput {
+   public:
+    explicit OutputReads(const RecordingTarget& t) : t_(t) {}
+    int Value(int channel) const override;
+    uint32_t outputs() const override;
+    std::vector<sim::CameraPort::Edge> Trace() const override;
+    DeviceOutputs inner;
+
+   private:
+    const RecordingTarget& t_;
+  };
+
   std::unique_ptr<Target> inner_;
   bool virtual_clock_ = false;
   bool can_restart_ = false;
   mutable std::string log_;
+  mutable std::string name_;  // the name last logged
   mutable TimeNs last_now_ = 0;
+  mutable OutputReads outputs_{*this};
   // The pin edges already logged per signal (Pins() logs what is new).
   mutable std::vector<size_t> pins_logged_;
 };
+
+struct LogEntry;  // one decoded call of a log (recorded_target.cpp)
 
 class PlaybackTarget final : public Target {
  public:
   // Checks the log's format; nullopt and `error` set when it is not one.
   static std::unique_ptr<PlaybackTarget> FromLog(std::string log, std::string* error);
+  ~PlaybackTarget() override;
 
   // Where the runner first asked what the log does not hold ("" while it
   // has asked nothing else): "call 1234: the run sent 3 bytes (...) where
@@ -111,7 +128,7 @@ class PlaybackTarget final : public Target {
   bool Exhausted() const { return at_ == log_.size(); }
   size_t calls_played() const { return calls_; }
 
-  std::string Name() const override { return name_; }
+  std::string Name() const override;
   bool VirtualClock() const override { return virtual_clock_; }
   bool CanRestart() const override { return can_restart_; }
   std::optional<std::string> Open() override;
@@ -124,6 +141,7 @@ class PlaybackTarget final : public Target {
   bool SetGioInput(int bit, bool level) override;
   bool CanPressButton(std::string_view button) const override;
   bool PressButton(std::string_view button) override;
+  DeviceOutputs Outputs() const override;
   std::optional<std::string> LinkLost() const override;
   std::optional<std::string> FirmwareStopped() const override;
   std::optional<FirmwareFault> FirmwareFaulted() const override;
@@ -133,14 +151,28 @@ class PlaybackTarget final : public Target {
   std::vector<std::string> Caveats() const override;
 
  private:
+  // The recorded outputs, each read answered from the log.
+  class OutputReads final : public DmxOutput, public GioOutput, public CameraOutput {
+   public:
+    explicit OutputReads(const PlaybackTarget& t) : t_(t) {}
+    int Value(int channel) const override;
+    uint32_t outputs() const override;
+    std::vector<sim::CameraPort::Edge> Trace() const override;
+
+   private:
+    const PlaybackTarget& t_;
+  };
+
   PlaybackTarget() = default;
-  // Starts the next entry, which must be `op` (with no divergence so far);
-  // false (and the divergence noted) otherwise.
-  bool Expect(uint8_t op, const char* what) const;
+  // The next call's entry, which must be `op` (with no divergence so far);
+  // null (and the divergence noted) otherwise. Valid until the next call.
+  const LogEntry* Next(uint8_t op) const;
+  // Takes the name changes logged before the next call.
+  void TakeNames() const;
   void Diverge(std::string what) const;
 
   std::string log_;
-  std::string name_;
+  mutable std::string name_;
   bool virtual_clock_ = false;
   bool can_restart_ = false;
   mutable size_t at_ = 0;
@@ -149,6 +181,8 @@ class PlaybackTarget final : public Target {
   mutable std::string divergence_;
   std::optional<Board> board_;
   mutable std::optional<PinTrace> pins_;
+  std::unique_ptr<LogEntry> entry_;
+  OutputReads outputs_{*this};
 };
 
 // The header of a call log and its traffic totals; nullopt and `error` set

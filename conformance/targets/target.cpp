@@ -149,7 +149,14 @@ bool InProcessTarget::PressButton(std::string_view button) {
 
 DeviceOutputs InProcessTarget::Outputs() const {
   if (!device_) return {};
-  return DeviceOutputs{device_->dmx_out(), device_->gio(), device_->camera_out()};
+  outputs_.dmx = device_->dmx_out();
+  outputs_.gio = device_->gio();
+  outputs_.camera = device_->camera_out();
+  DeviceOutputs out;
+  if (outputs_.dmx != nullptr) out.dmx = &outputs_;
+  if (outputs_.gio != nullptr) out.gio = &outputs_;
+  if (outputs_.camera != nullptr) out.camera = &outputs_;
+  return out;
 }
 
 // --- FdTarget ------------------------------------------------------------------------

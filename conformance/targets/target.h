@@ -53,11 +53,32 @@ struct CodeCoverage {
 
 // The outputs of a device that the runner can read where it reaches the
 // device (in-process): its DMX universe, general I/O outputs and camera lines
-// (with their edges). Each is null when the target cannot observe it.
+// (with their edges). Each read is a call on the target's reader, so a
+// recording target logs what was read (recorded_target.h).
+class DmxOutput {
+ public:
+  virtual ~DmxOutput() = default;
+  // DMX channel 1..512's level now, 0..255.
+  virtual int Value(int channel) const = 0;
+};
+class GioOutput {
+ public:
+  virtual ~GioOutput() = default;
+  // The general outputs now, bit 0 = output 1.
+  virtual uint32_t outputs() const = 0;
+};
+class CameraOutput {
+ public:
+  virtual ~CameraOutput() = default;
+  // The camera lines' edges kept so far, oldest first (sim::CameraPort::Trace).
+  virtual std::vector<sim::CameraPort::Edge> Trace() const = 0;
+};
+// Each is null when the target cannot observe it. Valid until the target's
+// next Open() or Restart().
 struct DeviceOutputs {
-  const sim::DmxUniverse* dmx = nullptr;
-  const sim::GioPort* gio = nullptr;
-  const sim::CameraPort* camera = nullptr;
+  const DmxOutput* dmx = nullptr;
+  const GioOutput* gio = nullptr;
+  const CameraOutput* camera = nullptr;
 };
 
 // Carries bytes both ways and keeps the clock timing rules are judged on.
@@ -216,6 +237,16 @@ class InProcessTarget final : public Target {
     }
     wire::Bytes pending;
   };
+  // The device's own I/O objects, read as DeviceOutputs.
+  class SimOutputs final : public DmxOutput, public GioOutput, public CameraOutput {
+   public:
+    int Value(int channel) const override { return dmx->Value(channel); }
+    uint32_t outputs() const override { return gio->outputs(); }
+    std::vector<sim::CameraPort::Edge> Trace() const override { return camera->Trace(); }
+    const sim::DmxUniverse* dmx = nullptr;
+    const sim::GioPort* gio = nullptr;
+    const sim::CameraPort* camera = nullptr;
+  };
   void Build();
 
   std::string name_;
@@ -223,6 +254,7 @@ class InProcessTarget final : public Target {
   std::unique_ptr<sim::Scheduler> scheduler_;
   Sink sink_;
   std::unique_ptr<devices::Device> device_;
+  mutable SimOutputs outputs_;
 };
 
 // A device outside the process: a PTY or serial path (termios raw, 8N1 at

@@ -80,7 +80,7 @@ std::string Levels(const std::vector<int>& v) {
 // Channel levels of the device now (-1 where it cannot be read).
 std::vector<int> ReadDmx(const Target& t, const std::vector<DmxTrack>& tracks) {
   std::vector<int> out;
-  const sim::DmxUniverse* dmx = t.Outputs().dmx;
+  const DmxOutput* dmx = t.Outputs().dmx;
   for (const DmxTrack& k : tracks) out.push_back(dmx != nullptr ? dmx->Value(k.channel) : -1);
   return out;
 }
@@ -424,7 +424,7 @@ void Triggers(DmcCaseContext& c) {
 namespace {
 
 // The shutter presses (closing edge to opening edge) from `from_ns` on.
-std::vector<std::pair<TimeNs, TimeNs>> Presses(const sim::CameraPort& cam, TimeNs from_ns) {
+std::vector<std::pair<TimeNs, TimeNs>> Presses(const CameraOutput& cam, TimeNs from_ns) {
   std::vector<std::pair<TimeNs, TimeNs>> out;
   for (const sim::CameraPort::Edge& e : cam.Trace()) {
     if (e.line != sim::CameraPort::kShutter || e.time_ns < from_ns) continue;
@@ -489,7 +489,7 @@ void CameraStills(DmcCaseContext& c) {
   }
   ExpectOk(c, "DMC-RT-021", h.Call(CameraRun(end, dmc::kPlayCameraStills, 90, 270)));
   WaitRest(c, kRestWaitNs);
-  const sim::CameraPort* cam = c.target.Outputs().camera;
+  const CameraOutput* cam = c.target.Outputs().camera;
   if (cam == nullptr) LogNotObserved(c, "camera exposures", {"DMC-RT-022", "DMC-RT-023"});
   const Watched w = GoAndWatch(c, "DMC-RT-021", 0, end, {}, 0);
   Expect(c, "DMC-RT-021", w.go == nullptr || w.end >= 0, "RT_END after the stills run",
@@ -530,7 +530,7 @@ void CameraVideo(DmcCaseContext& c) {
   run.flags = dmc::kPlayCameraVideo;  // no angles: "Only used if camera trigger for every frame"
   ExpectOk(c, "DMC-RT-021", h.Call(run));
   WaitRest(c, kRestWaitNs);
-  const sim::CameraPort* cam = c.target.Outputs().camera;
+  const CameraOutput* cam = c.target.Outputs().camera;
   if (cam == nullptr) LogNotObserved(c, "camera video triggers", {"DMC-RT-025"});
   const Watched w = GoAndWatch(c, "DMC-RT-021", 0, end, {}, 0);
   Expect(c, "DMC-RT-021", w.go == nullptr || w.end >= 0, "RT_END after the video run",
