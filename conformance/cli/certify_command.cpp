@@ -160,6 +160,15 @@ int Certify(const CertifyArgs& c) {
         "no certificate written: the firmware image changed during the run; certify "
         "again");
   }
+  // The files embedded before the run must still be the ones the run read.
+  json run_after;
+  const auto reread = RunSection(a, p->resolved.protocol, run_after);
+  for (const char* file : {"profile", "board", "driver"}) {
+    if (reread || run_after[file] != parts.run[file]) {
+      return Fail(std::string("no certificate written: the --") + file +
+                  " file changed during the run; certify again");
+    }
+  }
   parts.device = {{"target", report->target},
                   {"protocol", report->protocol},
                   {"introduced", report->device},
@@ -438,12 +447,12 @@ int VerifyCertificate(const VerifyArgs& v, const json& cert, const std::string& 
   }
   // What the certificate says of itself, read without trusting its types
   // (the seal is checked above; a wrong type is only shown as "?").
-  auto part = [&](const char* key) {
-    const auto it = cert.find(key);
+  auto part = [&](const char* field) {
+    const auto it = cert.find(field);
     return it != cert.end() && it->is_object() ? *it : json::object();
   };
-  auto text = [](const json& j, const char* key) {
-    const auto it = j.find(key);
+  auto text = [](const json& j, const char* field) {
+    const auto it = j.find(field);
     return it != j.end() && it->is_string() ? it->get<std::string>() : std::string("?");
   };
   const json device = part("device"), fw = part("firmware"), report = part("report");

@@ -8,7 +8,11 @@
 #include <rapidcheck/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <string>
+
+#include <unistd.h>
 
 #include "conformance/core/report.h"
 #include "conformance/core/seal.h"
@@ -257,6 +261,29 @@ TEST(CallLog, TheTargetsNameIsPlayedBackAsItChanged) {
   ASSERT_TRUE(sum) << error;
   EXPECT_EQ(sum->target, "renamed @ 16 MHz");
   EXPECT_EQ(sum->calls, 2u);
+}
+
+// The profile an in-process device is built from is read once, at Open():
+// a power cycle builds the same device even when the file has changed (or
+// is no profile any more) meanwhile, so what a run read is what a
+// certificate embeds (certify also checks the file after the run).
+TEST(InProcessTarget, ReadsItsProfileOnceForEveryPowerCycle) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("profile-once-" + std::to_string(getpid()));
+  std::ofstream(path) << R"({"device": "dfmoco", "board": "mega", "firmware": "2.0.0"})";
+  auto target = InProcessTarget::ForModel("dfmoco", path.string());
+  ASSERT_EQ(target->Open(), std::nullopt);
+  auto greeting = [&] {
+    wire::Bytes got;
+    target->Receive(target->Now() + 2 * sim::kNsPerSecond, got);
+    return std::string(got.begin(), got.end());
+  };
+  const std::string first = greeting();
+  EXPECT_NE(first.find("hi 2 8 "), std::string::npos) << first;  // a Mega's 8 motors
+  std::ofstream(path) << "{ this is no profile";
+  target->Restart();
+  EXPECT_EQ(greeting(), first);
+  std::filesystem::remove(path);
 }
 
 TEST(CallLog, AStackshotRunWithRestartsPlaysBack) {

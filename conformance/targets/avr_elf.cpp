@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+
+#include "base/file_io.h"
 
 namespace moco::conformance {
 namespace {
@@ -21,6 +22,9 @@ constexpr uint16_t kShnUndef = 0, kShnLoreserve = 0xff00;
 // A symbol table larger than this is no AVR firmware's (a 256 KiB flash holds
 // far fewer symbols); reading stops there.
 constexpr uint32_t kMaxSymtabBytes = 64u << 20;
+// An AVR image with its debug information is a few MiB; the same bound as a
+// certificate's firmware digest (docs/certificates.md).
+constexpr size_t kMaxElfBytes = size_t{64} << 20;
 
 uint16_t U16(const std::string& b, size_t at) {
   return static_cast<uint16_t>(static_cast<uint8_t>(b[at]) |
@@ -59,8 +63,10 @@ AvrSymbols AvrSymbols::Read(const std::string& path, std::string* error) {
     return AvrSymbols();
   };
   if (const std::string problem = CheckAvrElf(path); !problem.empty()) return fail(problem);
-  std::ifstream in(path, std::ios::binary);
-  const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string b;
+  if (auto problem = base::ReadFileBounded(path, &b, {.max_bytes = kMaxElfBytes})) {
+    return fail(*problem);
+  }
   if (b.size() < kHeaderBytes) return fail("too short for an ELF");
   const uint32_t shoff = U32(b, 0x20);
   const uint16_t shentsize = U16(b, 0x2E);

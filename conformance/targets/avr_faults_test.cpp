@@ -9,6 +9,8 @@
 #include <fstream>
 #include <string>
 
+#include <sys/stat.h>
+
 #include "conformance/targets/avr_elf.h"
 #include "conformance/targets/simavr_target.h"
 
@@ -65,6 +67,16 @@ TEST(AvrSymbols, RefuseWhatIsNoAvrElfAndSurviveATruncatedOne) {
   error.clear();
   EXPECT_TRUE(AvrSymbols::Read((dir / "text.elf").string(), &error).empty());
   EXPECT_NE(error.find("not an ELF file"), std::string::npos) << error;
+  // A FIFO would block the reader: refused by what it is, unread, as is a
+  // simavr target given one.
+  ASSERT_EQ(mkfifo((dir / "fifo.elf").c_str(), 0600), 0);
+  error.clear();
+  EXPECT_TRUE(AvrSymbols::Read((dir / "fifo.elf").string(), &error).empty());
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  SimavrTarget fifo(SimavrSpec{(dir / "fifo.elf").string(), "", 0});
+  const auto refused_fifo = fifo.Open();
+  ASSERT_TRUE(refused_fifo.has_value());
+  EXPECT_NE(refused_fifo->find("not a regular file"), std::string::npos) << *refused_fifo;
   // Every cut of a real ELF: no crash; a symbol table cut short is refused.
   std::ifstream in(MOCO_FAULTS_ELF, std::ios::binary);
   const std::string elf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -180,7 +180,7 @@ std::optional<std::string> SimavrTarget::Build() {
   previous_pc_id_ = 0;
 
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(spec_.elf_path, ec)) {
+  if (!std::filesystem::exists(spec_.elf_path, ec)) {
     return "firmware ELF \"" + spec_.elf_path +
            "\" not found; give the path of an AVR ELF built with avr-gcc, e.g. "
            "simavr:build/dev/fixtures/firmware/dfmoco_avr/dfmoco.elf";

@@ -64,9 +64,14 @@ std::unique_ptr<InProcessTarget> InProcessTarget::ForModel(const std::string& mo
   auto nvm =
       m != nullptr && m->keeps_state ? std::make_shared<devices::MemoryStateStore>() : nullptr;
   const devices::DeviceStart start{speaking};
+  // The profile is read once, at the first Open(); every Restart() builds the
+  // device from what was read then (a file edited during a run changes
+  // nothing in it).
+  auto maker = std::make_shared<devices::DeviceMaker>();
   return std::make_unique<InProcessTarget>(
-      model, [model, profile_path, nvm, start](sim::Scheduler& s, devices::ByteSink& sink) {
-        return devices::CreateDevice(model, profile_path, s, sink, nvm.get(), start);
+      model, [model, profile_path, nvm, start, maker](sim::Scheduler& s, devices::ByteSink& sink) {
+        if (!*maker) *maker = devices::PrepareDevice(model, profile_path, start);
+        return (*maker)(s, sink, nvm.get(), start);
       });
 }
 

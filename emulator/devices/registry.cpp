@@ -13,34 +13,37 @@ namespace moco::devices {
 
 namespace {
 
-// One factory per model: the profile file (empty: the built-in defaults),
-// then the device.
-std::unique_ptr<Device> MakeDmc16(const std::string& profile_path, sim::Scheduler& scheduler,
-                                  ByteSink& out, StateStore* /*state*/,
-                                  const DeviceStart& /*start*/) {
+// One factory per model: reads the profile file (empty: the built-in
+// defaults) once, then makes devices from it.
+DeviceMaker MakeDmc16(const std::string& profile_path) {
   Dmc16Profile profile = profile_path.empty() ? Dmc16Profile{} : LoadDmc16Profile(profile_path);
-  return std::make_unique<Dmc16>(scheduler, out, std::move(profile));
+  return [profile = std::move(profile)](sim::Scheduler& scheduler, ByteSink& out,
+                                        StateStore* /*state*/, const DeviceStart& /*start*/) {
+    return std::unique_ptr<Device>(std::make_unique<Dmc16>(scheduler, out, profile));
+  };
 }
 
-std::unique_ptr<Device> MakeDfmoco(const std::string& profile_path, sim::Scheduler& scheduler,
-                                   ByteSink& out, StateStore* /*state*/,
-                                   const DeviceStart& /*start*/) {
+DeviceMaker MakeDfmoco(const std::string& profile_path) {
   DfmocoProfile profile = profile_path.empty() ? DfmocoProfile{} : LoadDfmocoProfile(profile_path);
-  return std::make_unique<DfmocoArduino>(scheduler, out, std::move(profile));
+  return [profile = std::move(profile)](sim::Scheduler& scheduler, ByteSink& out,
+                                        StateStore* /*state*/, const DeviceStart& /*start*/) {
+    return std::unique_ptr<Device>(std::make_unique<DfmocoArduino>(scheduler, out, profile));
+  };
 }
 
-std::unique_ptr<Device> MakeStackshot3x(const std::string& profile_path, sim::Scheduler& scheduler,
-                                        ByteSink& out, StateStore* state,
-                                        const DeviceStart& start) {
+DeviceMaker MakeStackshot3x(const std::string& profile_path) {
   Stackshot3xProfile profile =
       profile_path.empty() ? Stackshot3xProfile{} : LoadStackshot3xProfile(profile_path);
-  auto device = std::make_unique<Stackshot3x>(scheduler, out, std::move(profile), state);
-  if (start.speaking == wire::Protocol::kStackshotDfmoco) {
-    // Settings->Mode->Motion->DfMoco on the panel (stackshot-protocol.txt
-    // section 3) is kept in NVM as the power-on mode.
-    device->SetPowerOnMode(stackshot::GlobalMode::kMotionDfMoco);
-  }
-  return device;
+  return [profile = std::move(profile)](sim::Scheduler& scheduler, ByteSink& out, StateStore* state,
+                                        const DeviceStart& start) {
+    auto device = std::make_unique<Stackshot3x>(scheduler, out, profile, state);
+    if (start.speaking == wire::Protocol::kStackshotDfmoco) {
+      // Settings->Mode->Motion->DfMoco on the panel (stackshot-protocol.txt
+      // section 3) is kept in NVM as the power-on mode.
+      device->SetPowerOnMode(stackshot::GlobalMode::kMotionDfMoco);
+    }
+    return std::unique_ptr<Device>(std::move(device));
+  };
 }
 
 // A StackShot 3X in DfMoco mode speaks DFMoco lines on its USB port.
@@ -85,9 +88,8 @@ std::string SpokenNames(const DeviceModel& model) {
   return wire::NameList(all);
 }
 
-std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
-                                     sim::Scheduler& scheduler, ByteSink& out, StateStore* state,
-                                     const DeviceStart& start) {
+DeviceMaker PrepareDevice(std::string_view model, const std::string& profile_path,
+                          const DeviceStart& start) {
   if (const DeviceModel* m = FindDeviceModel(model)) {
     if (start.speaking && *start.speaking != m->protocol &&
         std::find(m->also_speaks.begin(), m->also_speaks.end(), *start.speaking) ==
@@ -96,7 +98,7 @@ std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& 
                                   std::string(wire::ProtocolName(*start.speaking)) +
                                   "; it speaks " + SpokenNames(*m));
     }
-    return m->create(profile_path, scheduler, out, state, start);
+    return m->create(profile_path);
   }
   std::string known;
   for (const DeviceModel& m : DeviceModels()) {
@@ -105,6 +107,12 @@ std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& 
   }
   throw std::invalid_argument("unknown device model \"" + std::string(model) +
                               "\"; the models are: " + known);
+}
+
+std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
+                                     sim::Scheduler& scheduler, ByteSink& out, StateStore* state,
+                                     const DeviceStart& start) {
+  return PrepareDevice(model, profile_path, start)(scheduler, out, state, start);
 }
 
 }  // namespace moco::devices

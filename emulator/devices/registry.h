@@ -3,6 +3,7 @@
 #ifndef MOCO_DEVICES_REGISTRY_H_
 #define MOCO_DEVICES_REGISTRY_H_
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -26,10 +27,13 @@ struct DeviceStart {
   std::optional<wire::Protocol> speaking;
 };
 
-// Builds a powered-off device of one model (see CreateDevice).
-using DeviceFactory = std::unique_ptr<Device> (*)(const std::string& profile_path,
-                                                  sim::Scheduler& scheduler, ByteSink& out,
-                                                  StateStore* state, const DeviceStart& start);
+// Builds a powered-off device of one model from a profile already read (see
+// PrepareDevice), as often as it is called.
+using DeviceMaker = std::function<std::unique_ptr<Device>(
+    sim::Scheduler& scheduler, ByteSink& out, StateStore* state, const DeviceStart& start)>;
+// Reads one model's profile file (empty: the built-in defaults) and returns
+// the maker of its devices (see CreateDevice).
+using DeviceFactory = DeviceMaker (*)(const std::string& profile_path);
 
 struct DeviceModel {
   std::string_view name;             // "dmc16"
@@ -67,6 +71,11 @@ std::string SpokenNames(const DeviceModel& model);
 // behind it (devices open no files). Ignored by other models. `start`: how
 // it starts out; std::invalid_argument for a protocol the model does not
 // speak.
+// PrepareDevice then the maker, once. A caller that builds the device again
+// (a power cycle) calls PrepareDevice once and the maker each time, so the
+// profile file is read once and a file changed meanwhile changes nothing.
+DeviceMaker PrepareDevice(std::string_view model, const std::string& profile_path,
+                          const DeviceStart& start = {});
 std::unique_ptr<Device> CreateDevice(std::string_view model, const std::string& profile_path,
                                      sim::Scheduler& scheduler, ByteSink& out,
                                      StateStore* state = nullptr, const DeviceStart& start = {});
