@@ -64,7 +64,7 @@ keygen)
 in_process_dmc16 | in_process_dfmoco | in_process_stackshot3x)
   model=${test_name#in_process_}
   "$m" keygen --out k >/dev/null 2>&1 || fail "keygen"
-  expect_rc 0 "$m" certify --target "in-process:$model" --key k --out cert.json -q
+  expect_rc 0 "$m" certify --target "in-process:$model" --key k --out cert.json -q --html run.html
   grep -q "^certificate: cert.json (.*sealed by key [0-9a-f]\{16\})" out.txt ||
     fail "no certificate line: $(cat out.txt)"
   size=$(stat -c %s cert.json)
@@ -81,10 +81,13 @@ in_process_dmc16 | in_process_dfmoco | in_process_stackshot3x)
   grep -q "certified [0-9]*/[0-9]* MUST" badge.svg || fail "the badge gives no MUST count"
   grep -q "passed the mococheck .* conformance suite on 20[0-9-]*: [0-9]* MUST rules passed and 0 failed" out.txt ||
     fail "no summary paragraph: $(cat out.txt)"
-  # The page as headless Chromium builds it holds what the certificate holds;
-  # the same page with one rule's row taken out does not.
+  # The pages as headless Chromium builds them, certify's and verify's, hold
+  # what the certificate holds; the same page with one rule's row taken out
+  # does not.
+  "$src/tools/report-dom-check" run.html cert.json --certificate cert.json cert.json --sealed \
+    >dom.txt 2>&1 || fail "certify's page in Chromium: $(cat dom.txt)"
   "$src/tools/report-dom-check" c.html cert.json --certificate cert.json cert.json >dom.txt 2>&1 ||
-    fail "the page in Chromium: $(cat dom.txt)"
+    fail "verify's page in Chromium: $(cat dom.txt)"
   python3 - c.html cut.html <<'PY'
 import re, sys
 page = open(sys.argv[1]).read()

@@ -149,7 +149,9 @@ int Certify(const CertifyArgs& c) {
   RecordingTarget recorder(std::move(p->resolved.target));
   const std::optional<RunReport> report = ExecuteRun(a, *p, recorder);
   if (!report) return kExitUsage;
-  const int reports_exit = WriteReports(a, *report);
+  // Every report is written now; the --html page is written again, headed by
+  // the certificate, once it is sealed (a run that gets none keeps its page).
+  int reports_exit = WriteReports(a, *report);
   if (const std::string why = report->NoVerdictReason(); !why.empty()) {
     return Fail("no certificate written: the run has no verdict (" + why +
                 "); a certificate needs a complete run");
@@ -184,6 +186,14 @@ int Certify(const CertifyArgs& c) {
   }
   std::cout << "certificate: " << c.out_path << " (" << base::FormatByteSize(text.size())
             << ", sealed by key " << cert["seal"]["key_id"].get<std::string>() << ")" << std::endl;
+  if (!a.html_path.empty()) {
+    const std::string page = CertificateHtmlPage(*report, cert, Basename(c.out_path), false);
+    if (auto err = base::WriteFileAtomically(a.html_path, page)) {
+      std::cerr << "mococheck: could not write --html " << a.html_path << ": " << *err
+                << "; the certificate is written" << std::endl;
+      reports_exit = kExitUsage;
+    }
+  }
   return reports_exit;
 }
 
@@ -500,10 +510,7 @@ int VerifyCertificate(const VerifyArgs& v, const json& cert, const std::string& 
     std::cout << "badge:       " << v.badge_path << "\n";
   }
   if (!v.html_path.empty() && replayed) {
-    std::string page = HtmlReport(*replayed);
-    const std::string section = CertificateHtmlSection(cert, Basename(v.cert_path));
-    const size_t h1 = page.find("</h1>");
-    page.insert(h1 == std::string::npos ? 0 : h1 + 6, section);
+    const std::string page = CertificateHtmlPage(*replayed, cert, Basename(v.cert_path), true);
     if (auto err = base::WriteFileAtomically(v.html_path, page)) return Fail("--html: " + *err);
     std::cout << "html:        " << v.html_path << "\n";
   }

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "base/xml_escape.h"
+#include "conformance/core/report.h"
 #include "conformance/core/seal.h"
 #include "conformance/rules/catalogue.h"
 
@@ -444,7 +445,9 @@ std::string CertificateSummary(const json& cert, const std::string& cert_name) {
   return s;
 }
 
-std::string CertificateHtmlSection(const json& cert, const std::string& cert_name) {
+namespace {
+
+std::string CertificateHtmlSection(const json& cert, const std::string& cert_name, bool replayed) {
   const CertificateTally t = TallyOf(cert);
   const json tool = cert.value("mococheck", json::object());
   const json catalogue = cert.value("catalogue", json::object());
@@ -454,7 +457,8 @@ std::string CertificateHtmlSection(const json& cert, const std::string& cert_nam
     return "<tr><th>" + Escaped(k) + "</th><td><code>" + Escaped(v) + "</code></td></tr>\n";
   };
   std::string s = "<section id=\"certificate\"><h2>Certificate " + Escaped(cert_name) + ": " +
-                  (t.passed ? "PASS" : "FAIL") + ", verified</h2>\n<table>\n";
+                  (t.passed ? "PASS" : "FAIL") + (replayed ? ", verified" : ", sealed") +
+                  "</h2>\n<table>\n";
   s += row("device", t.device + " (" + t.protocol + ")");
   s += row("made", tool.value("made_at", "?") + " by mococheck " + tool.value("version", "?"));
   s += row("rule catalogue", catalogue.value("sha256", "?") + " (" +
@@ -465,10 +469,28 @@ std::string CertificateHtmlSection(const json& cert, const std::string& cert_nam
   s += row("sealed by", "Ed25519 key " + seal.value("key_id", "?"));
   const json manifest = seal.value("manifest", json::object());
   for (const char* p : kParts) s += row(std::string("sha256 of ") + p, manifest.value(p, "?"));
-  s += "</table>\n<p>This page was rendered by <code>mococheck verify --replay</code> from the "
-       "certificate's transcript, judged again: every verdict below is the sealed one.</p>\n"
-       "</section>\n";
+  if (replayed) {
+    s += "</table>\n<p>This page was rendered by <code>mococheck verify --replay</code> from the "
+         "certificate's transcript, judged again: every verdict below is the sealed one.</p>\n"
+         "</section>\n";
+  } else {
+    s += "</table>\n<p>This page was rendered by <code>mococheck certify</code> from the run it "
+         "sealed. Check the certificate, and judge its transcript again, with <code>mococheck "
+         "verify " +
+         Escaped(cert_name) + " --key KEY.pub --replay</code>.</p>\n</section>\n";
+  }
   return s;
+}
+
+}  // namespace
+
+std::string CertificateHtmlPage(const RunReport& report, const json& cert,
+                                const std::string& cert_name, bool replayed) {
+  std::string page = HtmlReport(report);
+  const size_t h1 = page.find("</h1>");
+  page.insert(h1 == std::string::npos ? 0 : h1 + 6,
+              CertificateHtmlSection(cert, cert_name, replayed));
+  return page;
 }
 
 }  // namespace moco::conformance

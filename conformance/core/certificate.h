@@ -17,6 +17,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "conformance/core/run_report.h"
+
 namespace moco::conformance {
 
 inline constexpr std::string_view kCertificateFormat = "mococheck-certificate/1";
@@ -107,10 +109,13 @@ std::string CertificateBadge(const nlohmann::json& cert);
 // `cert_name`: the certificate's file name as published.
 std::string CertificateSummary(const nlohmann::json& cert, const std::string& cert_name);
 
-// The certificate's facts as an HTML section (the key, when it was made, the
-// version, catalogue and firmware digests, each part's sealed digest), for
-// the top of the report page `verify --replay --html` renders.
-std::string CertificateHtmlSection(const nlohmann::json& cert, const std::string& cert_name);
+// The report page of `report` (HtmlReport) headed by the certificate's
+// facts (the key, when it was made, the version, catalogue and firmware
+// digests, each part's sealed digest): what `certify --html` writes for the
+// run it sealed (`replayed` false) and `verify --replay --html` for the run
+// it judged again from the certificate's transcript (`replayed` true).
+std::string CertificateHtmlPage(const RunReport& report, const nlohmann::json& cert,
+                                const std::string& cert_name, bool replayed);
 
 }  // namespace moco::conformance
 
