@@ -128,8 +128,8 @@ c["transcript"]["data"] = d[:i] + ("B" if d[i] == "A" else "A") + d[i+1:]'
 
 simavr)
   # Pins watched, the firmware build that loses steps: its DFM-PIN-001
-  # failure replays from the certificate (the good build's verdicts are
-  # proven the same way by SimavrPinProofs, and in-process above).
+  # failure replays from the certificate (the good build's certificate
+  # replays in simavr_pins_cli_test.sh own_firmware_passes).
   "$m" keygen --out k >/dev/null 2>&1 || fail "keygen"
   board="$src/fixtures/boards/own-dfmoco.json"
   expect_rc 1 "$m" certify --target "simavr:$fault" --protocol dfmoco --board "$board" \

@@ -2,7 +2,8 @@
 # The pin rules on real AVR firmware under simavr (conformance/rules/pin_rules.cpp):
 #   simavr_pins_cli_test.sh TEST MOCOCHECK WORKDIR SOURCE_DIR ELF
 # own_firmware_passes: the own DFMoco firmware passes every DFM-PIN rule, each judged
-#   (each fault variant failing its rule and no other: SimavrPinProofs).
+#   (each fault variant failing its rule and no other: SimavrPinProofs), and
+#   the certificate of that run replays to the same verdicts.
 # vcd_read_by_sigrok: the --vcd file, read back by sigrok-cli -I vcd, holds as many
 #   signed STEP pulses of motor 1 as the firmware's last `mp 1` reported.
 set -u
@@ -30,13 +31,19 @@ print("failing:", " ".join(sorted(x["id"] for x in r["rules"] if x["status"] == 
 
 case "$test_name" in
 own_firmware_passes)
-  "$m" run --target "simavr:$elf" --protocol dfmoco --board "$board" --driver a4988 -q \
-    --json run.json --html run.html >out.txt 2>err.txt
+  # Run as `certify` (the options and exit code of `run`, the whole suite),
+  # so the same run also proves that the good firmware's certificate
+  # replays to its verdicts (docs/certificates.md).
+  "$m" keygen --out k >/dev/null 2>&1 || fail "keygen"
+  "$m" certify --target "simavr:$elf" --protocol dfmoco --board "$board" --driver a4988 -q \
+    --key k --out cert.json --json run.json --html run.html >out.txt 2>err.txt
   rc=$?
   pin_summary run.json >pins.txt || fail "no JSON report"
   [ "$rc" = 0 ] || fail "exit $rc, not 0"
   [ "$(grep -c ' pass$' pins.txt)" = 7 ] || fail "not every DFM-PIN rule passed: $(cat pins.txt)"
   grep -q '^failing: $' pins.txt || fail "a rule failed: $(cat pins.txt)"
+  expect_rc 0 "$m" verify cert.json --key k.pub --replay --firmware "$elf"
+  grep -q "^replay: *same verdicts" out.txt || fail "the replay differs: $(cat out.txt)"
   ;;
 vcd_read_by_sigrok)
   # motor/move: motor 1 to 6000 steps and back to 0.
