@@ -168,6 +168,18 @@ usage)
   grep -q "not an Ed25519 private key" err.txt || fail "a public key given as --key"
   expect_rc 2 "$m" certify --target in-process:dfmoco --key k --out k
   grep -q "destroy the key" err.txt || fail "--out over the key"
+  # No report may be written over a file the run reads: the key, the
+  # profile, the firmware.
+  cp k k.before
+  for report in --json --junit --html; do
+    expect_rc 2 "$m" certify --target in-process:dfmoco --key k --out c.json "$report" k
+    grep -q "is the --key; writing it would destroy the key" err.txt ||
+      fail "$report over the key: $(cat err.txt)"
+  done
+  cmp -s k k.before || fail "the key was overwritten"
+  cp "$src/fixtures/profiles/dfmoco-uno.json" p.json
+  expect_rc 2 "$m" certify --target in-process:dfmoco --profile p.json --key k --out c.json --json p.json
+  grep -q "is the --profile" err.txt || fail "--json over the profile: $(cat err.txt)"
   [ ! -e c.json ] || fail "a certificate was written by a refused command"
   printf 'not json' >bad.json
   expect_rc 2 "$m" verify bad.json --key k.pub

@@ -133,13 +133,9 @@ int Certify(const CertifyArgs& c) {
   if (auto err = ReadInput("--key", c.key_path, kMaxKeyBytes, key)) return Fail(*err);
   std::string key_error;
   if (!PublicKeyOf(key, &key_error)) return Fail("--key " + c.key_path + ": " + key_error);
-  if (base::SameFile(c.out_path, c.key_path)) {
-    return Fail("--out " + c.out_path +
-                " is the --key; writing it would destroy the key: "
-                "choose another path for the certificate");
-  }
   int exit_code = kExitUsage;
-  std::optional<PreparedRun> p = PrepareRun(a, exit_code, {{"--out", c.out_path}});
+  std::optional<PreparedRun> p =
+      PrepareRun(a, exit_code, {{"--out", c.out_path}}, {{"--key", c.key_path}});
   if (!p) return exit_code;
   CertificateParts parts;
   if (auto err = FirmwareOf(*p, parts.firmware)) return Fail(*err);

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <set>
@@ -225,11 +226,33 @@ std::optional<std::string> LoadPins(const RunArgs& a, RunOptions& options,
   return std::nullopt;
 }
 
+// The files a run reads: the profile, board and driver files, the firmware
+// of a simavr: target, and `extra` (the command's own).
+std::vector<std::pair<std::string, std::string>> RunInputs(
+    const RunArgs& a, const PreparedRun& p,
+    const std::vector<std::pair<std::string, std::string>>& extra) {
+  std::vector<std::pair<std::string, std::string>> inputs = {{"--profile", a.profile},
+                                                             {"--board", a.board_path}};
+  std::error_code ec;
+  if (!a.driver.empty() && std::filesystem::is_regular_file(a.driver, ec)) {
+    inputs.push_back({"--driver", a.driver});
+  }
+  if (p.resolved.spec.kind == TargetSpec::Kind::kSimavr) {
+    auto spec = ParseSimavrAddress(p.resolved.spec.address);
+    if (const auto* s = std::get_if<SimavrSpec>(&spec)) {
+      inputs.push_back({"--target's firmware", s->elf_path});
+    }
+  }
+  inputs.insert(inputs.end(), extra.begin(), extra.end());
+  return inputs;
+}
+
 // Every output checked before the run, not after it (docs/files.md): each
-// writable, none the --profile, no two the same file. An error message, or
-// nullopt.
+// writable, none a file the run reads (`inputs`), no two the same file. An
+// error message, or nullopt.
 std::optional<std::string> CheckOutputs(
-    const RunArgs& a, const std::vector<std::pair<std::string, std::string>>& extra) {
+    const RunArgs& a, const std::vector<std::pair<std::string, std::string>>& extra,
+    const std::vector<std::pair<std::string, std::string>>& inputs) {
   std::vector<std::pair<std::string, std::string>> outputs = {{"--junit", a.junit},
                                                               {"--html", a.html_path},
                                                               {"--json", a.json_path},
@@ -240,9 +263,12 @@ std::optional<std::string> CheckOutputs(
     const auto& [option, path] = outputs[i];
     if (path.empty()) continue;
     if (auto err = base::CheckOutputPath(path, option)) return *err;
-    if (!a.profile.empty() && base::SameFile(path, a.profile)) {
-      return option + " " + path + " is the --profile; writing it would destroy the " +
-             "profile: choose another path for " + option;
+    for (const auto& [input, input_path] : inputs) {
+      if (!input_path.empty() && base::SameFile(path, input_path)) {
+        const std::string what = input.starts_with("--") ? input.substr(2) : input;
+        return option + " " + path + " is the " + input + "; writing it would destroy the " + what +
+               ": choose another path for " + option;
+      }
     }
     for (size_t j = 0; j < i; ++j) {
       if (!outputs[j].second.empty() && base::SameFile(path, outputs[j].second)) {
@@ -348,7 +374,8 @@ int WriteReports(const RunArgs& a, const RunReport& report) {
 
 std::optional<PreparedRun> PrepareRun(
     const RunArgs& a, int& exit_code,
-    const std::vector<std::pair<std::string, std::string>>& extra_outputs) {
+    const std::vector<std::pair<std::string, std::string>>& extra_outputs,
+    const std::vector<std::pair<std::string, std::string>>& extra_inputs) {
   auto fail = [&](const std::string& message) {
     exit_code = Fail(message);
     return std::nullopt;
@@ -372,7 +399,9 @@ std::optional<PreparedRun> PrepareRun(
   if (auto err = SelectCases(a, *p.runner, proto, p.options)) return fail(*err);
   if (auto err = SetHostOptions(a, p.options)) return fail(*err);
   if (auto err = LoadPins(a, p.options, p.board)) return fail(*err);
-  if (auto err = CheckOutputs(a, extra_outputs)) return fail(*err);
+  if (auto err = CheckOutputs(a, extra_outputs, RunInputs(a, p, extra_inputs))) {
+    return fail(*err);
+  }
   return p;
 }
 

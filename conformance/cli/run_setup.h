@@ -91,9 +91,14 @@ struct PreparedRun {
   RunOptions options;
   std::optional<Board> board;
 };
+// `extra_outputs`: the command's own files to write (certify's --out), checked
+// with the reports; `extra_inputs`: its own files to read (certify's --key),
+// which no output may be, as the run's profile, board, driver and firmware
+// may not.
 std::optional<PreparedRun> PrepareRun(
     const RunArgs& a, int& exit_code,
-    const std::vector<std::pair<std::string, std::string>>& extra_outputs = {});
+    const std::vector<std::pair<std::string, std::string>>& extra_outputs = {},
+    const std::vector<std::pair<std::string, std::string>>& extra_inputs = {});
 
 // Opens `target` (watching the board's pins when there is one), runs the
 // suite with the console streaming (`console` false: nothing printed but an

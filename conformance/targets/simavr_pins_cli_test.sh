@@ -46,6 +46,13 @@ own_firmware_passes)
   grep -q "^replay: *same verdicts" out.txt || fail "the replay differs: $(cat out.txt)"
   ;;
 vcd_read_by_sigrok)
+  # No output over a file the run reads (refused before anything runs).
+  cp "$elf" fw.elf && cp "$board" b.json
+  expect_rc 2 "$m" run --target simavr:fw.elf --protocol dfmoco --board b.json --vcd fw.elf
+  grep -q "is the --target's firmware" err.txt || fail "--vcd over the firmware: $(cat err.txt)"
+  expect_rc 2 "$m" run --target simavr:fw.elf --protocol dfmoco --board b.json --json b.json
+  grep -q "is the --board" err.txt || fail "--json over the board: $(cat err.txt)"
+  cmp -s fw.elf "$elf" && cmp -s b.json "$board" || fail "an input was overwritten"
   # motor/move: motor 1 to 6000 steps and back to 0.
   expect_rc 0 "$m" run --target "simavr:$elf" --protocol dfmoco --board "$board" \
     --cases 'motor/move' -q --vcd run.vcd --json run.json
