@@ -160,9 +160,12 @@ int Certify(const CertifyArgs& c) {
   }
   // The files embedded before the run must still be the ones the run read.
   json run_after;
-  const auto reread = RunSection(a, p->resolved.protocol, run_after);
+  if (auto err = RunSection(a, p->resolved.protocol, run_after)) {
+    return Fail("no certificate written: a file the run read cannot be read again (" + *err +
+                "); certify again");
+  }
   for (const char* file : {"profile", "board", "driver"}) {
-    if (reread || run_after[file] != parts.run[file]) {
+    if (run_after[file] != parts.run[file]) {
       return Fail(std::string("no certificate written: the --") + file +
                   " file changed during the run; certify again");
     }
