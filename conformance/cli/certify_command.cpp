@@ -370,9 +370,7 @@ std::vector<std::string> RunAgainst(const json& cert, const VerifyArgs& v, std::
   }
   p.resolved = std::move(std::get<ResolvedTarget>(resolved));
   InstallStopHandlers();
-  // Judged as the certifying run was: through the link and pins only (a
-  // recording target hides an in-process device's outputs).
-  RecordingTarget target(std::move(p.resolved.target));
+  Target& target = *p.resolved.target;
   const std::optional<RunReport> report = ExecuteRun(a, p, target, false);
   if (!report) {
     target_error = true;  // ExecuteRun printed why

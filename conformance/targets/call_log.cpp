@@ -50,9 +50,11 @@ bool DecodeEntry(Reader& r, LogEntry& e) {
       break;
     case kCanPress:
     case kPress:
+      e.bytes = r.String();
+      e.ok = r.Byte() != 0;
+      break;
     case kName:
       e.bytes = r.String();
-      if (e.op != kName) e.ok = r.Byte() != 0;
       break;
     case kFirmwareFaulted:
       e.ok = r.Byte() != 0;

@@ -142,11 +142,8 @@ DeviceOutputs RecordingTarget::Outputs() const {
                                             (reads.inner.camera != nullptr ? kCameraBit : 0));
   log_.push_back(kOutputs);
   log_.push_back(static_cast<char>(bits));
-  DeviceOutputs out;
-  if (reads.inner.dmx != nullptr) out.dmx = &outputs_;
-  if (reads.inner.gio != nullptr) out.gio = &outputs_;
-  if (reads.inner.camera != nullptr) out.camera = &outputs_;
-  return out;
+  return DeviceOutputs::Through(reads, (bits & kDmxBit) != 0, (bits & kGioBit) != 0,
+                                (bits & kCameraBit) != 0);
 }
 
 int RecordingTarget::OutputReads::Value(int channel) const {
@@ -404,11 +401,8 @@ bool PlaybackTarget::PressButton(std::string_view button) {
 DeviceOutputs PlaybackTarget::Outputs() const {
   const LogEntry* e = Next(kOutputs);
   if (e == nullptr) return {};
-  DeviceOutputs out;
-  if ((e->flags & kDmxBit) != 0) out.dmx = &outputs_;
-  if ((e->flags & kGioBit) != 0) out.gio = &outputs_;
-  if ((e->flags & kCameraBit) != 0) out.camera = &outputs_;
-  return out;
+  return DeviceOutputs::Through(outputs_, (e->flags & kDmxBit) != 0, (e->flags & kGioBit) != 0,
+                                (e->flags & kCameraBit) != 0);
 }
 
 int PlaybackTarget::OutputReads::Value(int channel) const {

@@ -157,11 +157,8 @@ DeviceOutputs InProcessTarget::Outputs() const {
   outputs_.dmx = device_->dmx_out();
   outputs_.gio = device_->gio();
   outputs_.camera = device_->camera_out();
-  DeviceOutputs out;
-  if (outputs_.dmx != nullptr) out.dmx = &outputs_;
-  if (outputs_.gio != nullptr) out.gio = &outputs_;
-  if (outputs_.camera != nullptr) out.camera = &outputs_;
-  return out;
+  return DeviceOutputs::Through(outputs_, outputs_.dmx != nullptr, outputs_.gio != nullptr,
+                                outputs_.camera != nullptr);
 }
 
 // --- FdTarget ------------------------------------------------------------------------

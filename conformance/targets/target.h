@@ -79,6 +79,13 @@ struct DeviceOutputs {
   const DmxOutput* dmx = nullptr;
   const GioOutput* gio = nullptr;
   const CameraOutput* camera = nullptr;
+
+  // The outputs present (dmx, gio, camera) read through one object that
+  // serves all three.
+  template <typename Reader>
+  static DeviceOutputs Through(const Reader& reader, bool dmx, bool gio, bool camera) {
+    return {dmx ? &reader : nullptr, gio ? &reader : nullptr, camera ? &reader : nullptr};
+  }
 };
 
 // Carries bytes both ways and keeps the clock timing rules are judged on.
