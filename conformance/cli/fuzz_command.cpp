@@ -19,6 +19,10 @@ namespace {
 // The coverage map of a firmware run: 64 KiB, as AFL's (few collisions below
 // some ten thousand edges; an AVR firmware of 32 KiB of flash has fewer).
 constexpr size_t kCoverageBytes = size_t{64} << 10;
+// Snapshots of the firmware after a session's first messages kept at once
+// (FuzzExecutor::Options::snapshots): a campaign mutates one prefix at a time
+// in batches, so a few suffice; each is a process.
+constexpr size_t kSnapshots = 8;
 
 struct FuzzArgs {
   std::vector<std::string> sessions;
@@ -62,6 +66,7 @@ int Fuzz(const FuzzArgs& a) {
   FuzzExecutor::Options run_options;
   run_options.fork = firmware;
   run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
+  run_options.snapshots = firmware ? kSnapshots : 0;
   FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
   // From here a signal ends the campaign; its summary and findings are still
@@ -103,6 +108,10 @@ int Fuzz(const FuzzArgs& a) {
     std::cout << "coverage: " << r.edges << " edges of the firmware's code reached; corpus "
               << r.corpus << " session(s), " << r.corpus - seeds.size()
               << " of them mutants that reached new edges\n";
+  }
+  if (r.snapshot_runs > 0) {
+    std::cout << "snapshots: " << r.snapshot_runs << " of the mutants ran from a snapshot "
+              << "of the firmware after the messages they keep\n";
   }
   if (r.code) {
     const CodeCoverage& c = *r.code;

@@ -83,6 +83,13 @@ void MutationSource::MutateDataBytes(wire::Bytes& data) {
   }
 }
 
+FuzzVerdict PlayAll(const FuzzHooks& hooks, Target& target, const Messages& messages,
+                    const wire::Bytes& boot_out) {
+  const std::unique_ptr<FuzzPlay> play = hooks.start(boot_out);
+  for (const wire::Bytes& m : messages) play->Play(target, m);
+  return play->Finish(target);
+}
+
 std::string_view FindingKindName(FuzzVerdict::Kind kind) {
   using K = FuzzVerdict::Kind;
   switch (kind) {

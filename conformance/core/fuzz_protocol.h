@@ -122,6 +122,19 @@ class ReplayMatcher {
 // A matcher that accepts no difference, saying `why` ("the packet differs").
 std::unique_ptr<ReplayMatcher> ExactMatcher(std::string why);
 
+// One run of a session, message by message: a protocol's FuzzHooks::start
+// makes it on a booted device, Play sends each host message (and waits for
+// what the protocol waits for), Finish ends the session (liveness, the drain)
+// and judges everything the device wrote. Deterministic on a target in
+// virtual time, so the state after some messages is the same whether they
+// were played in this run or in a snapshot it was forked from (FuzzExecutor).
+class FuzzPlay {
+ public:
+  virtual ~FuzzPlay() = default;
+  virtual void Play(Target& target, const wire::Bytes& message) = 0;
+  virtual FuzzVerdict Finish(Target& target) = 0;
+};
+
 struct FuzzHooks {
   wire::Protocol protocol = wire::Protocol::kDmc;
   // Virtual time a run leaves between two host messages.
@@ -135,15 +148,19 @@ struct FuzzHooks {
   // that runs firmware boots once, and every run starts from that state
   // (FuzzExecutor).
   void (*boot)(Target& target, wire::Bytes& out) = nullptr;
-  // Plays `messages` into the booted device in virtual time, `gap_ns` apart,
-  // and judges the invariants; `boot_out` is what the device wrote while it
-  // booted. nullptr: sessions of this protocol are mutated and replayed, not
-  // run by the fuzzer.
-  FuzzVerdict (*run)(Target& target, const Messages& messages, TimeNs gap_ns,
-                     const wire::Bytes& boot_out) = nullptr;
+  // Starts a run on the booted device: its messages go in in virtual time,
+  // `gap_ns` apart (or each once its answer has come), and the invariants are
+  // judged (FuzzPlay); `boot_out` is what the device wrote while it booted.
+  // nullptr: sessions of this protocol are mutated and replayed, not run by
+  // the fuzzer.
+  std::unique_ptr<FuzzPlay> (*start)(const wire::Bytes& boot_out) = nullptr;
   // A matcher for one replay.
   std::unique_ptr<ReplayMatcher> (*matcher)() = nullptr;
 };
+
+// Plays all of `messages` through `hooks.start` (which must be set) and judges them.
+FuzzVerdict PlayAll(const FuzzHooks& hooks, Target& target, const Messages& messages,
+                    const wire::Bytes& boot_out);
 
 }  // namespace moco::conformance
 

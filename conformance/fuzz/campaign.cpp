@@ -41,19 +41,52 @@ bool MergeCoverage(std::span<const uint8_t> run, std::vector<uint8_t>& seen, siz
   return fresh;
 }
 
-// Drops messages while the mutant still fails with a finding of the same kind,
-// keeping at least one; `verdict` becomes the shrunk mutant's.
+// How many messages `a` and `b` share from their start.
+size_t CommonPrefix(const Messages& a, const Messages& b) {
+  size_t n = 0;
+  while (n < a.size() && n < b.size() && a[n] == b[n]) ++n;
+  return n;
+}
+
+// Shrinks a failing mutant while it still fails with a finding of the same
+// kind: messages dropped (keeping at least one), then bytes dropped within
+// each message (keeping at least one), at most kByteBudget runs for the
+// bytes. `verdict` becomes the shrunk mutant's. Each attempt runs from a
+// snapshot after the messages it shares with the mutant so far, where the
+// executor keeps them.
 Messages Shrink(FuzzExecutor& executor, Messages messages, FuzzVerdict& verdict) {
   constexpr int kNoBudget = 1 << 30;
-  return ShrinkSequence(std::move(messages), kNoBudget, [&](const Messages& fewer) {
+  constexpr int kByteBudget = 200;
+  Messages current = messages;  // the shortest failing mutant so far
+  auto still_fails = [&](const Messages& fewer) {
     if (fewer.empty() || StopRequested() != 0) return false;
-    FuzzVerdict v = executor.Run(fewer);
+    FuzzVerdict v = executor.Run(fewer, CommonPrefix(fewer, current));
     // A run a stop request cut short proves nothing.
     if (v.ok || v.kind != verdict.kind || StopRequested() != 0) return false;
     verdict = std::move(v);
+    current = fewer;
     return true;
-  });
+  };
+  ShrinkSequence(std::move(messages), kNoBudget, still_fails);
+  int budget = kByteBudget;
+  for (size_t i = 0; i < current.size() && budget > 0; ++i) {
+    ShrinkSequence(current[i], budget, [&](const wire::Bytes& fewer_bytes) {
+      --budget;
+      if (fewer_bytes.empty()) return false;
+      Messages candidate = current;
+      candidate[i] = fewer_bytes;
+      return still_fails(candidate);
+    });
+  }
+  return current;
 }
+
+// A snapshot campaign's mutants come in batches from one corpus entry and one
+// point in it: the messages before the point are kept (and played from a
+// snapshot), the messages after it are mutated: a window of 1-4 of them, or
+// in one mutant of eight all the rest.
+constexpr size_t kBatch = 32;
+constexpr uint32_t kWholeRestPercent = 6;
 
 }  // namespace
 
@@ -137,7 +170,17 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
   };
 
   auto record = [&](Messages messages, const std::vector<std::string>& mutations,
-                    FuzzVerdict verdict) {
+                    FuzzVerdict verdict, bool from_snapshot) {
+    if (from_snapshot) {
+      // The finding as a fresh boot shows it: the saved session reruns so.
+      FuzzVerdict whole = executor.Run(messages);
+      if (whole.ok || whole.kind != verdict.kind) {
+        verdict.violation += " (from a snapshot; the whole session from boot gave " +
+                             (whole.ok ? std::string("no finding") : whole.violation) + ")";
+      } else {
+        verdict = std::move(whole);
+      }
+    }
     messages = Shrink(executor, std::move(messages), verdict);
     // One finding per kind, law and place: the violation up to its first ':'
     // (the law it names: "reply grammar", "every request answered", "the
@@ -190,26 +233,50 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     report.messages += v.messages;
     if (report.coverage) MergeCoverage(executor.coverage(), covered, report.edges);
     report.corpus = corpus.size();
-    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v);
+    if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v, false);
   }
 
   Messages mutant;
+  size_t base = 0;         // the corpus entry this batch mutates (snapshots)
+  size_t point = 0;        // the messages of it kept as they are
+  size_t batch_left = 0;   // mutants left in this batch
   while (report.failures.size() < options.max_failures && report.interrupted_by == 0) {
     if (options.runs > 0
             ? report.execs >= options.runs + seeds.size()
             : std::chrono::duration<double>(Clock::now() - t0).count() >= options.seconds) {
       break;
     }
-    mutant = corpus[mutator.Below(corpus.size())];
-    mutator.Mutate(mutant, donors);
-    const FuzzVerdict v = executor.Run(mutant);
+    size_t kept = 0;
+    if (executor.snapshots()) {
+      if (batch_left == 0) {
+        base = mutator.Below(corpus.size());
+        point = mutator.Below(corpus[base].size() + 1);
+        batch_left = kBatch;
+      }
+      --batch_left;
+      const Messages& from = corpus[base];
+      const size_t end =
+          mutator.Chance(kWholeRestPercent) ? from.size() : std::min(from.size(), point + 1 + mutator.Below(2));
+      Messages window(from.begin() + static_cast<ptrdiff_t>(point),
+                      from.begin() + static_cast<ptrdiff_t>(end));
+      mutator.Mutate(window, donors);
+      mutant.assign(from.begin(), from.begin() + static_cast<ptrdiff_t>(point));
+      mutant.insert(mutant.end(), window.begin(), window.end());
+      if (mutant.size() > SessionMutator::kMaxMessages) mutant.resize(SessionMutator::kMaxMessages);
+      kept = std::min(point, mutant.size());
+      if (kept > 0) ++report.snapshot_runs;
+    } else {
+      mutant = corpus[mutator.Below(corpus.size())];
+      mutator.Mutate(mutant, donors);
+    }
+    const FuzzVerdict v = executor.Run(mutant, kept);
     if (stopped()) break;
     ++report.execs;
     report.messages += v.messages;
     if (v.ok) {
       note_coverage(mutant);
     } else {
-      record(mutant, mutator.last_mutations(), v);
+      record(mutant, mutator.last_mutations(), v, kept > 0);
     }
     if (progress) {
       const auto now = Clock::now();

@@ -3,8 +3,12 @@
 #include "conformance/fuzz/executor.h"
 
 #include <sys/mman.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <algorithm>
 #include <cerrno>
@@ -44,6 +48,49 @@ std::string WaitStatusText(int status) {
   return "status " + std::to_string(status);
 }
 
+// Writes all of `bytes` to a socket (no SIGPIPE when the other end is gone);
+// whether it could.
+bool SendAll(int socket, const void* bytes, size_t n) {
+  const auto* p = static_cast<const uint8_t*>(bytes);
+  while (n > 0) {
+    const ssize_t k = send(socket, p, n, MSG_NOSIGNAL);
+    if (k < 0 && errno == EINTR) continue;
+    if (k <= 0) return false;
+    p += k;
+    n -= static_cast<size_t>(k);
+  }
+  return true;
+}
+
+// Reads exactly `n` bytes; false at the end of the stream or an error. A
+// signal that interrupts the wait ends it when `give_up_on_stop` and a stop
+// was requested.
+bool ReceiveAll(int socket, void* bytes, size_t n, bool give_up_on_stop) {
+  auto* p = static_cast<uint8_t*>(bytes);
+  while (n > 0) {
+    const ssize_t k = recv(socket, p, n, 0);
+    if (k < 0 && errno == EINTR) {
+      if (give_up_on_stop && StopRequested() != 0) return false;
+      continue;
+    }
+    if (k <= 0) return false;
+    p += k;
+    n -= static_cast<size_t>(k);
+  }
+  return true;
+}
+
+// A prefix's key: each message's length (4 bytes) then its bytes.
+std::string PrefixKey(std::span<const wire::Bytes> prefix) {
+  std::string key;
+  for (const wire::Bytes& m : prefix) {
+    const auto n = static_cast<uint32_t>(m.size());
+    key.append(reinterpret_cast<const char*>(&n), sizeof n);
+    key.append(m.begin(), m.end());
+  }
+  return key;
+}
+
 }  // namespace
 
 FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target)
@@ -56,6 +103,7 @@ FuzzExecutor::FuzzExecutor(Protocol protocol, std::unique_ptr<Target> target, Op
       options_(options) {}
 
 FuzzExecutor::~FuzzExecutor() {
+  while (!snapshots_.empty()) Drop(snapshots_.begin());
   if (shared_ != nullptr) munmap(shared_, shared_bytes_);
   if (code_ != nullptr) munmap(code_, code_bytes_);
 }
@@ -109,7 +157,7 @@ std::optional<std::string> FuzzExecutor::Open() {
   return std::nullopt;
 }
 
-bool FuzzExecutor::CanRun() const { return hooks_ != nullptr && hooks_->run != nullptr; }
+bool FuzzExecutor::CanRun() const { return hooks_ != nullptr && hooks_->start != nullptr; }
 
 TimeNs FuzzExecutor::gap_ns() const { return hooks_ == nullptr ? 0 : hooks_->gap_ns; }
 
@@ -126,7 +174,13 @@ std::optional<CodeCoverage> FuzzExecutor::code_coverage() const {
 std::string FuzzExecutor::target_name() const { return target_->Name(); }
 
 FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& boot_out) {
-  FuzzVerdict v = hooks_->run(*target_, messages, gap_ns(), boot_out);
+  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out);
+  for (const wire::Bytes& m : messages) play->Play(*target_, m);
+  return Conclude(*play);
+}
+
+FuzzVerdict FuzzExecutor::Conclude(FuzzPlay& play) {
+  FuzzVerdict v = play.Finish(*target_);
   if (auto fault = target_->FirmwareFaulted()) {
     v.ok = false;
     v.kind = FindingKindOf(fault->kind);
@@ -137,7 +191,7 @@ FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& b
 }
 
 FuzzVerdict FuzzExecutor::Run(const Messages& messages) {
-  if (hooks_ == nullptr || hooks_->run == nullptr) {
+  if (hooks_ == nullptr || hooks_->start == nullptr) {
     return Violation("the " + std::string(wire::Info(protocol_).title) + " protocol is not fuzzed",
                      0, 0);
   }
@@ -148,6 +202,23 @@ FuzzVerdict FuzzExecutor::Run(const Messages& messages) {
   if (hooks_->boot != nullptr) hooks_->boot(*target_, boot_out);
   return RunHere(messages, boot_out);
 }
+
+namespace {
+
+// What a forked run writes back into `back`.
+void WriteBack(const FuzzVerdict& v, SharedVerdict* back) {
+  back->ok = v.ok ? 1 : 0;
+  back->kind = static_cast<uint32_t>(v.kind);
+  back->messages = v.messages;
+  back->replies = v.replies;
+  back->violation_bytes = CopyOut(v.violation, back->violation, sizeof back->violation);
+  std::string frames;
+  for (const std::string& f : v.backtrace) frames += f + "\n";
+  back->backtrace_bytes = CopyOut(frames, back->backtrace, sizeof back->backtrace);
+  back->done = 1;
+}
+
+}  // namespace
 
 FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
   auto* back = reinterpret_cast<SharedVerdict*>(shared_ + options_.coverage_bytes);
@@ -160,25 +231,21 @@ FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
   if (pid == 0) {
     // The child: plays from the booted state, writes the verdict back and
     // leaves without running any exit handler of the parent's.
-    const FuzzVerdict v = RunHere(messages, boot_out_);
-    back->ok = v.ok ? 1 : 0;
-    back->kind = static_cast<uint32_t>(v.kind);
-    back->messages = v.messages;
-    back->replies = v.replies;
-    back->violation_bytes = CopyOut(v.violation, back->violation, sizeof back->violation);
-    std::string frames;
-    for (const std::string& f : v.backtrace) frames += f + "\n";
-    back->backtrace_bytes = CopyOut(frames, back->backtrace, sizeof back->backtrace);
-    back->done = 1;
+    WriteBack(RunHere(messages, boot_out_), back);
     _exit(0);
   }
   int status = 0;
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
-  if (back->done != 1) {
+  return ReadBack(back->done == 1, status, messages.size());
+}
+
+FuzzVerdict FuzzExecutor::ReadBack(bool done, int status, size_t messages) {
+  const auto* back = reinterpret_cast<const SharedVerdict*>(shared_ + options_.coverage_bytes);
+  if (!done) {
     return Violation(
         "mococheck's run process ended without a verdict (" + WaitStatusText(status) + ")",
-        messages.size(), 0);
+        messages, 0);
   }
   FuzzVerdict v;
   v.ok = back->ok != 0;
@@ -193,6 +260,137 @@ FuzzVerdict FuzzExecutor::RunForked(const Messages& messages) {
     at = nl + 1;
   }
   return v;
+}
+
+FuzzVerdict FuzzExecutor::Run(const Messages& messages, size_t prefix) {
+  if (!snapshots() || prefix == 0 || prefix > messages.size() || hooks_ == nullptr ||
+      hooks_->start == nullptr) {
+    return Run(messages);
+  }
+  const std::span<const wire::Bytes> all(messages);
+  Snapshot* snapshot = SnapshotAfter(all.first(prefix));
+  if (snapshot == nullptr) return Run(messages);
+  if (options_.coverage_bytes != 0) std::fill_n(shared_, options_.coverage_bytes, uint8_t{0});
+  auto* back = reinterpret_cast<SharedVerdict*>(shared_ + options_.coverage_bytes);
+  std::memset(back, 0, sizeof *back);
+  // The rest, as the snapshot reads it: a count, then each message's length and bytes.
+  std::string rest = PrefixKey(all.subspan(prefix));
+  const auto count = static_cast<uint32_t>(messages.size() - prefix);
+  rest.insert(0, reinterpret_cast<const char*>(&count), sizeof count);
+  const auto bytes = static_cast<uint32_t>(rest.size());
+  rest.insert(0, reinterpret_cast<const char*>(&bytes), sizeof bytes);
+  int32_t status = 0;
+  if (!SendAll(snapshot->socket, rest.data(), rest.size()) ||
+      !ReceiveAll(snapshot->socket, &status, sizeof status, true)) {
+    // The snapshot is gone (killed, or a stop request ended it): run it whole.
+    Drop(snapshots_.find(PrefixKey(all.first(prefix))));
+    if (StopRequested() != 0) return ReadBack(false, 0, messages.size());
+    return Run(messages);
+  }
+  return ReadBack(back->done == 1, status, messages.size());
+}
+
+FuzzExecutor::Snapshot* FuzzExecutor::SnapshotAfter(std::span<const wire::Bytes> prefix) {
+  std::string key = PrefixKey(prefix);
+  if (auto at = snapshots_.find(key); at != snapshots_.end()) {
+    at->second.used = ++uses_;
+    return &at->second;
+  }
+  while (snapshots_.size() >= options_.snapshots) {
+    auto oldest = snapshots_.begin();
+    for (auto it = snapshots_.begin(); it != snapshots_.end(); ++it) {
+      if (it->second.used < oldest->second.used) oldest = it;
+    }
+    Drop(oldest);
+  }
+  int pair[2];
+  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, pair) != 0) return nullptr;
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(pair[0]);
+    close(pair[1]);
+    return nullptr;
+  }
+  if (pid == 0) {
+    close(pair[0]);
+    ServeSnapshot(pair[1], prefix);
+  }
+  close(pair[1]);
+  char ready = 0;
+  if (!ReceiveAll(pair[0], &ready, 1, true) || ready != 'r') {
+    close(pair[0]);
+    kill(pid, SIGKILL);
+    while (waitpid(pid, nullptr, 0) < 0 && errno == EINTR) {
+    }
+    return nullptr;
+  }
+  Snapshot& made = snapshots_[std::move(key)];
+  made = Snapshot{pid, pair[0], ++uses_};
+  return &made;
+}
+
+// The snapshot's process: plays the prefix once, then for each rest it is
+// sent forks a run that plays it and writes its verdict back, and answers
+// with the run's wait status. It ends when the executor closes its end (or
+// ends itself: PR_SET_PDEATHSIG), or at a stop request while it waits.
+void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix) {
+  const pid_t executor = getppid();
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != executor) _exit(0);
+  // The other snapshots' sockets are the executor's, not this process's: an
+  // end held here would keep that snapshot from seeing the executor go.
+  for (const auto& [key, other] : snapshots_) close(other.socket);
+  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out_);
+  for (const wire::Bytes& m : prefix) play->Play(*target_, m);
+  const char ready = 'r';
+  if (!SendAll(socket, &ready, 1)) _exit(0);
+  auto* back = reinterpret_cast<SharedVerdict*>(shared_ + options_.coverage_bytes);
+  std::string rest;
+  for (;;) {
+    uint32_t bytes = 0;
+    if (!ReceiveAll(socket, &bytes, sizeof bytes, true)) _exit(0);
+    rest.resize(bytes);
+    if (!ReceiveAll(socket, rest.data(), bytes, true)) _exit(0);
+    const pid_t run = fork();
+    if (run == 0) {
+      close(socket);
+      uint32_t count = 0;
+      size_t at = 0;
+      auto take = [&](void* to, size_t n) {
+        if (at + n > rest.size()) _exit(3);
+        std::memcpy(to, rest.data() + at, n);
+        at += n;
+      };
+      take(&count, sizeof count);
+      for (uint32_t i = 0; i < count; ++i) {
+        uint32_t n = 0;
+        take(&n, sizeof n);
+        wire::Bytes m(n);
+        take(m.data(), n);
+        play->Play(*target_, m);
+      }
+      WriteBack(Conclude(*play), back);
+      _exit(0);
+    }
+    int status = 0;
+    if (run < 0) {
+      status = -1;
+    } else {
+      while (waitpid(run, &status, 0) < 0 && errno == EINTR) {
+      }
+    }
+    const auto answer = static_cast<int32_t>(status);
+    if (!SendAll(socket, &answer, sizeof answer)) _exit(0);
+  }
+}
+
+void FuzzExecutor::Drop(std::map<std::string, Snapshot>::iterator at) {
+  if (at == snapshots_.end()) return;
+  close(at->second.socket);
+  kill(at->second.pid, SIGKILL);
+  while (waitpid(at->second.pid, nullptr, 0) < 0 && errno == EINTR) {
+  }
+  snapshots_.erase(at);
 }
 
 }  // namespace moco::conformance

@@ -14,7 +14,10 @@
 #ifndef MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_
 #define MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_
 
+#include <sys/types.h>
+
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
@@ -34,6 +37,10 @@ class FuzzExecutor {
     bool fork = false;
     // The coverage map's size in bytes (a power of two); 0: no coverage.
     size_t coverage_bytes = 0;
+    // With fork: how many snapshots of the device after a session's first
+    // messages (a prefix) are kept for Run(messages, prefix), the least
+    // recently used given up first; 0: none.
+    size_t snapshots = 0;
   };
 
   // `target` must run on a virtual clock and restart (in-process, simavr).
@@ -48,6 +55,15 @@ class FuzzExecutor {
   // target without coverage when coverage was asked for) or nullopt.
   std::optional<std::string> Open();
   FuzzVerdict Run(const Messages& messages);
+  // Runs `messages` from a snapshot of the device after their first `prefix`
+  // messages, made on first use: a process forked from the booted state that
+  // played them and forks each run from there, so a run simulates only the
+  // messages after the prefix. The verdict is the one Run(messages) gives (a
+  // run is deterministic), whose coverage map holds what the rest reached.
+  // Without snapshots (Options::snapshots), as Run(messages).
+  FuzzVerdict Run(const Messages& messages, size_t prefix);
+  // Whether Run(messages, prefix) uses snapshots.
+  bool snapshots() const { return options_.fork && options_.snapshots > 0; }
   // Whether the protocol's sessions can be run at all (its FuzzHooks::run).
   bool CanRun() const;
 
@@ -63,8 +79,24 @@ class FuzzExecutor {
   std::string target_name() const;
 
  private:
+  // A process holding the device after one prefix (executor.cpp).
+  struct Snapshot {
+    pid_t pid = -1;
+    int socket = -1;  // the executor's end of a socket pair with it
+    uint64_t used = 0;
+  };
+
   FuzzVerdict RunHere(const Messages& messages, const wire::Bytes& boot_out);
+  // Ends a run played into `play`, with the target's firmware fault if any.
+  FuzzVerdict Conclude(FuzzPlay& play);
   FuzzVerdict RunForked(const Messages& messages);
+  // The verdict a forked run wrote back, or why there is none.
+  FuzzVerdict ReadBack(bool done, int status, size_t messages);
+  // The snapshot after `prefix` (made when missing), or nullptr when it
+  // could not be made.
+  Snapshot* SnapshotAfter(std::span<const wire::Bytes> prefix);
+  [[noreturn]] void ServeSnapshot(int socket, std::span<const wire::Bytes> prefix);
+  void Drop(std::map<std::string, Snapshot>::iterator at);
 
   Protocol protocol_;
   const FuzzHooks* hooks_;  // nullptr: the protocol has none
@@ -78,6 +110,9 @@ class FuzzExecutor {
   // Shared too: the instruction map every run adds to (Target::SetInstructionMap).
   uint8_t* code_ = nullptr;
   size_t code_bytes_ = 0;
+  // The snapshots, by their prefix's bytes (each message's length, then it).
+  std::map<std::string, Snapshot> snapshots_;
+  uint64_t uses_ = 0;
 };
 
 }  // namespace moco::conformance

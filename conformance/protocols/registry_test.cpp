@@ -113,7 +113,7 @@ TEST(Registry, EveryWireProtocolHasExactlyOneSetOfFuzzHooks) {
     EXPECT_NE(hooks->matcher, nullptr);
     EXPECT_GT(hooks->gap_ns, 0);
     if (FindRunner(info.id) != nullptr) {
-      EXPECT_NE(hooks->run, nullptr);
+      EXPECT_NE(hooks->start, nullptr);
     }
   }
 }

@@ -7,9 +7,7 @@
 
 #include <algorithm>
 
-extern "C" {
-#include "sim_avr.h"
-}
+#include "conformance/targets/avr_stack.h"
 
 namespace moco::conformance {
 namespace {
@@ -26,12 +24,8 @@ bool IsConditional(uint16_t w) {
 uint32_t AvrCodeMap::avr_pc(const avr_t* avr) { return static_cast<uint32_t>(avr->pc); }
 
 uint32_t AvrCodeMap::InterruptReturn(const avr_t* avr) {
-  // The return address was pushed last: its highest byte at SP + 1.
-  const uint32_t sp = avr->data[0x5D] | (static_cast<uint32_t>(avr->data[0x5E]) << 8);
-  uint32_t word = 0;
-  for (uint8_t i = 0; i < avr->address_size && i < 3; ++i)
-    word = (word << 8) | avr->data[sp + 1 + i];
-  return word * 2;
+  // The return address was pushed last.
+  return avr_stack::Pushed(avr, avr_stack::StackPointer(avr) + 1) * 2;
 }
 
 void AvrCodeMap::Prepare(const avr_t* avr, uint32_t code_end) {

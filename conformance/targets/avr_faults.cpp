@@ -1,7 +1,9 @@
 // The AVR fault oracles (see avr_faults.h). Opcodes from the AVR Instruction Set
 // Manual: CALL 1001 010k kkkk 111k (+16 bits), RCALL 1101 kkkk kkkk kkkk,
 // ICALL 1001 0101 0000 1001, EICALL 1001 0101 0001 1001, RET 1001 0101 0000 1000,
-// RETI 1001 0101 0001 1000. A call pushes its return address (a word address)
+// RETI 1001 0101 0001 1000; the data stores: 1001 001r rrrr xxxx (STS, ST
+// through X, Y+, -Y, Z+, -Z, PUSH, XCH, LAS, LAC, LAT) and STD 10q0 qq1r rrrr
+// xqqq (ST Y and ST Z are STD with q = 0). A call pushes its return address (a word address)
 // one byte at a time, low byte first, at SP and downwards (simavr's
 // _avr_push_addr, as the hardware): the pushed address's lowest stack byte,
 // its slot, is SP + 1 afterwards and holds its highest byte.
@@ -10,19 +12,12 @@
 #include <algorithm>
 #include <cstdio>
 
-extern "C" {
-#include "sim_avr.h"
-}
 
 namespace moco::conformance {
 namespace {
 
-constexpr uint16_t kSpl = 0x5D;  // SPL and SPH in data space (every ATmega)
-constexpr uint16_t kSph = 0x5E;
-
-uint32_t StackPointer(const avr_t* avr) {
-  return avr->data[kSpl] | (static_cast<uint32_t>(avr->data[kSph]) << 8);
-}
+using avr_stack::Pushed;
+using avr_stack::StackPointer;
 
 uint16_t Word(const avr_t* avr, uint32_t byte_address) {
   if (byte_address + 1 > avr->flashend) return 0xFFFF;
@@ -30,17 +25,11 @@ uint16_t Word(const avr_t* avr, uint32_t byte_address) {
 }
 
 bool IsLongCall(uint16_t w) { return (w & 0xFE0E) == 0x940E; }
+bool IsStore(uint16_t w) { return (w & 0xFE00) == 0x9200 || (w & 0xD200) == 0x8200; }
 // `rcall .+0` (0xD000) calls the next instruction: avr-gcc's way to take two
 // bytes of stack for locals, not a call.
 bool IsShortCall(uint16_t w) {
   return ((w & 0xF000) == 0xD000 && w != 0xD000) || w == 0x9509 || w == 0x9519;
-}
-
-// The return address (a word address) pushed at `slot`: its highest byte first.
-uint32_t Pushed(const avr_t* avr, uint32_t slot) {
-  const uint8_t* b = &avr->data[slot];
-  return avr->address_size == 3 ? (uint32_t{b[0]} << 16) | (uint32_t{b[1]} << 8) | b[2]
-                                : (uint32_t{b[0]} << 8) | b[1];
 }
 
 std::string Hex(uint32_t v) {
@@ -79,6 +68,7 @@ void AvrFaultWatch::Classify(const avr_t* avr) {
   ops_.assign((avr->flashend + 1) / 2, Op::kOther);
   for (uint32_t w = 0; w < ops_.size(); ++w) {
     const uint16_t op = Word(avr, 2 * w);
+    if (IsStore(op)) ops_[w] = Op::kStore;
     if (IsLongCall(op) || IsShortCall(op)) ops_[w] = Op::kCall;
     if (op == 0x9508) ops_[w] = Op::kRet;
     if (op == 0x9518) ops_[w] = Op::kReti;
@@ -88,13 +78,10 @@ void AvrFaultWatch::Classify(const avr_t* avr) {
   }
 }
 
-std::optional<AvrFault> AvrFaultWatch::Before(const avr_t* avr) {
-  if (ops_.empty()) Classify(avr);
-  pc_ = avr->pc;
-  running_ = avr->interrupts.running_ptr;
-  op_ = pc_ / 2 < ops_.size() ? ops_[pc_ / 2] : Op::kOther;
+std::optional<AvrFault> AvrFaultWatch::Checked(const avr_t* avr) {
   switch (op_) {
     case Op::kOther:
+    case Op::kStore:
       return std::nullopt;
     case Op::kCall:
       sp_ = StackPointer(avr);
@@ -108,14 +95,15 @@ std::optional<AvrFault> AvrFaultWatch::Before(const avr_t* avr) {
   return std::nullopt;
 }
 
-std::optional<AvrFault> AvrFaultWatch::After(const avr_t* avr) {
+std::optional<AvrFault> AvrFaultWatch::Ran(const avr_t* avr) {
   const uint8_t size = avr->address_size;
   if (op_ == Op::kCall && avr->pc != pc_) {
     // The call pushed at sp_ and below; an interrupt entered in the same step
     // pushed below that.
     Push(avr, sp_ + 1 - size, pc_);
   }
-  if (avr->interrupts.running_ptr > running_) {
+  const bool interrupted = avr->interrupts.running_ptr > running_;
+  if (interrupted) {
     const uint32_t slot = StackPointer(avr) + 1;
     Push(avr, slot, Pushed(avr, slot) * 2);
     frames_.back().site |= 0x80000000u;  // marks an interrupt's frame
@@ -125,7 +113,7 @@ std::optional<AvrFault> AvrFaultWatch::After(const avr_t* avr) {
   // reaches it before anything above it (the end of the data memory, where
   // simavr would stop the core first). Frames below the stack pointer were
   // left by a longjmp and are not checked.
-  if (!frames_.empty()) {
+  if (!frames_.empty() && (op_ == Op::kStore || op_ == Op::kCall || interrupted)) {
     const Frame& f = frames_.back();
     if (f.slot > StackPointer(avr) && Pushed(avr, f.slot) != f.value) {
       return Smash(avr, f, "the instruction at " + symbols_.Describe(pc_) + " wrote it");

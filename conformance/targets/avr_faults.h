@@ -30,8 +30,7 @@
 #include <vector>
 
 #include "conformance/targets/avr_elf.h"
-
-struct avr_t;
+#include "conformance/targets/avr_stack.h"
 
 namespace moco::conformance {
 
@@ -51,17 +50,34 @@ class AvrFaultWatch {
   // Forgets every frame (a fresh core).
   void Reset();
   // Around one avr_run(): Before() reads the instruction about to run (and
-  // checks a RET or a division's entry), After() records what it pushed.
-  // Either returns the first fault seen.
-  std::optional<AvrFault> Before(const avr_t* avr);
-  std::optional<AvrFault> After(const avr_t* avr);
+  // checks a RET or a division's entry), After() records what it pushed and
+  // checks what a store, a call or an interrupt's entry wrote. Either returns
+  // the first fault seen. Inline: most instructions need one table lookup.
+  std::optional<AvrFault> Before(const avr_t* avr) {
+    if (ops_.empty()) Classify(avr);
+    pc_ = static_cast<uint32_t>(avr->pc);
+    running_ = avr->interrupts.running_ptr;
+    op_ = pc_ / 2 < ops_.size() ? ops_[pc_ / 2] : Op::kOther;
+    if (op_ == Op::kOther || op_ == Op::kStore) return std::nullopt;
+    return Checked(avr);
+  }
+  std::optional<AvrFault> After(const avr_t* avr) {
+    if (op_ == Op::kOther && avr->interrupts.running_ptr <= running_ && avr->pc != 0) {
+      started_ = true;
+      return std::nullopt;
+    }
+    return Ran(avr);
+  }
 
   // `pc`, then the call site of each open frame, innermost first, each as
   // AvrSymbols::Describe gives it (at most `max_frames`).
   std::vector<std::string> Backtrace(uint32_t pc, size_t max_frames = 16) const;
 
  private:
-  enum class Op : uint8_t { kOther, kCall, kRet, kReti, kDivision };
+  // kStore: an instruction that writes the data memory (ST, STD, STS, PUSH,
+  // XCH, LAS, LAC, LAT): only it, a call or an interrupt's entry can
+  // overwrite a return address, so only after these is the frame checked.
+  enum class Op : uint8_t { kOther, kCall, kRet, kReti, kDivision, kStore };
   struct Frame {
     uint32_t slot;   // the lowest stack byte of the pushed address
     uint32_t site;   // the call instruction, or the PC an interrupt struck (bit 31 set)
@@ -69,6 +85,8 @@ class AvrFaultWatch {
   };
 
   void Classify(const avr_t* avr);
+  std::optional<AvrFault> Checked(const avr_t* avr);  // Before(), past the lookup
+  std::optional<AvrFault> Ran(const avr_t* avr);      // After(), past the fast path
 
   void Push(const avr_t* avr, uint32_t slot, uint32_t site);
   std::optional<AvrFault> CheckReturn(const avr_t* avr, uint32_t sp);

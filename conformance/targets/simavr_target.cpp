@@ -396,7 +396,7 @@ std::string SimavrTarget::At() const {
 
 bool SimavrTarget::StackCollided() {
   // SP is the next free byte: the last push wrote at SP + 1.
-  const uint32_t sp = avr_->data[kSpl] | (static_cast<uint32_t>(avr_->data[kSph]) << 8);
+  const uint32_t sp = avr_stack::StackPointer(avr_);
   if (sp + 1 >= data_end_) return false;
   char what[120];
   std::snprintf(what, sizeof what,

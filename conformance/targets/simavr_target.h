@@ -154,8 +154,6 @@ class SimavrTarget final : public Target {
   // Whether the PC has run past the program image into erased flash; stops
   // the firmware when so.
   bool LeftTheProgram();
-  static constexpr uint16_t kSpl = 0x5D;  // SPL and SPH in data space (every ATmega)
-  static constexpr uint16_t kSph = 0x5E;
 
   static uint64_t PacerTick(avr_t* avr, uint64_t when, void* param);
   static uint64_t WakeTick(avr_t* avr, uint64_t when, void* param);

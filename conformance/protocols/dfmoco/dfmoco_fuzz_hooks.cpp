@@ -227,51 +227,65 @@ int32_t GreetingMotors(const wire::Bytes& boot_out) {
   return h == nullptr ? 4 : dfmoco::DialectFrom(*h, false).motor_count;
 }
 
-FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
-                const wire::Bytes& boot_out) {
-  (void)gap_ns;  // a run waits for the answers instead (kFuzzSettleMaxNs)
-  wire::Bytes out = boot_out;
-  const int32_t motors = GreetingMotors(boot_out);
-  HostLines host;
-  std::string lost;  // the first request left without a reply
-  for (size_t i = 0; i < messages.size(); ++i) {
-    const wire::Bytes& m = messages[i];
+// One run: each message followed as soon as the lines every sketch must
+// answer have come (AwaitReplies), as Dragonframe does; then a line end and a
+// `hi` (twice when unanswered), and what is still on its way read.
+class DfmocoPlay final : public FuzzPlay {
+ public:
+  explicit DfmocoPlay(const wire::Bytes& boot_out)
+      : out_(boot_out), motors_(GreetingMotors(boot_out)) {}
+
+  void Play(Target& target, const wire::Bytes& m) override {
+    ++messages_;
     target.Send(m);
     std::string first;
-    size_t want = host.MustAnswer(m, motors, &first);
+    size_t want = host_.MustAnswer(m, motors_, &first);
     if (m.size() > kFuzzJudgedWriteBytes) want = 0;
-    if (!AwaitReplies(target, out, want) && lost.empty() && !target.FirmwareStopped()) {
-      lost = "every request answered: message " + std::to_string(i + 1) + " (\"" + first + "\"" +
-             (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
-             ") got " + (want > 1 ? "fewer reply lines than commands" : "no reply") + " within " +
-             std::to_string(kFuzzSettleMaxNs / kMs) + " ms";
+    if (!AwaitReplies(target, out_, want) && lost_.empty() && !target.FirmwareStopped()) {
+      lost_ = "every request answered: message " + std::to_string(messages_) + " (\"" + first +
+              "\"" + (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
+              ") got " + (want > 1 ? "fewer reply lines than commands" : "no reply") + " within " +
+              std::to_string(kFuzzSettleMaxNs / kMs) + " ms";
     }
   }
-  // End any unterminated line, then greet; greet again when no answer came.
+
+  FuzzVerdict Finish(Target& target) override;
+
+ private:
+  wire::Bytes out_;
+  int32_t motors_;
+  HostLines host_;
+  std::string lost_;  // the first request left without a reply
+  size_t messages_ = 0;
+};
+
+FuzzVerdict DfmocoPlay::Finish(Target& target) {
+  // End any unterminated line and greet at once (the `hi` queues behind the
+  // line end on the wire, and whatever answers that line comes before the
+  // greeting's answer); greet again when no answer came.
   const std::string_view line_end = "\r\n";
+  const size_t before_hi = out_.size();
   target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
-  AwaitReplies(target, out, 0);
-  const size_t before_hi = out.size();
-  const bool answered = Greet(target, out) || Greet(target, out);
+  const bool answered = Greet(target, out_) || Greet(target, out_);
   // What is still on its way, until the line has been quiet for kFuzzTailNs:
   // a firmware's transmitter may hold a backlog of replies at the line rate.
   const TimeNs drain_limit = target.Now() + kFuzzDrainMaxNs;
   while (target.Now() < drain_limit) {
-    const size_t n = out.size();
-    if (!target.Receive(std::min(drain_limit, target.Now() + kFuzzTailNs), out)) break;
-    if (out.size() == n) break;
+    const size_t n = out_.size();
+    if (!target.Receive(std::min(drain_limit, target.Now() + kFuzzTailNs), out_)) break;
+    if (out_.size() == n) break;
   }
   if (!answered && !target.FirmwareStopped()) {
     FuzzVerdict v = Violation(
         "hang: the device answered neither of two `hi` sent after the "
         "session (" +
             std::to_string(kFuzzHiAnswerNs / kMs) + " ms each), while its firmware runs",
-        messages.size(), CountLines(out));
+        messages_, CountLines(out_));
     v.kind = FuzzVerdict::Kind::kHang;
     v.backtrace = target.FirmwareBacktrace();
     return v;
   }
-  return Judge(out, before_hi, messages.size(), lost);
+  return Judge(out_, before_hi, messages_, lost_);
 }
 
 // The stream laws over everything the device wrote: CR LF lines of printable
@@ -397,14 +411,15 @@ const FuzzHooks kHooks[] = {
         .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
         .boot = &Boot,
-        .run = &Run,
+        .start = [](const wire::Bytes& boot_out) -> std::unique_ptr<FuzzPlay> {
+          return std::make_unique<DfmocoPlay>(boot_out);
+        },
         .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },
     },
     {
         .protocol = Protocol::kStackshotDfmoco,
         .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
-        .run = nullptr,
         .matcher = []() { return ExactMatcher("the line differs"); },
     },
 };

@@ -46,21 +46,30 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
   stackshot::EncodePacket(p, m);
 }
 
-FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
-                const wire::Bytes& /*boot_out*/) {
+// One run: each packet sent, then the inter-frame gap waited out.
+class StackshotPlay final : public FuzzPlay {
+ public:
+  void Play(Target& target, const wire::Bytes& m) override {
+    target.Send(m);
+    requests_.Feed(m, sent_);
+    target.Receive(target.Now() + kSsFuzzGapNs, out_);
+    requests_.Flush();  // the inter-frame gap ends a partial packet on both sides
+    ++messages_;
+  }
+  FuzzVerdict Finish(Target& target) override;
+
+ private:
+  wire::Bytes out_;
+  stackshot::PacketDecoder requests_{false};
+  std::vector<stackshot::DecodedPacket> sent_;
+  size_t messages_ = 0;
+};
+
+FuzzVerdict StackshotPlay::Finish(Target& target) {
   using stackshot::Action;
   using stackshot::Command;
-  wire::Bytes out;
-  stackshot::PacketDecoder requests(false);
-  std::vector<stackshot::DecodedPacket> sent;
   bool mode_switch = false;
-  for (const wire::Bytes& m : messages) {
-    target.Send(m);
-    requests.Feed(m, sent);
-    target.Receive(target.Now() + gap_ns, out);
-    requests.Flush();  // the inter-frame gap ends a partial packet on both sides
-  }
-  for (const auto& p : sent) {
+  for (const auto& p : sent_) {
     const uint16_t c = p.packet.command;
     if (c == stackshot::Id(Command::kRailConfigGlobalMode) ||
         c == stackshot::Id(Command::kReflash) || c == stackshot::Id(Command::kReset) ||
@@ -69,7 +78,7 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     }
   }
   // Liveness: a PING is answered (unless the session left the packet protocol).
-  size_t ping_index = sent.size();
+  size_t ping_index = sent_.size();
   if (!mode_switch) {
     stackshot::Packet ping;
     ping.command = stackshot::Id(Command::kPing);
@@ -79,28 +88,28 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     wire::Bytes bytes;
     stackshot::EncodePacket(ping, bytes);
     target.Send(bytes);
-    requests.Feed(bytes, sent);
+    requests_.Feed(bytes, sent_);
   }
-  target.Receive(target.Now() + kSsFuzzPingAnswerNs, out);
+  target.Receive(target.Now() + kSsFuzzPingAnswerNs, out_);
   while (true) {
-    const size_t n = out.size();
-    target.Receive(target.Now() + kSsFuzzDrainQuietNs, out);
-    if (out.size() == n) break;
+    const size_t n = out_.size();
+    target.Receive(target.Now() + kSsFuzzDrainQuietNs, out_);
+    if (out_.size() == n) break;
   }
 
   stackshot::PacketDecoder decoder(true);
   std::vector<stackshot::DecodedPacket> replies;
-  decoder.Feed(out, replies);
+  decoder.Feed(out_, replies);
   if (decoder.skipped_total() != 0 || decoder.pending_bytes() != 0) {
     return Violation("packet framing: " + std::to_string(decoder.skipped_total()) +
                          " device byte(s) outside packets, " +
                          std::to_string(decoder.pending_bytes()) + " left in a partial packet",
-                     messages.size(), replies.size());
+                     messages_, replies.size());
   }
-  if (replies.size() > sent.size()) {
+  if (replies.size() > sent_.size()) {
     return Violation("one reply per request: " + std::to_string(replies.size()) + " replies to " +
-                         std::to_string(sent.size()) + " request packets",
-                     messages.size(), replies.size());
+                         std::to_string(sent_.size()) + " request packets",
+                     messages_, replies.size());
   }
   // Replies come in request order: each answers a later request with its command.
   size_t next = 0;
@@ -109,36 +118,38 @@ FuzzVerdict Run(Target& target, const Messages& messages, TimeNs gap_ns,
     if (!r.checksum_ok) {
       return Violation("checksum: a device packet for " + stackshot::CommandName(r.packet.command) +
                            " carries a wrong checksum",
-                       messages.size(), replies.size());
+                       messages_, replies.size());
     }
     if (r.packet.action < static_cast<uint8_t>(Action::kRspOk) ||
         r.packet.action >= stackshot::kActionMax) {
       return Violation("status: " + stackshot::CommandName(r.packet.command) +
                            " answered with comm_action_t " + std::to_string(r.packet.action) +
                            ", not a response status",
-                       messages.size(), replies.size());
+                       messages_, replies.size());
     }
-    while (next < sent.size() && sent[next].packet.command != r.packet.command) ++next;
-    if (next == sent.size()) {
+    while (next < sent_.size() && sent_[next].packet.command != r.packet.command) ++next;
+    if (next == sent_.size()) {
       return Violation("command echo: a reply for " + stackshot::CommandName(r.packet.command) +
-                           " answers no request sent before it",
-                       messages.size(), replies.size());
+                           " answers no request sent_ before it",
+                       messages_, replies.size());
     }
     if (next == ping_index) ping_answered = true;
     ++next;
   }
   if (!mode_switch && !ping_answered) {
-    return Violation("liveness: CC_PING after the session got no reply", messages.size(),
+    return Violation("liveness: CC_PING after the session got no reply", messages_,
                      replies.size());
   }
-  return Passed(messages.size(), replies.size());
+  return Passed(messages_, replies.size());
 }
 
 const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kStackshot,
     .gap_ns = kSsFuzzGapNs,
     .mutate = &Mutate,
-    .run = &Run,
+    .start = [](const wire::Bytes&) -> std::unique_ptr<FuzzPlay> {
+      return std::make_unique<StackshotPlay>();
+    },
     .matcher = []() { return ExactMatcher("the packet differs"); },
 }};
 
