@@ -7,7 +7,9 @@
 
 #include <algorithm>
 
-#include "conformance/targets/avr_stack.h"
+extern "C" {
+#include "sim_avr.h"
+}
 
 namespace moco::conformance {
 namespace {
@@ -20,13 +22,6 @@ bool IsConditional(uint16_t w) {
 }
 
 }  // namespace
-
-uint32_t AvrCodeMap::avr_pc(const avr_t* avr) { return static_cast<uint32_t>(avr->pc); }
-
-uint32_t AvrCodeMap::InterruptReturn(const avr_t* avr) {
-  // The return address was pushed last.
-  return avr_stack::Pushed(avr, avr_stack::StackPointer(avr) + 1) * 2;
-}
 
 void AvrCodeMap::Prepare(const avr_t* avr, uint32_t code_end) {
   const uint32_t words = std::min<uint32_t>(code_end, avr->flashend + 1) / 2;

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "conformance/targets/avr_elf.h"
+#include "conformance/targets/avr_stack.h"
 #include "conformance/targets/target.h"
 
-struct avr_t;
 
 namespace moco::conformance {
 
@@ -33,18 +33,16 @@ class AvrCodeMap {
     const uint32_t word = pc_before >> 1;
     if (word >= lengths_.size()) return;
     const uint32_t next = pc_before + lengths_[word];
-    map[word] |= (interrupted ? InterruptReturn(avr) : static_cast<uint32_t>(avr_pc(avr))) == next
-                     ? uint8_t{1}
-                     : uint8_t{2};
+    const uint32_t went = interrupted
+                              ? avr_stack::Pushed(avr, avr_stack::StackPointer(avr) + 1) * 2
+                              : static_cast<uint32_t>(avr->pc);
+    map[word] |= went == next ? uint8_t{1} : uint8_t{2};
   }
 
   // Over the functions `symbols` size (a linear sweep of each).
   CodeCoverage Summarise(std::span<const uint8_t> map, const AvrSymbols& symbols) const;
 
  private:
-  static uint32_t avr_pc(const avr_t* avr);
-  static uint32_t InterruptReturn(const avr_t* avr);
-
   std::vector<uint8_t> lengths_;  // per flash word: 2 or 4 (as if an instruction started there)
   std::vector<uint16_t> words_;   // the image's words
 };

@@ -560,7 +560,11 @@ bool SimavrTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
         break;
       }
       if (state != cpu_Running && state != cpu_Sleeping) break;
-      if (StackCollided() || LeftTheProgram()) break;
+      // Each checked inline first: this runs after every instruction.
+      if ((avr_stack::StackPointer(avr_) + 1 < data_end_ && StackCollided()) ||
+          (avr_->pc >= code_end_ && LeftTheProgram())) {
+        break;
+      }
       // A call may wake the core without a cycle passing; a thousand in a row is a hang.
       stalls = avr_->cycle == before ? stalls + 1 : 0;
       if (stalls > 1000) {
