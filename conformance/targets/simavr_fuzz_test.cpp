@@ -3,8 +3,12 @@
 // state, the program counter's edges are counted into the coverage map, and
 // firmware that stops is a finding of its own kind.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -14,6 +18,7 @@
 
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/executor.h"
+#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "conformance/targets/simavr_target.h"
 
 namespace moco::conformance {
@@ -69,9 +74,12 @@ TEST(SimavrFuzz, EachForkedRunStartsFromTheBootedFirmwareAndCountsItsEdges) {
   EXPECT_EQ(Copy(ex.coverage()), first) << "the move's run left a trace in the next";
 }
 
-// The campaign keeps a mutant that reached new edges and mutates it further.
+// The campaign keeps a mutant that reached new edges and mutates it further,
+// most of them from snapshots after the messages they keep.
 TEST(SimavrFuzz, ACampaignOnOurFirmwareGrowsItsCorpusAndFindsNothing) {
-  FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), Forked());
+  FuzzExecutor::Options snapshots = Forked();
+  snapshots.snapshots = 4;
+  FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), snapshots);
   ASSERT_EQ(ex.Open(), std::nullopt);
   Seed seed;
   seed.path = "lines";
@@ -80,13 +88,14 @@ TEST(SimavrFuzz, ACampaignOnOurFirmwareGrowsItsCorpusAndFindsNothing) {
       {"hi\r\n", "pr 1 3000\r\n", "mm 1 300\r\n", "ms\r\n", "mp 1\r\n", "zm 1\r\n", "sm 1\r\n"});
   FuzzOptions options;
   options.seed = 7;
-  options.runs = 60;
+  options.runs = 100;
   const FuzzReport r = RunFuzz(ex, Protocol::kDfmoco, {seed}, options);
-  EXPECT_EQ(r.execs, 61u);
+  EXPECT_EQ(r.execs, 101u);
+  EXPECT_GT(r.snapshot_runs, 50u);
   for (const FuzzFailure& f : r.failures) ADD_FAILURE() << f.violation;
   EXPECT_TRUE(r.coverage);
   EXPECT_GT(r.edges, 100u);
-  EXPECT_GT(r.corpus, 1u) << "no mutant of 60 reached an edge the seed did not";
+  EXPECT_GT(r.corpus, 1u) << "no mutant of 100 reached an edge the seed did not";
   // What the campaign reached of the image, against the ELF's functions.
   ASSERT_TRUE(r.code.has_value());
   EXPECT_GT(r.code->instructions, 500u);
@@ -249,6 +258,104 @@ TEST(SimavrFuzz, ASavedFindingRerunsCycleForCycle) {
   EXPECT_EQ(again.violation, found.violation);
   EXPECT_EQ(again.backtrace, found.backtrace);
   std::remove(path.c_str());
+}
+
+FuzzExecutor::Options WithSnapshots(size_t kept) {
+  FuzzExecutor::Options o = Forked();
+  o.snapshots = kept;
+  return o;
+}
+
+// This process's children (the executor's snapshots and their runs).
+std::vector<pid_t> Children() {
+  std::vector<pid_t> out;
+  std::FILE* f = std::fopen(("/proc/self/task/" + std::to_string(getpid()) + "/children").c_str(), "r");
+  if (f == nullptr) return out;
+  int pid = 0;
+  while (std::fscanf(f, "%d", &pid) == 1) out.push_back(pid);
+  std::fclose(f);
+  return out;
+}
+
+// A run from a snapshot after a session's first messages is the whole run's:
+// the same finding, word for word and PC for PC, whichever prefix it keeps,
+// with two snapshots kept of the four prefixes (older ones given up and made
+// again); a smashed run leaves nothing in the snapshot for the next; a run
+// from a snapshot twice reaches the same edges; snapshots killed under the
+// executor are made again; and none is left once the executor is gone.
+TEST(SimavrFuzz, ARunFromASnapshotIsTheWholeRun) {
+  const Messages session = Lines({"hi\r\n", "pr 1 4000\r\n", "mp 1\r\nmp 2\r\n",
+                                  "mm 1 2 3 4 5 6 7 8 9 10 11 12 "
+                                  "13 14 15 16 17 18 19 20 21 22 23 24\r\n"});
+  {
+    FuzzExecutor ex(Protocol::kDfmoco, Firmware(BugElf("args_overflow").c_str()),
+                    WithSnapshots(2));
+    ASSERT_EQ(ex.Open(), std::nullopt);
+    ASSERT_TRUE(ex.snapshots());
+    const FuzzVerdict whole = ex.Run(session);
+    ASSERT_FALSE(whole.ok);
+    ASSERT_EQ(whole.kind, FuzzVerdict::Kind::kStackSmash) << whole.violation;
+    for (size_t kept = 1; kept <= session.size(); ++kept) {
+      SCOPED_TRACE("kept " + std::to_string(kept));
+      const FuzzVerdict v = ex.Run(session, kept);
+      EXPECT_EQ(v.kind, whole.kind);
+      EXPECT_EQ(v.violation, whole.violation);
+      EXPECT_EQ(v.backtrace, whole.backtrace);
+      EXPECT_EQ(v.messages, whole.messages);
+      EXPECT_EQ(v.replies, whole.replies);
+    }
+    EXPECT_LE(Children().size(), 2u) << "more snapshots than kept";
+
+    Messages fine(session.begin(), session.begin() + 3);
+    const FuzzVerdict after_smash = ex.Run(fine, 2);
+    EXPECT_TRUE(after_smash.ok) << after_smash.violation;
+    const std::vector<uint8_t> map = Copy(ex.coverage());
+    EXPECT_GT(Reached(map), 20u) << "the rest's edges are in the map";
+    EXPECT_TRUE(ex.Run(fine, 2).ok);
+    EXPECT_EQ(Copy(ex.coverage()), map) << "the same rest from the same snapshot";
+
+    const std::vector<pid_t> snapshots = Children();
+    ASSERT_FALSE(snapshots.empty());
+    for (const pid_t pid : snapshots) kill(pid, SIGKILL);
+    const FuzzVerdict remade = ex.Run(session, 2);
+    EXPECT_EQ(remade.violation, whole.violation);
+    EXPECT_TRUE(ex.Run(fine, 2).ok);
+  }
+  errno = 0;
+  EXPECT_EQ(waitpid(-1, nullptr, WNOHANG), -1) << "a snapshot outlived its executor";
+  EXPECT_EQ(errno, ECHILD);
+}
+
+// A campaign from snapshots finds the over-long line (the session's own
+// lines are short), and the finding is shrunk to the bytes that matter: one
+// message, shorter than the longest line the mutator makes, that still
+// smashes the stack when a fresh boot replays it.
+TEST(SimavrFuzz, ASnapshotCampaignFindsAndShrinksAFindingInBytes) {
+  const std::string elf = BugElf("args_overflow");
+  FuzzExecutor ex(Protocol::kDfmoco, Firmware(elf.c_str()), WithSnapshots(4));
+  ASSERT_EQ(ex.Open(), std::nullopt);
+  Seed seed;
+  seed.path = "lines";
+  seed.protocol = Protocol::kDfmoco;
+  seed.messages = Lines({"hi\r\n", "pr 1 3000\r\n", "mm 1 300\r\n", "ms\r\n", "mp 1\r\n"});
+  FuzzOptions options;
+  options.seed = 3;
+  options.runs = 400;
+  options.max_failures = 1;
+  const FuzzReport r = RunFuzz(ex, Protocol::kDfmoco, {seed}, options);
+  ASSERT_EQ(r.failures.size(), 1u) << "no finding in 400 runs";
+  const FuzzFailure& f = r.failures.front();
+  EXPECT_EQ(f.kind, FuzzVerdict::Kind::kStackSmash) << f.violation;
+  size_t bytes = 0;
+  for (const wire::Bytes& m : f.messages) bytes += m.size();
+  EXPECT_LT(bytes, DfmocoProtocol::kMaxFuzzLine) << "not shrunk within the line";
+
+  FuzzExecutor fresh(Protocol::kDfmoco, Firmware(elf.c_str()));
+  ASSERT_EQ(fresh.Open(), std::nullopt);
+  const FuzzVerdict again = fresh.Run(f.messages);
+  EXPECT_EQ(again.kind, f.kind);
+  EXPECT_EQ(again.violation, f.violation);
+  EXPECT_EQ(again.backtrace, f.backtrace);
 }
 
 // Fuzzing needs a device in virtual time and coverage a target that sees code.
