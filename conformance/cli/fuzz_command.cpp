@@ -104,6 +104,18 @@ int Fuzz(const FuzzArgs& a) {
                 static_cast<unsigned long long>(a.seed), static_cast<unsigned long long>(r.execs),
                 r.wall_s, r.ExecsPerSecond(), static_cast<unsigned long long>(r.messages));
   std::cout << summary;
+  if (firmware && r.execs > 0 && r.wall_s > 0) {
+    const double simulated_s = static_cast<double>(r.simulated_ns) / 1e9;
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "firmware time: %.1f s simulated, %.1f ms per run, %.1f times real time\n",
+                  simulated_s, 1000.0 * simulated_s / static_cast<double>(r.execs),
+                  simulated_s / r.wall_s);
+    std::cout << line;
+  }
+  if (r.shrink_runs > 0) {
+    std::cout << "shrinking: " << r.shrink_runs << " more runs to shrink the findings\n";
+  }
   if (r.coverage) {
     std::cout << "coverage: " << r.edges << " edges of the firmware's code reached; corpus "
               << r.corpus << " session(s), " << r.corpus - seeds.size()

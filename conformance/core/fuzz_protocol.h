@@ -32,6 +32,7 @@ struct FuzzVerdict {
   std::string violation;  // the invariant broken and what was seen; empty when ok
   size_t messages = 0;    // host messages sent
   size_t replies = 0;     // device messages received
+  TimeNs simulated_ns = 0;  // the device's time the run took (from its snapshot, if any)
   // What kind of finding a failed run is:
   //  - kInvariant: the protocol's stream laws (framing, every request
   //    answered, replies well formed);

@@ -54,12 +54,14 @@ size_t CommonPrefix(const Messages& a, const Messages& b) {
 // bytes. `verdict` becomes the shrunk mutant's. Each attempt runs from a
 // snapshot after the messages it shares with the mutant so far, where the
 // executor keeps them.
-Messages Shrink(FuzzExecutor& executor, Messages messages, FuzzVerdict& verdict) {
+Messages Shrink(FuzzExecutor& executor, Messages messages, FuzzVerdict& verdict,
+                uint64_t& runs) {
   constexpr int kNoBudget = 1 << 30;
   constexpr int kByteBudget = 200;
   Messages current = messages;  // the shortest failing mutant so far
   auto still_fails = [&](const Messages& fewer) {
     if (fewer.empty() || StopRequested() != 0) return false;
+    ++runs;
     FuzzVerdict v = executor.Run(fewer, CommonPrefix(fewer, current));
     // A run a stop request cut short proves nothing.
     if (v.ok || v.kind != verdict.kind || StopRequested() != 0) return false;
@@ -79,6 +81,24 @@ Messages Shrink(FuzzExecutor& executor, Messages messages, FuzzVerdict& verdict)
     });
   }
   return current;
+}
+
+// One finding per kind, law and place: the violation up to its first ':'
+// (the law it names: "reply grammar", "every request answered", "the firmware
+// stopped"), and for a firmware the function it stopped in. Many mutants break
+// one law the same way (lines run into each other), and listing each would
+// hide the other findings.
+std::string FindingKey(const FuzzVerdict& verdict) {
+  std::string key = std::string(FindingKindName(verdict.kind)) + " " +
+                    verdict.violation.substr(0, verdict.violation.find(':'));
+  if (!verdict.backtrace.empty()) {
+    const std::string& pc = verdict.backtrace.front();
+    const size_t open = pc.find('('), plus = pc.find('+', open);
+    key += " in " + (open == std::string::npos
+                         ? pc
+                         : pc.substr(open + 1, std::min(plus, pc.find(')', open)) - open - 1));
+  }
+  return key;
 }
 
 // A snapshot campaign's mutants come in batches from one corpus entry and one
@@ -157,7 +177,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
   SessionMutator mutator(protocol, options.seed);
   std::vector<Messages> donors;
   for (const Seed& s : seeds) donors.push_back(s.messages);
-  std::set<std::string> seen;  // violations reported, by their first 60 characters
+  std::set<std::string> seen;  // findings reported, by FindingKey (before and after shrinking)
 
   std::vector<Messages> corpus = donors;
   std::vector<uint8_t> covered(executor.coverage().size(), 0);
@@ -171,8 +191,14 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
 
   auto record = [&](Messages messages, const std::vector<std::string>& mutations,
                     FuzzVerdict verdict, bool from_snapshot) {
+    // A finding already reported is not shrunk again: a firmware that breaks
+    // one law often (the real sketch's interleaved replies) would spend the
+    // campaign shrinking the same finding.
+    const std::string first = FindingKey(verdict);
+    if (!seen.insert(first).second) return;
     if (from_snapshot) {
       // The finding as a fresh boot shows it: the saved session reruns so.
+      ++report.shrink_runs;
       FuzzVerdict whole = executor.Run(messages);
       if (whole.ok || whole.kind != verdict.kind) {
         verdict.violation += " (from a snapshot; the whole session from boot gave " +
@@ -181,22 +207,9 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
         verdict = std::move(whole);
       }
     }
-    messages = Shrink(executor, std::move(messages), verdict);
-    // One finding per kind, law and place: the violation up to its first ':'
-    // (the law it names: "reply grammar", "every request answered", "the
-    // firmware stopped"), and for a firmware the function it stopped in. Many
-    // mutants break one law the same way (lines run into each other), and
-    // listing each would hide the other findings.
-    std::string key = std::string(FindingKindName(verdict.kind)) + " " +
-                      verdict.violation.substr(0, verdict.violation.find(':'));
-    if (!verdict.backtrace.empty()) {
-      const std::string& pc = verdict.backtrace.front();
-      const size_t open = pc.find('('), plus = pc.find('+', open);
-      key += " in " + (open == std::string::npos
-                           ? pc
-                           : pc.substr(open + 1, std::min(plus, pc.find(')', open)) - open - 1));
-    }
-    if (!seen.insert(key).second) return;
+    messages = Shrink(executor, std::move(messages), verdict, report.shrink_runs);
+    const std::string key = FindingKey(verdict);
+    if (key != first && !seen.insert(key).second) return;  // shrunk into one reported before
     FuzzFailure f{
         std::move(messages),         mutations, std::move(verdict.violation), "", verdict.kind,
         std::move(verdict.backtrace)};
@@ -231,6 +244,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     if (stopped()) break;
     ++report.execs;
     report.messages += v.messages;
+    report.simulated_ns += v.simulated_ns;
     if (report.coverage) MergeCoverage(executor.coverage(), covered, report.edges);
     report.corpus = corpus.size();
     if (!v.ok) record(s.messages, {"none (the recorded session itself)"}, v, false);
@@ -273,6 +287,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
     if (stopped()) break;
     ++report.execs;
     report.messages += v.messages;
+    report.simulated_ns += v.simulated_ns;
     if (v.ok) {
       note_coverage(mutant);
     } else {

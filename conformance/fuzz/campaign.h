@@ -61,6 +61,8 @@ struct FuzzReport {
   size_t edges = 0;       // distinct edges reached over all runs
   size_t corpus = 0;      // sessions mutants are made from: the seeds and every new-coverage mutant
   uint64_t snapshot_runs = 0;  // mutants run from a snapshot (FuzzExecutor::snapshots())
+  uint64_t shrink_runs = 0;    // runs made to shrink findings (not in execs)
+  TimeNs simulated_ns = 0;     // the device's time the execs took, summed
   std::optional<CodeCoverage> code;  // of a firmware image: FuzzExecutor::code_coverage()
   std::vector<FuzzFailure> failures;
   int interrupted_by = 0;  // the signal that stopped the campaign (StopRequested), or 0

@@ -27,6 +27,7 @@ struct SharedVerdict {
   uint32_t violation_bytes;
   uint64_t messages;
   uint64_t replies;
+  int64_t simulated_ns;
   uint32_t backtrace_bytes;  // the frames, one per line
   char violation[4096];
   char backtrace[2048];
@@ -174,13 +175,15 @@ std::optional<CodeCoverage> FuzzExecutor::code_coverage() const {
 std::string FuzzExecutor::target_name() const { return target_->Name(); }
 
 FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& boot_out) {
+  const TimeNs start = target_->Now();
   const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out);
   for (const wire::Bytes& m : messages) play->Play(*target_, m);
-  return Conclude(*play);
+  return Conclude(*play, start);
 }
 
-FuzzVerdict FuzzExecutor::Conclude(FuzzPlay& play) {
+FuzzVerdict FuzzExecutor::Conclude(FuzzPlay& play, TimeNs start) {
   FuzzVerdict v = play.Finish(*target_);
+  v.simulated_ns = target_->Now() - start;
   if (auto fault = target_->FirmwareFaulted()) {
     v.ok = false;
     v.kind = FindingKindOf(fault->kind);
@@ -211,6 +214,7 @@ void WriteBack(const FuzzVerdict& v, SharedVerdict* back) {
   back->kind = static_cast<uint32_t>(v.kind);
   back->messages = v.messages;
   back->replies = v.replies;
+  back->simulated_ns = v.simulated_ns;
   back->violation_bytes = CopyOut(v.violation, back->violation, sizeof back->violation);
   std::string frames;
   for (const std::string& f : v.backtrace) frames += f + "\n";
@@ -252,6 +256,7 @@ FuzzVerdict FuzzExecutor::ReadBack(bool done, int status, size_t messages) {
   v.kind = static_cast<FuzzVerdict::Kind>(back->kind);
   v.messages = back->messages;
   v.replies = back->replies;
+  v.simulated_ns = back->simulated_ns;
   v.violation.assign(back->violation, back->violation_bytes);
   const std::string frames(back->backtrace, back->backtrace_bytes);
   for (size_t at = 0; at < frames.size();) {
@@ -361,6 +366,7 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
         std::memcpy(to, rest.data() + at, n);
         at += n;
       };
+      const TimeNs start = target_->Now();
       take(&count, sizeof count);
       for (uint32_t i = 0; i < count; ++i) {
         uint32_t n = 0;
@@ -369,7 +375,7 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
         take(m.data(), n);
         play->Play(*target_, m);
       }
-      WriteBack(Conclude(*play), back);
+      WriteBack(Conclude(*play, start), back);
       _exit(0);
     }
     int status = 0;

@@ -87,8 +87,9 @@ class FuzzExecutor {
   };
 
   FuzzVerdict RunHere(const Messages& messages, const wire::Bytes& boot_out);
-  // Ends a run played into `play`, with the target's firmware fault if any.
-  FuzzVerdict Conclude(FuzzPlay& play);
+  // Ends a run played into `play` since the target's time `start`, with the
+  // target's firmware fault if any.
+  FuzzVerdict Conclude(FuzzPlay& play, TimeNs start);
   FuzzVerdict RunForked(const Messages& messages);
   // The verdict a forked run wrote back, or why there is none.
   FuzzVerdict ReadBack(bool done, int status, size_t messages);
