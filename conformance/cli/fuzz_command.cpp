@@ -11,6 +11,7 @@
 
 #include "cli_numbers.h"
 #include "conformance/cli/commands.h"
+#include "conformance/cli/run_setup.h"
 #include "conformance/fuzz/campaign.h"
 
 namespace moco::conformance::cli {
@@ -26,7 +27,7 @@ constexpr size_t kSnapshots = 8;
 
 struct FuzzArgs {
   std::vector<std::string> sessions;
-  std::string target, profile, crashes = "mococheck-fuzz";
+  std::string target, profile, crashes = "mococheck-fuzz", board_path, driver;
   uint64_t seed = 1, runs = 0;
   double seconds = 10;
   size_t max_failures = 5;
@@ -67,6 +68,19 @@ int Fuzz(const FuzzArgs& a) {
   run_options.fork = firmware;
   run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
   run_options.snapshots = firmware ? kSnapshots : 0;
+  if (a.board_path.empty() && !a.driver.empty()) {
+    return Fail("--driver needs --board: give the board profile naming the watched pins, e.g. "
+                "--board fixtures/boards/own-dfmoco.json");
+  }
+  if (!a.board_path.empty()) {
+    if (!firmware) {
+      return Fail("--board watches the pins of firmware under simavr; give --target "
+                  "simavr:FIRMWARE.elf");
+    }
+    auto pins = LoadPinJudge(a.board_path, a.driver);
+    if (const auto* err = std::get_if<std::string>(&pins)) return Fail(*err);
+    run_options.pins = std::get<PinJudgeOptions>(pins);
+  }
   FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
   // From here a signal ends the campaign; its summary and findings are still
@@ -96,14 +110,15 @@ int Fuzz(const FuzzArgs& a) {
     std::cerr << text << (tty ? "\r" : "\n") << std::flush;
   });
   if (tty) std::cerr << "\n";
-  char summary[200];
-  std::snprintf(summary, sizeof summary,
-                "mococheck fuzz: %s, %zu seed session(s), seed %llu: %llu execs in %.1f s (%.0f "
-                "execs/s, %llu host messages)\n",
-                firmware ? executor.target_name().c_str() : model.c_str(), seeds.size(),
-                static_cast<unsigned long long>(a.seed), static_cast<unsigned long long>(r.execs),
-                r.wall_s, r.ExecsPerSecond(), static_cast<unsigned long long>(r.messages));
-  std::cout << summary;
+  char counts[160];
+  std::snprintf(counts, sizeof counts,
+                "%zu seed session(s), seed %llu: %llu execs in %.1f s (%.0f execs/s, %llu host "
+                "messages)\n",
+                seeds.size(), static_cast<unsigned long long>(a.seed),
+                static_cast<unsigned long long>(r.execs), r.wall_s, r.ExecsPerSecond(),
+                static_cast<unsigned long long>(r.messages));
+  // The target's name may be long (a firmware's path): not in the fixed buffer.
+  std::cout << "mococheck fuzz: " << (firmware ? executor.target_name() : model) << ", " << counts;
   if (firmware && r.execs > 0 && r.wall_s > 0) {
     const double simulated_s = static_cast<double>(r.simulated_ns) / 1e9;
     char line[160];
@@ -155,7 +170,10 @@ int Fuzz(const FuzzArgs& a) {
     if (!f.saved_path.empty()) std::cout << "; saved: " << f.saved_path;
     std::cout << "\n";
     if (firmware && f.saved_path.rfind("not saved", 0) != 0 && !f.saved_path.empty()) {
-      std::cout << "  rerun: mococheck replay " << f.saved_path << " --target " << a.target << "\n";
+      std::cout << "  rerun: mococheck replay " << f.saved_path << " --target " << a.target;
+      if (!a.board_path.empty()) std::cout << " --board " << a.board_path;
+      if (!a.driver.empty()) std::cout << " --driver " << a.driver;
+      std::cout << "\n";
     }
   }
   if (r.interrupted_by != 0) {
@@ -196,6 +214,7 @@ Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub) {
       ->capture_default_str();
   AddNumber(fuzz, "--max-failures", a->max_failures, size_t{1}, size_t{1000},
             "Stop after this many distinct failures");
+  AddPinOptions(fuzz, a->board_path, a->driver);
   return [a] { return Fuzz(*a); };
 }
 

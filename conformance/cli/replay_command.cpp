@@ -7,6 +7,7 @@
 
 #include "cli_numbers.h"
 #include "conformance/cli/commands.h"
+#include "conformance/cli/run_setup.h"
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/executor.h"
 #include "conformance/fuzz/replay.h"
@@ -16,7 +17,7 @@ namespace moco::conformance::cli {
 namespace {
 
 struct ReplayArgs {
-  std::string session, target, profile;
+  std::string session, target, profile, board_path, driver;
   int64_t steps = -1, ms = -1;
   uint32_t baud = 0;
 };
@@ -76,8 +77,21 @@ int Replay(const ReplayArgs& a) {
   const bool host_only =
       std::none_of(session.entries.begin(), session.entries.end(),
                    [](const auto& e) { return !e.is_event && e.from == session::Origin::kDevice; });
+  if (a.board_path.empty() && !a.driver.empty()) {
+    return Fail("--driver needs --board: give the board profile naming the watched pins");
+  }
+  FuzzExecutor::Options rerun;
+  if (!a.board_path.empty()) {
+    if (!host_only) {
+      return Fail("--board judges the pins of a rerun fuzz finding (a session with no device "
+                  "side); to judge a device's pins, use mococheck run --board");
+    }
+    auto pins = LoadPinJudge(a.board_path, a.driver);
+    if (const auto* err = std::get_if<std::string>(&pins)) return Fail(*err);
+    rerun.pins = std::get<PinJudgeOptions>(pins);
+  }
   if (host_only && target->VirtualClock() && target->CanRestart()) {
-    FuzzExecutor executor(proto, std::move(target));
+    FuzzExecutor executor(proto, std::move(target), rerun);
     if (executor.CanRun()) return Rejudge(a.session, executor);
     return Fail(a.session + ": the session records no device side to compare, and " +
                 std::string(ProtocolName(proto)) +
@@ -124,6 +138,7 @@ Runner AddReplayCommand(CLI::App& app, CLI::App*& sub) {
             "How far a device message may arrive from its recorded time (default: the "
             "session's, else 0 in-process and 50 on a real link)")
       ->default_str("the session's");
+  AddPinOptions(replay, a->board_path, a->driver);
   return [a] { return Replay(*a); };
 }
 

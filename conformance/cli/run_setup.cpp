@@ -214,16 +214,33 @@ std::optional<std::string> LoadPins(const RunArgs& a, RunOptions& options,
            "fixtures/boards/own-dfmoco.json";
   }
   if (a.board_path.empty()) return std::nullopt;
-  auto loaded = LoadBoard(a.board_path);
-  if (const auto* err = std::get_if<std::string>(&loaded)) return *err;
-  auto driver = LoadDriver(a.driver.empty() ? "a4988" : a.driver);
-  if (const auto* err = std::get_if<std::string>(&driver)) return *err;
-  board = std::get<Board>(loaded);
-  PinJudgeOptions pins;
-  pins.board = *board;
-  pins.driver = std::get<DriverProfile>(driver);
-  options.pins = pins;
+  auto pins = LoadPinJudge(a.board_path, a.driver);
+  if (const auto* err = std::get_if<std::string>(&pins)) return *err;
+  options.pins = std::get<PinJudgeOptions>(pins);
+  board = options.pins->board;
   return std::nullopt;
+}
+
+std::variant<PinJudgeOptions, std::string> LoadPinJudge(const std::string& board_path,
+                                                        const std::string& driver_name) {
+  auto loaded = LoadBoard(board_path);
+  if (const auto* err = std::get_if<std::string>(&loaded)) return *err;
+  auto driver = LoadDriver(driver_name.empty() ? "a4988" : driver_name);
+  if (const auto* err = std::get_if<std::string>(&driver)) return *err;
+  PinJudgeOptions pins;
+  pins.board = std::get<Board>(loaded);
+  pins.driver = std::get<DriverProfile>(driver);
+  return pins;
+}
+
+void AddPinOptions(CLI::App* sub, std::string& board_path, std::string& driver) {
+  sub->add_option("--board", board_path,
+                  "Board profile (JSON, fixtures/boards/) naming the pins to watch on a simavr: "
+                  "target; enables the pin rules (*-PIN-*)")
+      ->check(moco::cli::NonEmptyPath());
+  sub->add_option("--driver", driver,
+                  "Step driver whose STEP/DIR timing the pin rules judge: a4988 (default), "
+                  "drv8825, tmc2209, or a driver profile (JSON, fixtures/drivers/); needs --board");
 }
 
 // The files a run reads: the profile, board and driver files, the firmware
@@ -477,13 +494,7 @@ void AddRunOptions(CLI::App* sub, RunArgs& a, bool subsets) {
                 "same failing rules)");
   AddNumber(sub, "--position-gap-ms", a.position_gap_ms, int64_t{1}, int64_t{600000},
             "DMC-POS-002: the largest gap between position updates while moving");
-  sub->add_option("--board", a.board_path,
-                  "Board profile (JSON, fixtures/boards/) naming the pins to watch on a simavr: "
-                  "target; enables the pin rules (*-PIN-*)")
-      ->check(moco::cli::NonEmptyPath());
-  sub->add_option("--driver", a.driver,
-                  "Step driver whose STEP/DIR timing the pin rules judge: a4988 (default), "
-                  "drv8825, tmc2209, or a driver profile (JSON, fixtures/drivers/)");
+  AddPinOptions(sub, a.board_path, a.driver);
   sub->add_option("--vcd", a.vcd_path,
                   "Write the watched pins of every case here as a Value Change Dump (GTKWave, "
                   "PulseView, sigrok-cli -I vcd); needs --board")

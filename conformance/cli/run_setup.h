@@ -36,6 +36,13 @@ struct RunArgs {
 // suite).
 void AddRunOptions(CLI::App* sub, RunArgs& a, bool subsets);
 
+// A board profile and a step driver (a name or a profile file; empty: a4988)
+// loaded as the pin judge's options, or an error message naming the file.
+std::variant<PinJudgeOptions, std::string> LoadPinJudge(const std::string& board_path,
+                                                        const std::string& driver_name);
+// The --board and --driver options of a command that runs firmware.
+void AddPinOptions(CLI::App* sub, std::string& board_path, std::string& driver);
+
 // --dialect's help: the dialects of every protocol that has some.
 std::string DialectHelp();
 // --dialect checked against the dialects `runner`'s protocol names: an error

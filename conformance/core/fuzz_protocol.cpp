@@ -83,13 +83,6 @@ void MutationSource::MutateDataBytes(wire::Bytes& data) {
   }
 }
 
-FuzzVerdict PlayAll(const FuzzHooks& hooks, Target& target, const Messages& messages,
-                    const wire::Bytes& boot_out) {
-  const std::unique_ptr<FuzzPlay> play = hooks.start(boot_out);
-  for (const wire::Bytes& m : messages) play->Play(target, m);
-  return play->Finish(target);
-}
-
 std::string_view FindingKindName(FuzzVerdict::Kind kind) {
   using K = FuzzVerdict::Kind;
   switch (kind) {
@@ -107,6 +100,8 @@ std::string_view FindingKindName(FuzzVerdict::Kind kind) {
       return "division-by-zero";
     case K::kReset:
       return "reset";
+    case K::kPinLaw:
+      return "pin-law";
   }
   return "invariant";
 }

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "conformance/core/pin_judge.h"
 #include "conformance/targets/target.h"
 #include "wire/bytes.h"
 #include "wire/protocol.h"
@@ -42,7 +43,9 @@ struct FuzzVerdict {
   //    instruction, the PC past the program, the core halted or stuck),
   //    kStackOverflow (the stack grew into .data/.bss), kStackSmash (a return
   //    address overwritten), kDivisionByZero, kReset (a jump to the reset
-  //    vector after start).
+  //    vector after start);
+  //  - kPinLaw: with a board, a MUST rule of the protocol's pin family broken
+  //    at the firmware's pins (position = pulses, the driver's timing).
   enum class Kind {
     kInvariant,
     kHang,
@@ -50,7 +53,8 @@ struct FuzzVerdict {
     kStackOverflow,
     kStackSmash,
     kDivisionByZero,
-    kReset
+    kReset,
+    kPinLaw
   };
   Kind kind = Kind::kInvariant;
   // Where the firmware was (a stopped or hung firmware under a target that
@@ -59,7 +63,7 @@ struct FuzzVerdict {
 };
 
 // "invariant", "hang", "crash", "stack-overflow", "stack-smash",
-// "division-by-zero", "reset": the finding kinds as reports name them.
+// "division-by-zero", "reset", "pin-law": the finding kinds as reports name them.
 std::string_view FindingKindName(FuzzVerdict::Kind kind);
 // The finding kind of a firmware fault.
 FuzzVerdict::Kind FindingKindOf(FirmwareFaultKind kind);
@@ -154,14 +158,13 @@ struct FuzzHooks {
   // judged (FuzzPlay); `boot_out` is what the device wrote while it booted.
   // nullptr: sessions of this protocol are mutated and replayed, not run by
   // the fuzzer.
-  std::unique_ptr<FuzzPlay> (*start)(const wire::Bytes& boot_out) = nullptr;
+  // With `pins` (a board's watched pins, may be nullptr), the run also judges
+  // the protocol's pin rules over the target's pin trace (a kPinLaw finding).
+  std::unique_ptr<FuzzPlay> (*start)(const wire::Bytes& boot_out,
+                                     const PinJudgeOptions* pins) = nullptr;
   // A matcher for one replay.
   std::unique_ptr<ReplayMatcher> (*matcher)() = nullptr;
 };
-
-// Plays all of `messages` through `hooks.start` (which must be set) and judges them.
-FuzzVerdict PlayAll(const FuzzHooks& hooks, Target& target, const Messages& messages,
-                    const wire::Bytes& boot_out);
 
 }  // namespace moco::conformance
 

@@ -132,6 +132,9 @@ std::optional<std::string> FuzzExecutor::Open() {
   // Every fault a firmware can show is a finding here, whatever it costs per
   // instruction (a target without firmware watches nothing).
   target_->WatchFirmwareFaults();
+  if (options_.pins) {
+    if (auto err = target_->WatchPins(options_.pins->board)) return err;
+  }
   if (auto err = target_->Open()) return err;
   if (map != 0 && !target_->SetCoverageMap(shared_, map)) {
     return target_->Name() +
@@ -176,7 +179,7 @@ std::string FuzzExecutor::target_name() const { return target_->Name(); }
 
 FuzzVerdict FuzzExecutor::RunHere(const Messages& messages, const wire::Bytes& boot_out) {
   const TimeNs start = target_->Now();
-  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out);
+  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out, Pins());
   for (const wire::Bytes& m : messages) play->Play(*target_, m);
   return Conclude(*play, start);
 }
@@ -345,7 +348,7 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
   // The other snapshots' sockets are the executor's, not this process's: an
   // end held here would keep that snapshot from seeing the executor go.
   for (const auto& [key, other] : snapshots_) close(other.socket);
-  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out_);
+  const std::unique_ptr<FuzzPlay> play = hooks_->start(boot_out_, Pins());
   for (const wire::Bytes& m : prefix) play->Play(*target_, m);
   const char ready = 'r';
   if (!SendAll(socket, &ready, 1)) _exit(0);

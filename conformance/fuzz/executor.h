@@ -41,6 +41,9 @@ class FuzzExecutor {
     // messages (a prefix) are kept for Run(messages, prefix), the least
     // recently used given up first; 0: none.
     size_t snapshots = 0;
+    // A board's pins to watch and the pin judge's options: each run also
+    // judges the protocol's pin rules (FuzzHooks::start). nullopt: none.
+    std::optional<PinJudgeOptions> pins;
   };
 
   // `target` must run on a virtual clock and restart (in-process, simavr).
@@ -79,6 +82,8 @@ class FuzzExecutor {
   std::string target_name() const;
 
  private:
+  const PinJudgeOptions* Pins() const { return options_.pins ? &*options_.pins : nullptr; }
+
   // A process holding the device after one prefix (executor.cpp).
   struct Snapshot {
     pid_t pid = -1;

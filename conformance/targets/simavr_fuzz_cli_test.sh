@@ -8,6 +8,12 @@
 #   same place; the good firmware passes the same file.
 # sigterm_ends_campaign: SIGTERM ends a long campaign with its summary printed
 #   and exit 2 (no finding).
+# pin_law_replays (a 7th argument: the firmware with FAULT_DIR_WITH_STEP): with
+#   --board the golden session itself is a pin-law finding (DFM-PIN-004), saved
+#   with a rerun line that carries the board, and `replay --board` finds it
+#   again while the good firmware passes; --driver without --board, --board on
+#   an emulated device and `replay --board` of a session with a device side are
+#   usage errors that name the fix.
 set -u
 test_name=$1
 m=$2
@@ -49,6 +55,29 @@ sigterm_ends_campaign)
   grep -q '^mococheck fuzz: simavr:.* execs in ' out.txt || fail "no summary"
   grep -q '^result: INTERRUPTED by signal 15 (Terminated) after [0-9]* execs, 0 finding' out.txt ||
     fail "no INTERRUPTED result: $(cat out.txt)"
+  ;;
+pin_law_replays)
+  dir_fault=$7
+  board="$src/fixtures/boards/own-dfmoco.json"
+  golden="$src/fixtures/sessions/dfmoco-uno-workflow.jsonl"
+  expect_rc 1 "$m" fuzz "$golden" --target "simavr:$dir_fault" --board "$board" --runs 2 \
+    --crashes found
+  grep -q '^FAIL \[pin-law\] pin law: DFM-PIN-004 ' out.txt || fail "no pin-law finding"
+  saved=$(sed -n 's/.*; saved: \(found\/mutant-[0-9-]*\.jsonl\)$/\1/p' out.txt | head -1)
+  [ -s "$saved" ] || fail "no saved finding ($saved)"
+  grep -qF "rerun: mococheck replay $saved --target simavr:$dir_fault --board $board" out.txt ||
+    fail "the rerun line does not carry the board"
+  expect_rc 1 "$m" replay "$saved" --target "simavr:$dir_fault" --board "$board"
+  grep -q '^FAIL \[pin-law\] pin law: DFM-PIN-004 ' out.txt || fail "the replay does not find it"
+  expect_rc 0 "$m" replay "$saved" --target "simavr:$good" --board "$board" --driver a4988
+  grep -q '^result: PASS' out.txt || fail "the good firmware's pins do not pass"
+  expect_rc 2 "$m" fuzz "$golden" --target "simavr:$good" --driver a4988 --runs 1
+  grep -q -- '--driver needs --board' err.txt || fail "--driver alone: $(cat err.txt)"
+  expect_rc 2 "$m" fuzz "$golden" --target in-process:dfmoco --board "$board" --runs 1
+  grep -q -- '--board watches the pins of firmware under simavr' err.txt ||
+    fail "--board on an emulated device: $(cat err.txt)"
+  expect_rc 2 "$m" replay "$golden" --target "simavr:$good" --board "$board"
+  grep -q -- 'use mococheck run --board' err.txt || fail "replay --board of a recording"
   ;;
 *)
   fail "unknown test $test_name"

@@ -19,6 +19,7 @@
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/executor.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/targets/own_dfmoco_pins_testing.h"
 #include "conformance/targets/simavr_target.h"
 
 namespace moco::conformance {
@@ -356,6 +357,48 @@ TEST(SimavrFuzz, ASnapshotCampaignFindsAndShrinksAFindingInBytes) {
   EXPECT_EQ(again.kind, f.kind);
   EXPECT_EQ(again.violation, f.violation);
   EXPECT_EQ(again.backtrace, f.backtrace);
+}
+
+// With a board, the pin laws judge every run (a pin-law finding naming the
+// rule): the golden session itself shows DIR written with the STEP edge
+// (DFM-PIN-004, the driver's timing), and a move of 1500 steps asked for its
+// position until it has come to rest (under a second) shows the step lost of
+// every thousand (DFM-PIN-001, position = pulses), from a snapshot too; the
+// firmware without a fault passes both.
+TEST(SimavrFuzz, WithABoardThePinLawsAreFindingsOfTheirOwnKind) {
+  FuzzExecutor::Options o = WithSnapshots(2);
+  o.pins = OwnDfmocoPins();
+  auto seed = LoadSeed(std::string(std::getenv("MOCO_SOURCE_DIR") != nullptr
+                                       ? std::getenv("MOCO_SOURCE_DIR")
+                                       : ".") +
+                       "/fixtures/sessions/dfmoco-uno-workflow.jsonl");
+  ASSERT_TRUE(std::holds_alternative<Seed>(seed)) << std::get<std::string>(seed);
+  const Messages golden = std::get<Seed>(seed).messages;
+  Messages long_move = Lines({"hi\r\n", "pr 1 20000\r\n", "mm 1 1500\r\n"});
+  for (int i = 0; i < 300; ++i) long_move.push_back(Lines({"mp 1\r\n"}).front());
+
+  FuzzExecutor dir(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_FAULT_DIR_WITH_STEP_ELF), o);
+  ASSERT_EQ(dir.Open(), std::nullopt);
+  const FuzzVerdict v = dir.Run(golden);
+  EXPECT_EQ(v.kind, FuzzVerdict::Kind::kPinLaw) << v.violation;
+  EXPECT_EQ(v.violation.rfind("pin law: DFM-PIN-004 ", 0), 0u) << v.violation;
+  EXPECT_EQ(FindingKindName(v.kind), "pin-law");
+
+  FuzzExecutor lost(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_FAULT_LOST_STEP_ELF), o);
+  ASSERT_EQ(lost.Open(), std::nullopt);
+  const FuzzVerdict whole = lost.Run(long_move);
+  EXPECT_EQ(whole.kind, FuzzVerdict::Kind::kPinLaw) << whole.violation;
+  EXPECT_EQ(whole.violation.rfind("pin law: DFM-PIN-001 ", 0), 0u) << whole.violation;
+  const FuzzVerdict from_snapshot = lost.Run(long_move, 3);
+  EXPECT_EQ(from_snapshot.violation, whole.violation);
+  EXPECT_TRUE(lost.Run(Lines({"hi\r\n", "mp 1\r\n"})).ok) << "under a thousand steps";
+
+  FuzzExecutor good(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), o);
+  ASSERT_EQ(good.Open(), std::nullopt);
+  for (const Messages* m : {&golden, static_cast<const Messages*>(&long_move)}) {
+    const FuzzVerdict fine = good.Run(*m);
+    EXPECT_TRUE(fine.ok) << fine.violation;
+  }
 }
 
 // Fuzzing needs a device in virtual time and coverage a target that sees code.

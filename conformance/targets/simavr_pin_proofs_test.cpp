@@ -17,6 +17,7 @@
 #include "conformance/core/report.h"
 #include "conformance/core/rule_proof_testing.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/targets/own_dfmoco_pins_testing.h"
 #include "conformance/targets/simavr_pins.h"
 #include "conformance/targets/simavr_target.h"
 
@@ -25,27 +26,6 @@ namespace {
 
 using proof::ExpectCaught;
 using proof::ExpectMustsFailed;
-
-// The pin judging the CLI sets up for --board own-dfmoco --driver a4988.
-PinJudgeOptions OwnDfmocoPins() {
-  const char* root = std::getenv("MOCO_SOURCE_DIR");
-  const std::string path =
-      std::string(root != nullptr ? root : ".") + "/fixtures/boards/own-dfmoco.json";
-  PinJudgeOptions pins;
-  auto board = LoadBoard(path);
-  if (const auto* err = std::get_if<std::string>(&board)) {
-    ADD_FAILURE() << *err << " (is MOCO_SOURCE_DIR the source tree?)";
-    return pins;
-  }
-  auto driver = LoadDriver("a4988");
-  if (const auto* err = std::get_if<std::string>(&driver)) {
-    ADD_FAILURE() << *err;
-    return pins;
-  }
-  pins.board = std::get<Board>(board);
-  pins.driver = std::get<DriverProfile>(driver);
-  return pins;
-}
 
 // Every DFMoco case of the firmware `elf` under simavr, its pins judged.
 RunReport RunWithPins(const char* elf) {

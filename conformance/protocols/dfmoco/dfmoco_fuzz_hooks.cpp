@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string_view>
 
+#include "conformance/core/pin_judge.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "conformance/protocols/dfmoco/dfmoco_timing.h"
 #include "wire/dfmoco.h"
@@ -173,39 +174,62 @@ size_t CountLines(const wire::Bytes& out) {
   return static_cast<size_t>(std::count(out.begin(), out.end(), uint8_t{'\n'}));
 }
 
+// What the device wrote in a run; while the pins are judged, also every chunk
+// either way with its time (the pin judge's traffic).
+struct Written {
+  wire::Bytes out;
+  std::vector<Chunk>* traffic = nullptr;
+
+  bool Receive(Target& target, TimeNs deadline) {
+    const size_t before = out.size();
+    const bool alive = target.Receive(deadline, out);
+    if (traffic != nullptr && out.size() > before) {
+      traffic->push_back(
+          Chunk{target.Now(), false, wire::Bytes(out.begin() + static_cast<ptrdiff_t>(before), out.end())});
+    }
+    return alive;
+  }
+  void Send(Target& target, wire::ByteView bytes) {
+    if (traffic != nullptr) {
+      traffic->push_back(Chunk{target.Now(), true, wire::Bytes(bytes.begin(), bytes.end())});
+    }
+    target.Send(bytes);
+  }
+};
+
 // Reads until the device has written `want` more lines and then
 // kept quiet for kFuzzReplyQuietNs (want > 0), or kept quiet for
 // kFuzzSettleQuietNs (want == 0); at most kFuzzSettleMaxNs. Whether the lines came.
-bool AwaitReplies(Target& target, wire::Bytes& out, size_t want) {
+bool AwaitReplies(Target& target, Written& w, size_t want) {
   const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
-  size_t seen = out.size();
+  size_t seen = w.out.size();
   size_t got = 0;
   const TimeNs quiet = want > 0 ? kFuzzReplyQuietNs : kFuzzSettleQuietNs;
   while (target.Now() < limit) {
     if (got < want) {
-      if (!target.Receive(limit, out)) break;
-    } else if (!target.Receive(std::min(limit, target.Now() + quiet), out) || out.size() == seen) {
+      if (!w.Receive(target, limit)) break;
+    } else if (!w.Receive(target, std::min(limit, target.Now() + quiet)) || w.out.size() == seen) {
       break;  // quiet (or the firmware stopped)
     }
     got += static_cast<size_t>(
-        std::count(out.begin() + static_cast<ptrdiff_t>(seen), out.end(), uint8_t{'\n'}));
-    seen = out.size();
+        std::count(w.out.begin() + static_cast<ptrdiff_t>(seen), w.out.end(), uint8_t{'\n'}));
+    seen = w.out.size();
   }
   return got >= want;
 }
 
 // Sends `hi` and reads until a `hi` reply has come after it (within
 // kFuzzHiAnswerNs); whether it did.
-bool Greet(Target& target, wire::Bytes& out) {
+bool Greet(Target& target, Written& w) {
   const std::string_view hi = "hi\r\n";
-  const size_t before = out.size();
-  target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(hi.data()), hi.size()));
+  const size_t before = w.out.size();
+  w.Send(target, wire::ByteView(reinterpret_cast<const uint8_t*>(hi.data()), hi.size()));
   const TimeNs deadline = target.Now() + kFuzzHiAnswerNs;
   while (target.Now() < deadline) {
-    if (!target.Receive(deadline, out)) break;
-    if (out.size() > before && out.back() == '\n') {
-      const std::string_view s(reinterpret_cast<const char*>(out.data()) + before,
-                               out.size() - before);
+    if (!w.Receive(target, deadline)) break;
+    if (w.out.size() > before && w.out.back() == '\n') {
+      const std::string_view s(reinterpret_cast<const char*>(w.out.data()) + before,
+                               w.out.size() - before);
       if (s.find("hi ") != std::string_view::npos) return true;
     }
   }
@@ -232,16 +256,19 @@ int32_t GreetingMotors(const wire::Bytes& boot_out) {
 // `hi` (twice when unanswered), and what is still on its way read.
 class DfmocoPlay final : public FuzzPlay {
  public:
-  explicit DfmocoPlay(const wire::Bytes& boot_out)
-      : out_(boot_out), motors_(GreetingMotors(boot_out)) {}
+  DfmocoPlay(const wire::Bytes& boot_out, const PinJudgeOptions* pins)
+      : motors_(GreetingMotors(boot_out)), pins_(pins) {
+    w_.out = boot_out;
+    if (pins_ != nullptr) w_.traffic = &traffic_;
+  }
 
   void Play(Target& target, const wire::Bytes& m) override {
     ++messages_;
-    target.Send(m);
+    w_.Send(target, m);
     std::string first;
     size_t want = host_.MustAnswer(m, motors_, &first);
     if (m.size() > kFuzzJudgedWriteBytes) want = 0;
-    if (!AwaitReplies(target, out_, want) && lost_.empty() && !target.FirmwareStopped()) {
+    if (!AwaitReplies(target, w_, want) && lost_.empty() && !target.FirmwareStopped()) {
       lost_ = "every request answered: message " + std::to_string(messages_) + " (\"" + first +
               "\"" + (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
               ") got " + (want > 1 ? "fewer reply lines than commands" : "no reply") + " within " +
@@ -252,8 +279,14 @@ class DfmocoPlay final : public FuzzPlay {
   FuzzVerdict Finish(Target& target) override;
 
  private:
-  wire::Bytes out_;
+  // With a board: the pin rules (rules/pin_rules.cpp) over the whole run,
+  // the first MUST rule broken as a finding; else nullopt.
+  std::optional<FuzzVerdict> JudgePinLaws(Target& target) const;
+
+  Written w_;
   int32_t motors_;
+  const PinJudgeOptions* pins_;  // nullptr: the pins are not judged
+  std::vector<Chunk> traffic_;   // with pins_: both sides, timed
   HostLines host_;
   std::string lost_;  // the first request left without a reply
   size_t messages_ = 0;
@@ -264,28 +297,52 @@ FuzzVerdict DfmocoPlay::Finish(Target& target) {
   // line end on the wire, and whatever answers that line comes before the
   // greeting's answer); greet again when no answer came.
   const std::string_view line_end = "\r\n";
-  const size_t before_hi = out_.size();
-  target.Send(wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
-  const bool answered = Greet(target, out_) || Greet(target, out_);
+  const size_t before_hi = w_.out.size();
+  w_.Send(target, wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
+  const bool answered = Greet(target, w_) || Greet(target, w_);
   // What is still on its way, until the line has been quiet for kFuzzTailNs:
   // a firmware's transmitter may hold a backlog of replies at the line rate.
   const TimeNs drain_limit = target.Now() + kFuzzDrainMaxNs;
   while (target.Now() < drain_limit) {
-    const size_t n = out_.size();
-    if (!target.Receive(std::min(drain_limit, target.Now() + kFuzzTailNs), out_)) break;
-    if (out_.size() == n) break;
+    const size_t n = w_.out.size();
+    if (!w_.Receive(target, std::min(drain_limit, target.Now() + kFuzzTailNs))) break;
+    if (w_.out.size() == n) break;
   }
   if (!answered && !target.FirmwareStopped()) {
     FuzzVerdict v = Violation(
         "hang: the device answered neither of two `hi` sent after the "
         "session (" +
             std::to_string(kFuzzHiAnswerNs / kMs) + " ms each), while its firmware runs",
-        messages_, CountLines(out_));
+        messages_, CountLines(w_.out));
     v.kind = FuzzVerdict::Kind::kHang;
     v.backtrace = target.FirmwareBacktrace();
     return v;
   }
-  return Judge(out_, before_hi, messages_, lost_);
+  FuzzVerdict v = Judge(w_.out, before_hi, messages_, lost_);
+  if (!v.ok) return v;
+  if (auto pin = JudgePinLaws(target)) return *pin;
+  return v;
+}
+
+std::optional<FuzzVerdict> DfmocoPlay::JudgePinLaws(Target& target) const {
+  const PinTrace* trace = target.Pins();
+  if (pins_ == nullptr || trace == nullptr) return std::nullopt;
+  Verdicts verdicts;
+  JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, DfmocoProtocol::PinEvents(traffic_), *pins_,
+            target.Now(), verdicts);
+  for (const auto& [id, o] : verdicts.outcomes()) {
+    const Rule* r = FindRule(id);
+    if (o.status != Status::kFail || r == nullptr || r->level != Level::kMust) continue;
+    std::string what = "pin law: " + id + " " + std::string(r->title);
+    if (!o.evidence.empty()) {
+      const Evidence& e = o.evidence.front();
+      what += ": expected " + e.expected + ", observed " + e.observed;
+    }
+    FuzzVerdict v = Violation(what, messages_, CountLines(w_.out));
+    v.kind = FuzzVerdict::Kind::kPinLaw;
+    return v;
+  }
+  return std::nullopt;
 }
 
 // The stream laws over everything the device wrote: CR LF lines of printable
@@ -411,8 +468,9 @@ const FuzzHooks kHooks[] = {
         .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
         .boot = &Boot,
-        .start = [](const wire::Bytes& boot_out) -> std::unique_ptr<FuzzPlay> {
-          return std::make_unique<DfmocoPlay>(boot_out);
+        .start = [](const wire::Bytes& boot_out,
+                    const PinJudgeOptions* pins) -> std::unique_ptr<FuzzPlay> {
+          return std::make_unique<DfmocoPlay>(boot_out, pins);
         },
         .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },
     },

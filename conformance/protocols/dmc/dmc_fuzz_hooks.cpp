@@ -227,7 +227,8 @@ const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kDmc,
     .gap_ns = dmc_cases::kFuzzGapNs,
     .mutate = &Mutate,
-    .start = [](const wire::Bytes&) -> std::unique_ptr<FuzzPlay> {
+    // The pin rules are DFMoco's (no DMC or StackShot firmware runs under simavr).
+    .start = [](const wire::Bytes&, const PinJudgeOptions*) -> std::unique_ptr<FuzzPlay> {
       return std::make_unique<DmcPlay>();
     },
     .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },

@@ -147,7 +147,8 @@ const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kStackshot,
     .gap_ns = kSsFuzzGapNs,
     .mutate = &Mutate,
-    .start = [](const wire::Bytes&) -> std::unique_ptr<FuzzPlay> {
+    // The pin rules are DFMoco's (no DMC or StackShot firmware runs under simavr).
+    .start = [](const wire::Bytes&, const PinJudgeOptions*) -> std::unique_ptr<FuzzPlay> {
       return std::make_unique<StackshotPlay>();
     },
     .matcher = []() { return ExactMatcher("the packet differs"); },
