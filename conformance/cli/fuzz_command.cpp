@@ -33,6 +33,24 @@ struct FuzzArgs {
   size_t max_failures = 5;
 };
 
+// --board and --driver into the executor's options; an error message or nullopt.
+std::optional<std::string> LoadFuzzPins(const FuzzArgs& a, bool firmware,
+                                        FuzzExecutor::Options& options) {
+  if (a.board_path.empty() && !a.driver.empty()) {
+    return "--driver needs --board: give the board profile naming the watched pins, e.g. "
+           "--board fixtures/boards/own-dfmoco.json";
+  }
+  if (a.board_path.empty()) return std::nullopt;
+  if (!firmware) {
+    return "--board watches the pins of firmware under simavr; give --target "
+           "simavr:FIRMWARE.elf";
+  }
+  auto pins = LoadPinJudge(a.board_path, a.driver);
+  if (const auto* err = std::get_if<std::string>(&pins)) return *err;
+  options.pins = std::get<PinJudgeOptions>(pins);
+  return std::nullopt;
+}
+
 int Fuzz(const FuzzArgs& a) {
   std::vector<Seed> seeds;
   for (const std::string& p : a.sessions) {
@@ -68,19 +86,7 @@ int Fuzz(const FuzzArgs& a) {
   run_options.fork = firmware;
   run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
   run_options.snapshots = firmware ? kSnapshots : 0;
-  if (a.board_path.empty() && !a.driver.empty()) {
-    return Fail("--driver needs --board: give the board profile naming the watched pins, e.g. "
-                "--board fixtures/boards/own-dfmoco.json");
-  }
-  if (!a.board_path.empty()) {
-    if (!firmware) {
-      return Fail("--board watches the pins of firmware under simavr; give --target "
-                  "simavr:FIRMWARE.elf");
-    }
-    auto pins = LoadPinJudge(a.board_path, a.driver);
-    if (const auto* err = std::get_if<std::string>(&pins)) return Fail(*err);
-    run_options.pins = std::get<PinJudgeOptions>(pins);
-  }
+  if (auto err = LoadFuzzPins(a, firmware, run_options)) return Fail(*err);
   FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
   // From here a signal ends the campaign; its summary and findings are still

@@ -83,8 +83,9 @@ int Replay(const ReplayArgs& a) {
   FuzzExecutor::Options rerun;
   if (!a.board_path.empty()) {
     if (!host_only) {
-      return Fail("--board judges the pins of a rerun fuzz finding (a session with no device "
-                  "side); to judge a device's pins, use mococheck run --board");
+      return Fail(
+          "--board judges the pins of a rerun fuzz finding (a session with no device "
+          "side); to judge a device's pins, use mococheck run --board");
     }
     auto pins = LoadPinJudge(a.board_path, a.driver);
     if (const auto* err = std::get_if<std::string>(&pins)) return Fail(*err);

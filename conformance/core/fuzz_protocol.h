@@ -30,9 +30,9 @@ using Messages = std::vector<wire::Bytes>;
 // What one run of a mutated session found.
 struct FuzzVerdict {
   bool ok = true;
-  std::string violation;  // the invariant broken and what was seen; empty when ok
-  size_t messages = 0;    // host messages sent
-  size_t replies = 0;     // device messages received
+  std::string violation;    // the invariant broken and what was seen; empty when ok
+  size_t messages = 0;      // host messages sent
+  size_t replies = 0;       // device messages received
   TimeNs simulated_ns = 0;  // the device's time the run took (from its snapshot, if any)
   // What kind of finding a failed run is:
   //  - kInvariant: the protocol's stream laws (framing, every request

@@ -17,7 +17,7 @@ constexpr TimeNs kMs = sim::kNsPerMs;
 // A motor with no rising STEP edge for this long after (or before) a report is at rest; its
 // position was taken at most this long before the report was complete (a full
 // 192-byte output queue at 57600 baud takes 33 ms).
-constexpr TimeNs kRestWindowNs = 50 * kMs;
+constexpr TimeNs kRestWindowNs = kPinRestWindowNs;
 // The window the step rate is counted over for PIN-006 (the sketch's chunk).
 constexpr TimeNs kRateWindowNs = 50 * kMs;
 constexpr double kAccelTolerance = 1.5;  // the planner's acceleration plus 50 %

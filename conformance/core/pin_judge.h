@@ -29,6 +29,11 @@ struct PinPositionEvent {
   int64_t position = 0;
 };
 
+// A motor with no rising STEP edge for this long after a report was at rest
+// when it reported (PIN-001); a trace that ends sooner after a report cannot
+// tell (a run cut short judges only up to its end less this).
+inline constexpr sim::TimeNs kPinRestWindowNs = 50 * sim::kNsPerMs;
+
 struct PinJudgeOptions {
   DriverProfile driver;
   Board board;

@@ -1,11 +1,15 @@
 // `mococheck fuzz`: mutates the host side of recorded sessions (docs/sessions.md)
 // and runs every mutant against a device in virtual time: an in-process one,
 // or firmware under simavr (see mutator.h and executor.h). A mutant that
-// breaks an invariant or stops the firmware is shrunk (messages dropped while
-// it still fails) and saved as a session file `mococheck replay` reruns. Where
-// the executor observes the firmware's code, a mutant that reaches an edge
-// (or an edge's hit count class) no run reached before joins the corpus the
-// next mutants are made from.
+// breaks an invariant or stops the firmware is shrunk (messages dropped, then
+// bytes within each message, while it still fails with a finding of the same
+// kind) and saved as a session file `mococheck replay` reruns. Where the
+// executor observes the firmware's code, a mutant that reaches an edge (or an
+// edge's hit count class) no run reached before joins the corpus the next
+// mutants are made from. Where it keeps snapshots, mutants come in batches
+// from one corpus entry and one point in it: the messages before the point are
+// kept and played from a snapshot, a window of one or two after it (or, in one
+// mutant of sixteen, all the rest) is mutated.
 #ifndef MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
 #define MOCO_CONFORMANCE_FUZZ_CAMPAIGN_H_
 
@@ -60,9 +64,9 @@ struct FuzzReport {
   bool coverage = false;  // the executor observed the code
   size_t edges = 0;       // distinct edges reached over all runs
   size_t corpus = 0;      // sessions mutants are made from: the seeds and every new-coverage mutant
-  uint64_t snapshot_runs = 0;  // mutants run from a snapshot (FuzzExecutor::snapshots())
-  uint64_t shrink_runs = 0;    // runs made to shrink findings (not in execs)
-  TimeNs simulated_ns = 0;     // the device's time the execs took, summed
+  uint64_t snapshot_runs = 0;        // mutants run from a snapshot (FuzzExecutor::snapshots())
+  uint64_t shrink_runs = 0;          // runs made to shrink findings (not in execs)
+  TimeNs simulated_ns = 0;           // the device's time the execs took, summed
   std::optional<CodeCoverage> code;  // of a firmware image: FuzzExecutor::code_coverage()
   std::vector<FuzzFailure> failures;
   int interrupted_by = 0;  // the signal that stopped the campaign (StopRequested), or 0

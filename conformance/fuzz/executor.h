@@ -8,8 +8,13 @@
 // before every run) or firmware run by a target (simavr). Firmware boots
 // once; with Options::fork each run then plays in a child process forked
 // from the booted state, so no run re-boots and nothing one run does (its
-// memory, its stack, a crash) reaches the next. Where the target can observe
-// the firmware's code, every run counts its edges into one coverage map
+// memory, its stack, a crash) reaches the next. With Options::snapshots a
+// run may also start from a snapshot: a process forked from the booted state
+// that has played the session's first messages (the protocol's FuzzPlay, one
+// message at a time) and forks each run from there, so a mutant that keeps
+// those messages simulates only the rest. A run is deterministic, so its
+// verdict is the one a run from boot gives. Where the target can observe the
+// firmware's code, every run counts its edges into one coverage map
 // (Target::SetCoverageMap) that coverage() shows afterwards.
 #ifndef MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_
 #define MOCO_CONFORMANCE_FUZZ_EXECUTOR_H_

@@ -16,7 +16,6 @@
 #include "conformance/targets/avr_stack.h"
 #include "conformance/targets/target.h"
 
-
 namespace moco::conformance {
 
 class AvrCodeMap {
@@ -33,9 +32,8 @@ class AvrCodeMap {
     const uint32_t word = pc_before >> 1;
     if (word >= lengths_.size()) return;
     const uint32_t next = pc_before + lengths_[word];
-    const uint32_t went = interrupted
-                              ? avr_stack::Pushed(avr, avr_stack::StackPointer(avr) + 1) * 2
-                              : static_cast<uint32_t>(avr->pc);
+    const uint32_t went = interrupted ? avr_stack::Pushed(avr, avr_stack::StackPointer(avr) + 1) * 2
+                                      : static_cast<uint32_t>(avr->pc);
     map[word] |= went == next ? uint8_t{1} : uint8_t{2};
   }
 

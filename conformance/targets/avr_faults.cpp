@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cstdio>
 
-
 namespace moco::conformance {
 namespace {
 

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
+#include "conformance/core/own_dfmoco_pins_testing.h"
 #include "conformance/fuzz/campaign.h"
 #include "conformance/fuzz/executor.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
-#include "conformance/targets/own_dfmoco_pins_testing.h"
 #include "conformance/targets/simavr_target.h"
 
 namespace moco::conformance {
@@ -270,7 +270,8 @@ FuzzExecutor::Options WithSnapshots(size_t kept) {
 // This process's children (the executor's snapshots and their runs).
 std::vector<pid_t> Children() {
   std::vector<pid_t> out;
-  std::FILE* f = std::fopen(("/proc/self/task/" + std::to_string(getpid()) + "/children").c_str(), "r");
+  std::FILE* f =
+      std::fopen(("/proc/self/task/" + std::to_string(getpid()) + "/children").c_str(), "r");
   if (f == nullptr) return out;
   int pid = 0;
   while (std::fscanf(f, "%d", &pid) == 1) out.push_back(pid);
@@ -289,8 +290,7 @@ TEST(SimavrFuzz, ARunFromASnapshotIsTheWholeRun) {
                                   "mm 1 2 3 4 5 6 7 8 9 10 11 12 "
                                   "13 14 15 16 17 18 19 20 21 22 23 24\r\n"});
   {
-    FuzzExecutor ex(Protocol::kDfmoco, Firmware(BugElf("args_overflow").c_str()),
-                    WithSnapshots(2));
+    FuzzExecutor ex(Protocol::kDfmoco, Firmware(BugElf("args_overflow").c_str()), WithSnapshots(2));
     ASSERT_EQ(ex.Open(), std::nullopt);
     ASSERT_TRUE(ex.snapshots());
     const FuzzVerdict whole = ex.Run(session);
@@ -399,6 +399,21 @@ TEST(SimavrFuzz, WithABoardThePinLawsAreFindingsOfTheirOwnKind) {
     const FuzzVerdict fine = good.Run(*m);
     EXPECT_TRUE(fine.ok) << fine.violation;
   }
+}
+
+// Writes with no answer to wait for queue on the line at 57600 baud: a
+// request behind them gets its 100 ms from when it has arrived, not from
+// when it was written (four lines of 190 bytes are 130 ms of line time).
+TEST(SimavrFuzz, ARequestIsTimedFromItsArrival) {
+  FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), Forked());
+  ASSERT_EQ(ex.Open(), std::nullopt);
+  std::string flood = "mm 2 -1500";
+  while (flood.size() < 190) flood += " 7";
+  Messages session;
+  for (int i = 0; i < 4; ++i) session.emplace_back(flood.begin(), flood.end());
+  for (const wire::Bytes& m : Lines({"\r\n", "mm 1 3000\r\n"})) session.push_back(m);
+  const FuzzVerdict v = ex.Run(session);
+  EXPECT_TRUE(v.ok) << v.violation;
 }
 
 // Fuzzing needs a device in virtual time and coverage a target that sees code.

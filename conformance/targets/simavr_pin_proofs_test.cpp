@@ -13,11 +13,11 @@
 #include <string>
 #include <variant>
 
+#include "conformance/core/own_dfmoco_pins_testing.h"
 #include "conformance/core/pin_judge.h"
 #include "conformance/core/report.h"
 #include "conformance/core/rule_proof_testing.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
-#include "conformance/targets/own_dfmoco_pins_testing.h"
 #include "conformance/targets/simavr_pins.h"
 #include "conformance/targets/simavr_target.h"
 

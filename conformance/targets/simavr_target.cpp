@@ -364,6 +364,12 @@ TimeNs SimavrTarget::Now() const {
                              (c % frequency_hz_) * kNsPerSecond / frequency_hz_);
 }
 
+TimeNs SimavrTarget::SentBy() const {
+  if (avr_ == nullptr) return Now();
+  const uint64_t line_free = std::max<uint64_t>(avr_->cycle, rx_line_free_cycle_);
+  return CyclesToNs(line_free + to_device_.size() * FrameCycles());
+}
+
 uint64_t SimavrTarget::NsToCycles(TimeNs ns) const {
   if (ns <= 0) return 0;
   const auto u = static_cast<uint64_t>(ns);

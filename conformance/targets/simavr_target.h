@@ -87,6 +87,9 @@ class SimavrTarget final : public Target {
   void Restart() override;
   TimeNs Now() const override;
   bool Send(wire::ByteView bytes) override;
+  // The host's line paced at the firmware's baud rate: the frame on the line,
+  // then one frame per byte still queued.
+  TimeNs SentBy() const override;
   // Runs the core until a device byte has been shifted out or Now() >= deadline_ns.
   bool Receive(TimeNs deadline_ns, wire::Bytes& out) override;
 

@@ -112,6 +112,11 @@ class Target {
   virtual TimeNs Now() const = 0;
   // Writes `bytes` to the device. False when the link is gone.
   virtual bool Send(wire::ByteView bytes) = 0;
+  // When every byte sent so far will have reached the device: later than
+  // Now() on a target that paces the host's bytes at the line rate (simavr),
+  // so that a host's timeout for an answer can start when its request has
+  // arrived (the fuzzer's laws). Now() where bytes arrive at once.
+  virtual TimeNs SentBy() const { return Now(); }
   // Waits until device bytes arrive or Now() reaches `deadline_ns` and appends
   // what arrived to `out`. Returns false when the link is gone.
   virtual bool Receive(TimeNs deadline_ns, wire::Bytes& out) = 0;

@@ -185,7 +185,8 @@ struct Written {
     const bool alive = target.Receive(deadline, out);
     if (traffic != nullptr && out.size() > before) {
       traffic->push_back(
-          Chunk{target.Now(), false, wire::Bytes(out.begin() + static_cast<ptrdiff_t>(before), out.end())});
+          Chunk{target.Now(), false,
+                wire::Bytes(out.begin() + static_cast<ptrdiff_t>(before), out.end())});
     }
     return alive;
   }
@@ -199,9 +200,11 @@ struct Written {
 
 // Reads until the device has written `want` more lines and then
 // kept quiet for kFuzzReplyQuietNs (want > 0), or kept quiet for
-// kFuzzSettleQuietNs (want == 0); at most kFuzzSettleMaxNs. Whether the lines came.
+// kFuzzSettleQuietNs (want == 0); at most kFuzzSettleMaxNs from when the bytes
+// sent so far have reached the device (Target::SentBy: writes sent without an
+// answer to wait for queue on the line). Whether the lines came.
 bool AwaitReplies(Target& target, Written& w, size_t want) {
-  const TimeNs limit = target.Now() + kFuzzSettleMaxNs;
+  const TimeNs limit = target.SentBy() + kFuzzSettleMaxNs;
   size_t seen = w.out.size();
   size_t got = 0;
   const TimeNs quiet = want > 0 ? kFuzzReplyQuietNs : kFuzzSettleQuietNs;
@@ -270,9 +273,10 @@ class DfmocoPlay final : public FuzzPlay {
     if (m.size() > kFuzzJudgedWriteBytes) want = 0;
     if (!AwaitReplies(target, w_, want) && lost_.empty() && !target.FirmwareStopped()) {
       lost_ = "every request answered: message " + std::to_string(messages_) + " (\"" + first +
-              "\"" + (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
+              "\"" +
+              (want > 1 ? " and " + std::to_string(want - 1) + " more in the same write" : "") +
               ") got " + (want > 1 ? "fewer reply lines than commands" : "no reply") + " within " +
-              std::to_string(kFuzzSettleMaxNs / kMs) + " ms";
+              std::to_string(kFuzzSettleMaxNs / kMs) + " ms of its arrival";
     }
   }
 
@@ -298,7 +302,8 @@ FuzzVerdict DfmocoPlay::Finish(Target& target) {
   // greeting's answer); greet again when no answer came.
   const std::string_view line_end = "\r\n";
   const size_t before_hi = w_.out.size();
-  w_.Send(target, wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
+  w_.Send(target,
+          wire::ByteView(reinterpret_cast<const uint8_t*>(line_end.data()), line_end.size()));
   const bool answered = Greet(target, w_) || Greet(target, w_);
   // What is still on its way, until the line has been quiet for kFuzzTailNs:
   // a firmware's transmitter may hold a backlog of replies at the line rate.
@@ -327,9 +332,12 @@ FuzzVerdict DfmocoPlay::Finish(Target& target) {
 std::optional<FuzzVerdict> DfmocoPlay::JudgePinLaws(Target& target) const {
   const PinTrace* trace = target.Pins();
   if (pins_ == nullptr || trace == nullptr) return std::nullopt;
+  // The run stops with its session, perhaps while a motor still moves: what
+  // the last rest window holds cannot show whether a report was made at rest,
+  // so the pins are judged up to the end less that window.
   Verdicts verdicts;
   JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, DfmocoProtocol::PinEvents(traffic_), *pins_,
-            target.Now(), verdicts);
+            target.Now() - kPinRestWindowNs, verdicts);
   for (const auto& [id, o] : verdicts.outcomes()) {
     const Rule* r = FindRule(id);
     if (o.status != Status::kFail || r == nullptr || r->level != Level::kMust) continue;
@@ -468,10 +476,8 @@ const FuzzHooks kHooks[] = {
         .gap_ns = kFuzzGapNs,
         .mutate = &Mutate,
         .boot = &Boot,
-        .start = [](const wire::Bytes& boot_out,
-                    const PinJudgeOptions* pins) -> std::unique_ptr<FuzzPlay> {
-          return std::make_unique<DfmocoPlay>(boot_out, pins);
-        },
+        .start = [](const wire::Bytes& boot_out, const PinJudgeOptions* pins)
+            -> std::unique_ptr<FuzzPlay> { return std::make_unique<DfmocoPlay>(boot_out, pins); },
         .matcher = []() -> std::unique_ptr<ReplayMatcher> { return std::make_unique<Matcher>(); },
     },
     {

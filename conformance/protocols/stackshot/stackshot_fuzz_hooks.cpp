@@ -137,8 +137,7 @@ FuzzVerdict StackshotPlay::Finish(Target& target) {
     ++next;
   }
   if (!mode_switch && !ping_answered) {
-    return Violation("liveness: CC_PING after the session got no reply", messages_,
-                     replies.size());
+    return Violation("liveness: CC_PING after the session got no reply", messages_, replies.size());
   }
   return Passed(messages_, replies.size());
 }

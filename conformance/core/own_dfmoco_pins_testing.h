@@ -1,8 +1,8 @@
 // For the simavr tests: the pin judging the CLI sets up for `--board
 // fixtures/boards/own-dfmoco.json --driver a4988`, the board file read from
 // the source tree (MOCO_SOURCE_DIR, else the working directory).
-#ifndef MOCO_CONFORMANCE_TARGETS_OWN_DFMOCO_PINS_TESTING_H_
-#define MOCO_CONFORMANCE_TARGETS_OWN_DFMOCO_PINS_TESTING_H_
+#ifndef MOCO_CONFORMANCE_CORE_OWN_DFMOCO_PINS_TESTING_H_
+#define MOCO_CONFORMANCE_CORE_OWN_DFMOCO_PINS_TESTING_H_
 
 #include <gtest/gtest.h>
 
@@ -37,4 +37,4 @@ inline PinJudgeOptions OwnDfmocoPins() {
 
 }  // namespace moco::conformance
 
-#endif  // MOCO_CONFORMANCE_TARGETS_OWN_DFMOCO_PINS_TESTING_H_
+#endif  // MOCO_CONFORMANCE_CORE_OWN_DFMOCO_PINS_TESTING_H_
