@@ -81,15 +81,16 @@ bool ReceiveAll(int socket, void* bytes, size_t n, bool give_up_on_stop) {
   return true;
 }
 
-// A prefix's key: each message's length (4 bytes) then its bytes.
-std::string PrefixKey(std::span<const wire::Bytes> prefix) {
-  std::string key;
-  for (const wire::Bytes& m : prefix) {
+// Messages as bytes: each message's length (4 bytes), then its bytes. A
+// prefix's key, and the rest of a session as a snapshot is sent it.
+std::string Encode(std::span<const wire::Bytes> messages) {
+  std::string out;
+  for (const wire::Bytes& m : messages) {
     const auto n = static_cast<uint32_t>(m.size());
-    key.append(reinterpret_cast<const char*>(&n), sizeof n);
-    key.append(m.begin(), m.end());
+    out.append(reinterpret_cast<const char*>(&n), sizeof n);
+    out.append(m.begin(), m.end());
   }
-  return key;
+  return out;
 }
 
 }  // namespace
@@ -276,30 +277,29 @@ FuzzVerdict FuzzExecutor::Run(const Messages& messages, size_t prefix) {
     return Run(messages);
   }
   const std::span<const wire::Bytes> all(messages);
-  Snapshot* snapshot = SnapshotAfter(all.first(prefix));
+  const std::string key = Encode(all.first(prefix));
+  Snapshot* snapshot = SnapshotAfter(key, all.first(prefix));
   if (snapshot == nullptr) return Run(messages);
   if (options_.coverage_bytes != 0) std::fill_n(shared_, options_.coverage_bytes, uint8_t{0});
   auto* back = reinterpret_cast<SharedVerdict*>(shared_ + options_.coverage_bytes);
   std::memset(back, 0, sizeof *back);
-  // The rest, as the snapshot reads it: a count, then each message's length and bytes.
-  std::string rest = PrefixKey(all.subspan(prefix));
-  const auto count = static_cast<uint32_t>(messages.size() - prefix);
-  rest.insert(0, reinterpret_cast<const char*>(&count), sizeof count);
+  // The rest, as the snapshot reads it: its length in bytes, then Encode()d.
+  std::string rest = Encode(all.subspan(prefix));
   const auto bytes = static_cast<uint32_t>(rest.size());
   rest.insert(0, reinterpret_cast<const char*>(&bytes), sizeof bytes);
   int32_t status = 0;
   if (!SendAll(snapshot->socket, rest.data(), rest.size()) ||
       !ReceiveAll(snapshot->socket, &status, sizeof status, true)) {
     // The snapshot is gone (killed, or a stop request ended it): run it whole.
-    Drop(snapshots_.find(PrefixKey(all.first(prefix))));
+    Drop(snapshots_.find(key));
     if (StopRequested() != 0) return ReadBack(false, 0, messages.size());
     return Run(messages);
   }
   return ReadBack(back->done == 1, status, messages.size());
 }
 
-FuzzExecutor::Snapshot* FuzzExecutor::SnapshotAfter(std::span<const wire::Bytes> prefix) {
-  std::string key = PrefixKey(prefix);
+FuzzExecutor::Snapshot* FuzzExecutor::SnapshotAfter(const std::string& key,
+                                                    std::span<const wire::Bytes> prefix) {
   if (auto at = snapshots_.find(key); at != snapshots_.end()) {
     at->second.used = ++uses_;
     return &at->second;
@@ -332,7 +332,7 @@ FuzzExecutor::Snapshot* FuzzExecutor::SnapshotAfter(std::span<const wire::Bytes>
     }
     return nullptr;
   }
-  Snapshot& made = snapshots_[std::move(key)];
+  Snapshot& made = snapshots_[key];
   made = Snapshot{pid, pair[0], ++uses_};
   return &made;
 }
@@ -362,7 +362,6 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
     const pid_t run = fork();
     if (run == 0) {
       close(socket);
-      uint32_t count = 0;
       size_t at = 0;
       auto take = [&](void* to, size_t n) {
         if (at + n > rest.size()) _exit(3);
@@ -370,8 +369,7 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
         at += n;
       };
       const TimeNs start = target_->Now();
-      take(&count, sizeof count);
-      for (uint32_t i = 0; i < count; ++i) {
+      while (at < rest.size()) {
         uint32_t n = 0;
         take(&n, sizeof n);
         wire::Bytes m(n);

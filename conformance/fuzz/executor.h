@@ -103,9 +103,9 @@ class FuzzExecutor {
   FuzzVerdict RunForked(const Messages& messages);
   // The verdict a forked run wrote back, or why there is none.
   FuzzVerdict ReadBack(bool done, int status, size_t messages);
-  // The snapshot after `prefix` (made when missing), or nullptr when it
-  // could not be made.
-  Snapshot* SnapshotAfter(std::span<const wire::Bytes> prefix);
+  // The snapshot after `prefix`, whose Encode()d bytes are `key` (made when
+  // missing), or nullptr when it could not be made.
+  Snapshot* SnapshotAfter(const std::string& key, std::span<const wire::Bytes> prefix);
   [[noreturn]] void ServeSnapshot(int socket, std::span<const wire::Bytes> prefix);
   void Drop(std::map<std::string, Snapshot>::iterator at);
 

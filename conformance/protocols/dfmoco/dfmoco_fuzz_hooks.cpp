@@ -5,8 +5,10 @@
 // The StackShot 3X's DfMoco mode speaks the same lines: its sessions are
 // mutated and replayed the same way, byte-exact.
 #include <cstdlib>
+#include <optional>
 #include <string_view>
 
+#include "conformance/core/host_link.h"
 #include "conformance/core/pin_judge.h"
 #include "conformance/protocols/dfmoco/dfmoco_protocol.h"
 #include "conformance/protocols/dfmoco/dfmoco_timing.h"
@@ -174,28 +176,37 @@ size_t CountLines(const wire::Bytes& out) {
   return static_cast<size_t>(std::count(out.begin(), out.end(), uint8_t{'\n'}));
 }
 
-// What the device wrote in a run; while the pins are judged, also every chunk
-// either way with its time (the pin judge's traffic).
-struct Written {
-  wire::Bytes out;
-  std::vector<Chunk>* traffic = nullptr;
+// What the device wrote in a run (after what it wrote while it booted), read
+// through a HostLink (core/host_link.h), which also keeps every chunk either
+// way with its time: the pin judge's traffic. The link is made at the first
+// read or write, where the target is known.
+class Written {
+ public:
+  explicit Written(const wire::Bytes& boot_out) : out(boot_out) {}
+  Written(const Written&) = delete;
+  Written& operator=(const Written&) = delete;
 
+  wire::Bytes out;
+
+  // Whether the link is still up (the firmware runs, no stop was requested).
   bool Receive(Target& target, TimeNs deadline) {
-    const size_t before = out.size();
-    const bool alive = target.Receive(deadline, out);
-    if (traffic != nullptr && out.size() > before) {
-      traffic->push_back(
-          Chunk{target.Now(), false,
-                wire::Bytes(out.begin() + static_cast<ptrdiff_t>(before), out.end())});
-    }
-    return alive;
+    HostLink& link = Link(target);
+    link.Pump(deadline);
+    return !link.lost();
   }
-  void Send(Target& target, wire::ByteView bytes) {
-    if (traffic != nullptr) {
-      traffic->push_back(Chunk{target.Now(), true, wire::Bytes(bytes.begin(), bytes.end())});
+  void Send(Target& target, wire::ByteView bytes) { Link(target).WriteWithoutReading(bytes); }
+  std::vector<Chunk> traffic() const { return link_ ? link_->traffic() : std::vector<Chunk>(); }
+
+ private:
+  HostLink& Link(Target& target) {
+    if (!link_) {
+      link_.emplace(target,
+                    [this](wire::ByteView b) { out.insert(out.end(), b.begin(), b.end()); });
     }
-    target.Send(bytes);
+    return *link_;
   }
+
+  std::optional<HostLink> link_;
 };
 
 // Reads until the device has written `want` more lines and then
@@ -260,10 +271,7 @@ int32_t GreetingMotors(const wire::Bytes& boot_out) {
 class DfmocoPlay final : public FuzzPlay {
  public:
   DfmocoPlay(const wire::Bytes& boot_out, const PinJudgeOptions* pins)
-      : motors_(GreetingMotors(boot_out)), pins_(pins) {
-    w_.out = boot_out;
-    if (pins_ != nullptr) w_.traffic = &traffic_;
-  }
+      : w_(boot_out), motors_(GreetingMotors(boot_out)), pins_(pins) {}
 
   void Play(Target& target, const wire::Bytes& m) override {
     ++messages_;
@@ -290,7 +298,6 @@ class DfmocoPlay final : public FuzzPlay {
   Written w_;
   int32_t motors_;
   const PinJudgeOptions* pins_;  // nullptr: the pins are not judged
-  std::vector<Chunk> traffic_;   // with pins_: both sides, timed
   HostLines host_;
   std::string lost_;  // the first request left without a reply
   size_t messages_ = 0;
@@ -338,7 +345,7 @@ std::optional<FuzzVerdict> DfmocoPlay::JudgePinLaws(Target& target) const {
   // reporting period either side of a report made while it moved (DFM-PIN-002).
   // So every rule is judged up to the end less the rest window, and
   // DFM-PIN-002 up to the end less a reporting period and that window.
-  const std::vector<PinPositionEvent> events = DfmocoProtocol::PinEvents(traffic_);
+  const std::vector<PinPositionEvent> events = DfmocoProtocol::PinEvents(w_.traffic());
   const std::string moving_rule = std::string(DfmocoProtocol::kPinRulePrefix) + "PIN-002";
   Verdicts all;
   JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, events, *pins_, target.Now() - kPinRestWindowNs,
