@@ -31,11 +31,10 @@ TEST(DfmocoTraffic, LinesBecomeReportsResetsAndPulseRates) {
   EXPECT_EQ(e[2].position, 99);
 }
 
-TEST(DfmocoTraffic, ZeroAndNewPositionAnswersAreResetsAndAParseErrorForgetsWhatWasAsked) {
+TEST(DfmocoTraffic, ZeroAndNewPositionAnswersAreResets) {
   const std::vector<Chunk> traffic = {
-      Line(0, true, "zm 2\r\n"),     Line(5, false, "zm 2\r\n"),  // the protocol's own answer
-      Line(6, true, "np 3 40\r\n"),  Line(7, false, "parse error\r\n"),  // np refused
-      Line(8, false, "mp 3 40\r\n"),  // then a report, not a reset
+      Line(0, true, "zm 2\r\n"), Line(5, false, "zm 2\r\n"),     // the protocol's own answer
+      Line(6, true, "mp 3\r\n"), Line(8, false, "mp 3 40\r\n"),  // nothing asked: a report
       Line(9, false, "np 1 -5\r\n")};
   const auto e = DfmocoProtocol::PinEvents(traffic);
   ASSERT_EQ(e.size(), 3u);
@@ -46,6 +45,39 @@ TEST(DfmocoTraffic, ZeroAndNewPositionAnswersAreResetsAndAParseErrorForgetsWhatW
   EXPECT_EQ(e[1].motor, 3);
   EXPECT_EQ(e[2].kind, Kind::kReset);
   EXPECT_EQ(e[2].position, -5);
+}
+
+// Several resets for one motor in one write, a garbled line between them:
+// the real sketch answers `mp 1 1`, `parse error`, `mp 1 4000`, and both
+// answers are resets (a parse error answers the garbled line, not an np).
+TEST(DfmocoTraffic, ResetsAskedInOneWriteAreMatchedInOrderPastAParseError) {
+  const std::vector<Chunk> traffic = {
+      Line(0, true, "np 1 1\r\nnp 1 x\r\nnp 1 4000\r\nzm 2\r\nmp 1\r\n"),
+      Line(10, false, "mp 1 1\r\n"),
+      Line(11, false, "parse error\r\n"),
+      Line(12, false, "mp 1 4000\r\n"),
+      Line(13, false, "mp 1 4000\r\n"),  // the answer to `mp 1`: a report
+      Line(14, false, "mp 2 0\r\n")};    // the sketch answers zm later, with mp
+  const auto e = DfmocoProtocol::PinEvents(traffic);
+  ASSERT_EQ(e.size(), 4u);
+  EXPECT_EQ(e[0].kind, Kind::kReset);
+  EXPECT_EQ(e[0].position, 1);
+  EXPECT_EQ(e[1].kind, Kind::kReset);
+  EXPECT_EQ(e[1].position, 4000);
+  EXPECT_EQ(e[2].kind, Kind::kReport) << "each reset asked for is answered once";
+  EXPECT_EQ(e[3].kind, Kind::kReset);
+  EXPECT_EQ(e[3].motor, 2);
+}
+
+// An answer to a later reset gives up the earlier ones for that motor (the
+// device answers in order): a report equal to one of them is a report.
+TEST(DfmocoTraffic, AnAnswerGivesUpTheResetsAskedBeforeIt) {
+  const std::vector<Chunk> traffic = {Line(0, true, "np 1 5\r\nnp 1 9\r\n"),
+                                      Line(10, false, "mp 1 9\r\n"), Line(20, false, "mp 1 5\r\n")};
+  const auto e = DfmocoProtocol::PinEvents(traffic);
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0].kind, Kind::kReset);
+  EXPECT_EQ(e[1].kind, Kind::kReport);
 }
 
 // Lines are framed as the codec frames them, whatever the chunking and the
