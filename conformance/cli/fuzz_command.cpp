@@ -31,6 +31,7 @@ struct FuzzArgs {
   uint64_t seed = 1, runs = 0;
   double seconds = 10;
   size_t max_failures = 5;
+  uint32_t pause_percent = SessionMutator::kDefaultPausePercent;
 };
 
 // --board and --driver into the executor's options; an error message or nullopt.
@@ -102,6 +103,7 @@ int Fuzz(const FuzzArgs& a) {
   options.crash_dir = a.crashes;
   options.device = model;
   options.max_failures = a.max_failures;
+  options.pause_percent = a.pause_percent;
   const bool tty = isatty(STDERR_FILENO) != 0;
   const FuzzReport r = RunFuzz(executor, proto, seeds, options, [&](const FuzzReport& so_far) {
     char line[200];
@@ -220,6 +222,12 @@ Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub) {
       ->capture_default_str();
   AddNumber(fuzz, "--max-failures", a->max_failures, size_t{1}, size_t{1000},
             "Stop after this many distinct failures");
+  AddNumber(fuzz, "--pause-percent", a->pause_percent, uint32_t{0},
+            SessionMutator::kMaxPausePercent,
+            "Of every 100 mutations, how many put in a pause of the protocol's polling "
+            "period between two messages (DFMoco 250 ms, 1-4 in a row), so a move runs "
+            "its course; 0: none (a firmware whose idle time is slow to simulate runs "
+            "more mutants without)");
   AddPinOptions(fuzz, a->board_path, a->driver);
   return [a] { return Fuzz(*a); };
 }

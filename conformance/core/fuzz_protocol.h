@@ -24,7 +24,10 @@
 namespace moco::conformance {
 
 // One host message as it goes on the wire: a DMC frame, a DFMoco line with its
-// line end, a StackShot packet; or bytes that frame as nothing (noise).
+// line end, a StackShot packet; or bytes that frame as nothing (noise). An
+// empty message is a pause: the host sends nothing for its protocol's
+// FuzzHooks::pause_ns (the mutator's timing mutation; a saved session holds
+// it as a `pause` event, docs/sessions.md).
 using Messages = std::vector<wire::Bytes>;
 
 // What one run of a mutated session found.
@@ -129,7 +132,8 @@ std::unique_ptr<ReplayMatcher> ExactMatcher(std::string why);
 
 // One run of a session, message by message: a protocol's FuzzHooks::start
 // makes it on a booted device, Play sends each host message (and waits for
-// what the protocol waits for), Finish ends the session (liveness, the drain)
+// what the protocol waits for; an empty message: reads for the protocol's
+// FuzzHooks::pause_ns and sends nothing), Finish ends the session (liveness, the drain)
 // and judges everything the device wrote. Deterministic on a target in
 // virtual time, so the state after some messages is the same whether they
 // were played in this run or in a snapshot it was forked from (FuzzExecutor).
@@ -144,6 +148,8 @@ struct FuzzHooks {
   wire::Protocol protocol = wire::Protocol::kDmc;
   // Virtual time a run leaves between two host messages.
   TimeNs gap_ns = 0;
+  // How long a pause (an empty message) keeps the host quiet.
+  TimeNs pause_ns = 0;
   // Mutates one host message in place (its fields, then re-framed: length,
   // checksum or line end repaired, except where a mutation breaks it on
   // purpose), noting each mutation in `source`.

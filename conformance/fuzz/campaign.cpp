@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "conformance/core/sequence.h"
+#include "conformance/protocols/registry.h"
 #include "session/session.h"
 
 namespace moco::conformance {
@@ -111,6 +112,13 @@ constexpr size_t kBatch = 32;
 constexpr uint64_t kWindow = 2;
 constexpr uint32_t kWholeRestPercent = 6;
 
+// A mutant's pause as a saved session holds it (docs/sessions.md "pause").
+constexpr std::string_view kPauseEvent = "pause";
+
+bool IsPause(const session::SessionEntry& e) {
+  return e.is_event && e.event.is_object() && e.event.value("event", "") == kPauseEvent;
+}
+
 }  // namespace
 
 std::variant<Seed, std::string> LoadSeed(const std::string& path, bool as_written) {
@@ -125,22 +133,39 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path, bool as_writte
     return path + ": protocol " + std::string(wire::ProtocolName(s.header.protocol)) +
            " is not fuzzed; record the session in the device's packet protocol";
   }
+  // The host's bytes between two pauses are cut into messages apart from
+  // those after the pause; a pause is an empty message (core/fuzz_protocol.h).
+  Messages messages;
   wire::Bytes host;
-  Messages writes;
+  auto cut = [&] {
+    if (as_written || host.empty()) return;
+    for (wire::Bytes& m : wire::SplitMessages(*protocol, wire::Side::kHost, host)) {
+      messages.push_back(std::move(m));
+    }
+    host.clear();
+  };
   for (const session::SessionEntry& e : s.entries) {
-    if (!e.is_event && e.from == session::Origin::kHost) {
-      host.insert(host.end(), e.bytes.begin(), e.bytes.end());
-      writes.push_back(e.bytes);
+    if (IsPause(e)) {
+      cut();
+      messages.emplace_back();
+    } else if (!e.is_event && e.from == session::Origin::kHost && !e.bytes.empty()) {
+      if (as_written) {
+        messages.push_back(e.bytes);
+      } else {
+        host.insert(host.end(), e.bytes.begin(), e.bytes.end());
+      }
     }
   }
+  cut();
   Seed seed;
   seed.path = path;
   seed.protocol = *protocol;
   seed.device = s.header.device;
-  seed.messages =
-      as_written ? std::move(writes) : wire::SplitMessages(*protocol, wire::Side::kHost, host);
+  seed.messages = std::move(messages);
   seed.warning = session::SessionWarning(s);
-  if (seed.messages.empty()) return path + ": the session holds no host traffic to mutate";
+  if (std::ranges::all_of(seed.messages, [](const wire::Bytes& m) { return m.empty(); })) {
+    return path + ": the session holds no host traffic to mutate";
+  }
   return seed;
 }
 
@@ -153,8 +178,16 @@ std::string SaveMessages(const std::string& path, Protocol protocol, const std::
     h.clock = "virtual";
     h.note = note;
     session::SessionWriter w(path, h);
+    const FuzzHooks* hooks = FindFuzzHooks(protocol);
+    const TimeNs pause_ns = hooks == nullptr ? 0 : hooks->pause_ns;
     TimeNs t = 0;
     for (const wire::Bytes& m : messages) {
+      if (m.empty()) {
+        w.Append(session::SessionEntry::Event(
+            {{"t_ns", t}, {"event", std::string(kPauseEvent)}, {"ns", pause_ns}}));
+        t += pause_ns;
+        continue;
+      }
       session::SessionEntry e;
       e.t_ns = t;
       e.from = session::Origin::kHost;
@@ -178,6 +211,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
   auto last_progress = t0;
   FuzzReport report;
   SessionMutator mutator(protocol, options.seed);
+  mutator.set_pause_percent(options.pause_percent);
   std::vector<Messages> donors;
   for (const Seed& s : seeds) donors.push_back(s.messages);
   std::set<std::string> seen;  // findings reported, by FindingKey (before and after shrinking)

@@ -46,6 +46,8 @@ struct FuzzOptions {
   std::string crash_dir;    // where failing mutants are saved; empty: not saved
   std::string device;       // the model name written into saved sessions
   size_t max_failures = 5;  // stop after this many distinct failures
+  // Of every 100 mutations, how many put in a pause (SessionMutator::set_pause_percent).
+  uint32_t pause_percent = SessionMutator::kDefaultPausePercent;
 };
 
 struct FuzzFailure {
@@ -80,7 +82,9 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
                    const std::function<void(const FuzzReport&)>& progress = {});
 
 // Writes `messages` as a session file (host traffic only, one message every
-// `gap_ns`), atomically. Returns an error message or "".
+// `gap_ns`; a pause, an empty message, as a `pause` event of the protocol's
+// FuzzHooks::pause_ns that the next message comes after), atomically.
+// Returns an error message or "".
 std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
                          const std::string& note, const Messages& messages, TimeNs gap_ns);
 

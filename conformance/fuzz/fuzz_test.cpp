@@ -161,6 +161,32 @@ TEST(SessionMutator, MutantsStayWithinTheirBounds) {
   }
 }
 
+// The timing mutation: a pause is an empty message, put in by a share of
+// the mutations that set_pause_percent gives (a later mutation of the same
+// mutant may take it out again); none at 0.
+TEST(SessionMutator, PausesComeAtTheShareAskedFor) {
+  const Seed s = LoadOrDie("dfmoco-uno-workflow.jsonl");
+  for (const uint32_t percent : {0u, SessionMutator::kDefaultPausePercent, 30u}) {
+    SessionMutator mut(Protocol::kDfmoco, 5);
+    mut.set_pause_percent(percent);
+    int with_pause = 0;
+    for (int i = 0; i < 2000; ++i) {
+      Messages m = s.messages;
+      mut.Mutate(m, {});
+      const bool noted = std::ranges::find(mut.last_mutations(), "pause") !=
+                         mut.last_mutations().end();
+      const bool has = std::ranges::find(m, wire::Bytes()) != m.end();
+      if (has) EXPECT_TRUE(noted) << "an empty message comes only from a pause";
+      with_pause += has;
+    }
+    // 1-4 mutations a mutant (2.5 on average).
+    if (percent == 0) EXPECT_EQ(with_pause, 0);
+    if (percent == 1) EXPECT_GT(with_pause, 10);
+    if (percent == 1) EXPECT_LT(with_pause, 100);
+    if (percent == 30) EXPECT_GT(with_pause, 800);
+  }
+}
+
 // --- the executor -----------------------------------------------------------------------
 
 TEST(FuzzExecutor, EveryRecordedSessionKeepsTheInvariants) {
@@ -177,6 +203,35 @@ TEST(FuzzExecutor, EveryRecordedSessionKeepsTheInvariants) {
     const FuzzVerdict v = ex.Run(LoadOrDie(k.file).messages);
     EXPECT_TRUE(v.ok) << k.file << ": " << v.violation;
     EXPECT_GT(v.replies, 5u) << k.file;
+  }
+}
+
+// Each protocol's run waits out a pause (an empty message) reading, and
+// sends nothing: the session takes the pauses' time longer, and still keeps
+// the invariants.
+TEST(FuzzExecutor, EveryProtocolWaitsOutAPause) {
+  const struct {
+    const char* file;
+    Protocol protocol;
+    const char* model;
+  } kCases[] = {{"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
+                {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
+                {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
+  for (const auto& k : kCases) {
+    const TimeNs pause = FindFuzzHooks(k.protocol)->pause_ns;
+    EXPECT_GE(pause, 100 * sim::kNsPerMs) << k.file;
+    Messages messages = LoadOrDie(k.file).messages;
+    FuzzExecutor plain(k.protocol, InProcessTarget::ForModel(k.model, ""));
+    ASSERT_FALSE(plain.Open().has_value());
+    const FuzzVerdict without = plain.Run(messages);
+    messages.insert(messages.begin() + 2, 2, wire::Bytes());
+    FuzzExecutor paused(k.protocol, InProcessTarget::ForModel(k.model, ""));
+    ASSERT_FALSE(paused.Open().has_value());
+    const FuzzVerdict with = paused.Run(messages);
+    EXPECT_TRUE(with.ok) << k.file << ": " << with.violation;
+    EXPECT_EQ(with.messages, without.messages) << k.file << ": a pause is no message";
+    EXPECT_GE(with.simulated_ns, without.simulated_ns + 2 * pause - 20 * sim::kNsPerMs)
+        << k.file;
   }
 }
 

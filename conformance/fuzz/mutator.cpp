@@ -7,6 +7,19 @@
 #include "conformance/protocols/registry.h"
 
 namespace moco::conformance {
+namespace {
+
+// The share of mutations (in percent) that change one message's fields or,
+// set_pause_percent() of them, put in a pause (core/fuzz_protocol.h). A
+// pause costs a run the protocol's pause in the device's time (DFMoco:
+// 250 ms, ten times a run's usual 25 ms), so it is rare; docs/benchmarks.md
+// "Firmware fuzzing" gives what the default was chosen by.
+constexpr uint64_t kFieldOrPausePercent = SessionMutator::kMaxPausePercent;
+// A pause mutation puts in 1 to this many pauses in a row (DFMoco: up to 1 s,
+// what a move of a few thousand steps takes).
+constexpr uint64_t kMaxPauses = 4;
+
+}  // namespace
 
 SessionMutator::SessionMutator(Protocol protocol, uint64_t seed)
     : MutationSource(seed), protocol_(protocol), hooks_(FindFuzzHooks(protocol)) {}
@@ -33,8 +46,19 @@ void SessionMutator::MutateOne(Messages& messages, const std::vector<Messages>& 
   if (messages.empty()) messages.push_back(wire::Info(protocol_).greeting());
   const uint64_t pick = Below(100);
   const size_t at = Below(messages.size());
-  if (pick < 60) {
-    if (hooks_ != nullptr) hooks_->mutate(*this, messages[at]);
+  if (pick < kFieldOrPausePercent - pause_percent_) {
+    // A pause has no fields: the first message from `at` on (round) that is
+    // not one is mutated.
+    for (size_t k = 0; k < messages.size(); ++k) {
+      wire::Bytes& m = messages[(at + k) % messages.size()];
+      if (m.empty()) continue;
+      if (hooks_ != nullptr) hooks_->mutate(*this, m);
+      break;
+    }
+  } else if (pick < kFieldOrPausePercent) {  // a pause (1-4 empty messages) between two messages
+    messages.insert(messages.begin() + static_cast<ptrdiff_t>(Below(messages.size() + 1)),
+                    1 + Below(kMaxPauses), wire::Bytes());
+    Note("pause");
   } else if (pick < 70) {  // duplicate
     messages.insert(messages.begin() + static_cast<ptrdiff_t>(at), messages[at]);
     Note("duplicate");

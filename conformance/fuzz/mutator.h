@@ -5,10 +5,11 @@
 // mutants reach the device's message logic; a small share keeps broken
 // framing on purpose) and across messages here (splices between messages and
 // sessions, duplication, deletion, reordering, two messages sent in one write,
-// a message cut short).
+// a message cut short, a pause between two messages).
 #ifndef MOCO_CONFORMANCE_FUZZ_MUTATOR_H_
 #define MOCO_CONFORMANCE_FUZZ_MUTATOR_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,6 +33,10 @@ class SessionMutator : public MutationSource {
   // Two messages are sent in one write ("burst") only while the write stays
   // within this many bytes.
   static constexpr size_t kMaxBurstBytes = 256;
+  // The share of mutations (in percent) that put in a pause unless told
+  // otherwise (set_pause_percent), and the most that may.
+  static constexpr uint32_t kDefaultPausePercent = 1;
+  static constexpr uint32_t kMaxPausePercent = 60;
 
   SessionMutator(Protocol protocol, uint64_t seed);
 
@@ -51,10 +56,16 @@ class SessionMutator : public MutationSource {
   // The names of the mutations applied by the last Mutate(), for reports.
   const std::vector<std::string>& last_mutations() const { return applied(); }
 
+  // How many of every 100 mutations put in a pause (1-4 empty messages,
+  // core/fuzz_protocol.h), taken from those that change a message's fields;
+  // at most kMaxPausePercent. 0: none.
+  void set_pause_percent(uint32_t percent) { pause_percent_ = std::min(percent, kMaxPausePercent); }
+
  private:
   void MutateOne(Messages& messages, const std::vector<Messages>& donors);
 
   Protocol protocol_;
+  uint32_t pause_percent_ = kDefaultPausePercent;
   const FuzzHooks* hooks_;  // nullptr: the protocol has none; messages are only rearranged
 };
 

@@ -401,6 +401,76 @@ TEST(SimavrFuzz, WithABoardThePinLawsAreFindingsOfTheirOwnKind) {
   }
 }
 
+// A pause (an empty message) lets the firmware run 250 ms with nothing sent:
+// a move of 1500 steps asked for its position at once is still moving, and
+// after four pauses it has come to rest, where the lost step shows
+// (DFM-PIN-001). A finding with pauses is saved with them and reruns so.
+TEST(SimavrFuzz, APauseLetsAMoveRunItsCourse) {
+  FuzzExecutor::Options o = WithSnapshots(2);
+  o.pins = OwnDfmocoPins();
+  FuzzExecutor lost(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_FAULT_LOST_STEP_ELF), o);
+  ASSERT_EQ(lost.Open(), std::nullopt);
+  const Messages at_once = Lines({"hi\r\n", "pr 1 20000\r\n", "mm 1 1500\r\n", "mp 1\r\n"});
+  const FuzzVerdict moving = lost.Run(at_once);
+  EXPECT_TRUE(moving.ok) << moving.violation;
+  EXPECT_LT(moving.simulated_ns, 250 * sim::kNsPerMs);
+
+  Messages paused(at_once.begin(), at_once.end() - 1);
+  paused.insert(paused.end(), 4, wire::Bytes());
+  paused.push_back(at_once.back());
+  const FuzzVerdict rest = lost.Run(paused);
+  EXPECT_EQ(rest.kind, FuzzVerdict::Kind::kPinLaw) << rest.violation;
+  EXPECT_EQ(rest.violation.rfind("pin law: DFM-PIN-001 ", 0), 0u) << rest.violation;
+  EXPECT_GE(rest.simulated_ns, 1000 * sim::kNsPerMs);
+  EXPECT_EQ(lost.Run(paused, 5).violation, rest.violation) << "from a snapshot after two pauses";
+
+  const std::string path = ::testing::TempDir() + "/paused.jsonl";
+  ASSERT_EQ(SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "paused", paused, lost.gap_ns()),
+            "");
+  auto again = LoadSeed(path, /*as_written=*/true);
+  ASSERT_TRUE(std::holds_alternative<Seed>(again)) << std::get<std::string>(again);
+  EXPECT_EQ(std::get<Seed>(again).messages, paused);
+  EXPECT_EQ(lost.Run(std::get<Seed>(again).messages).violation, rest.violation);
+  std::remove(path.c_str());
+
+  FuzzExecutor good(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_ELF), o);
+  ASSERT_EQ(good.Open(), std::nullopt);
+  const FuzzVerdict fine = good.Run(paused);
+  EXPECT_TRUE(fine.ok) << fine.violation;
+}
+
+// The timing mutation finds what only time shows: from a session that asks
+// for the position at once, the lost step is found with pauses and not
+// without them, in the same runs.
+TEST(SimavrFuzz, TheTimingMutationFindsALostStepASessionWithoutPausesCannotShow) {
+  Seed seed;
+  seed.path = "lines";
+  seed.protocol = Protocol::kDfmoco;
+  seed.messages = Lines({"hi\r\n", "pr 1 20000\r\n", "mm 1 1500\r\n", "mp 1\r\n"});
+  for (const uint32_t percent : {0u, 30u}) {
+    FuzzExecutor::Options o = WithSnapshots(4);
+    o.pins = OwnDfmocoPins();
+    FuzzExecutor ex(Protocol::kDfmoco, Firmware(MOCO_DFMOCO_FAULT_LOST_STEP_ELF), o);
+    ASSERT_EQ(ex.Open(), std::nullopt);
+    FuzzOptions options;
+    options.seed = 1;
+    options.runs = 300;
+    options.max_failures = 1;
+    options.pause_percent = percent;
+    const FuzzReport r = RunFuzz(ex, Protocol::kDfmoco, {seed}, options);
+    if (percent == 0) {
+      EXPECT_TRUE(r.failures.empty()) << r.failures.front().violation;
+      continue;
+    }
+    ASSERT_EQ(r.failures.size(), 1u) << "no finding in 300 runs with pauses";
+    const FuzzFailure& f = r.failures.front();
+    EXPECT_EQ(f.kind, FuzzVerdict::Kind::kPinLaw) << f.violation;
+    EXPECT_EQ(f.violation.rfind("pin law: DFM-PIN-001 ", 0), 0u) << f.violation;
+    EXPECT_NE(std::ranges::find(f.messages, wire::Bytes()), f.messages.end())
+        << "the shrunk finding keeps a pause";
+  }
+}
+
 // Writes with no answer to wait for queue on the line at 57600 baud: a
 // request behind them gets its 100 ms from when it has arrived, not from
 // when it was written (four lines of 190 bytes are 130 ms of line time).

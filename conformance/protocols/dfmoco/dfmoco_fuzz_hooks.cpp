@@ -22,6 +22,7 @@ using dfmoco_cases::kFuzzDrainMaxNs;
 using dfmoco_cases::kFuzzGapNs;
 using dfmoco_cases::kFuzzHiAnswerNs;
 using dfmoco_cases::kFuzzJudgedWriteBytes;
+using dfmoco_cases::kFuzzPauseNs;
 using dfmoco_cases::kFuzzReplyQuietNs;
 using dfmoco_cases::kFuzzSettleMaxNs;
 using dfmoco_cases::kFuzzSettleQuietNs;
@@ -195,6 +196,7 @@ class Written {
     return !link.lost();
   }
   void Send(Target& target, wire::ByteView bytes) { Link(target).WriteWithoutReading(bytes); }
+  void Idle(Target& target, TimeNs duration_ns) { Link(target).Idle(duration_ns); }
   std::vector<Chunk> traffic() const { return link_ ? link_->traffic() : std::vector<Chunk>(); }
 
  private:
@@ -274,6 +276,10 @@ class DfmocoPlay final : public FuzzPlay {
       : w_(boot_out), motors_(GreetingMotors(boot_out)), pins_(pins) {}
 
   void Play(Target& target, const wire::Bytes& m) override {
+    if (m.empty()) {  // a pause: what the device writes meanwhile is read
+      w_.Idle(target, kFuzzPauseNs);
+      return;
+    }
     ++messages_;
     w_.Send(target, m);
     std::string first;
@@ -492,6 +498,7 @@ const FuzzHooks kHooks[] = {
     {
         .protocol = Protocol::kDfmoco,
         .gap_ns = kFuzzGapNs,
+        .pause_ns = kFuzzPauseNs,
         .mutate = &Mutate,
         .boot = &Boot,
         .start = [](const wire::Bytes& boot_out, const PinJudgeOptions* pins)
@@ -501,6 +508,7 @@ const FuzzHooks kHooks[] = {
     {
         .protocol = Protocol::kStackshotDfmoco,
         .gap_ns = kFuzzGapNs,
+        .pause_ns = kFuzzPauseNs,
         .mutate = &Mutate,
         .matcher = []() { return ExactMatcher("the line differs"); },
     },

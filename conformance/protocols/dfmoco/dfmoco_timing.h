@@ -81,6 +81,12 @@ inline constexpr sim::TimeNs kRandomRestTimeoutNs = 600'000 * kMs;
 // --- the fuzz hooks (dfmoco_fuzz_hooks.cpp) --------------------------------------------
 // Plan choice: the spacing a saved finding's messages are written with.
 inline constexpr sim::TimeNs kFuzzGapNs = 1 * kMs;
+// Plan choice: a pause the mutator puts between two messages (an empty
+// message, core/fuzz_protocol.h): Dragonframe's polling period while a motor
+// moves, as the golden session shows (fixtures/sessions/dfmoco-uno-workflow.jsonl:
+// `ms` and `mp` 250 ms apart). A run otherwise follows each answer at once and
+// never lets a move run its course.
+inline constexpr sim::TimeNs kFuzzPauseNs = 250 * kMs;
 // A host waits for the answer before the next command, as Dragonframe does (the
 // sketch's 57600 baud line and 16-message queue cannot keep up with more). A
 // message with commands every sketch answers is followed as soon as their reply

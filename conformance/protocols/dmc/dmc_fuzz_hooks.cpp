@@ -88,6 +88,10 @@ class DmcPlay final : public FuzzPlay {
  public:
   void Play(Target& target, const wire::Bytes& m) override {
     DmcHost& host = Host(target);
+    if (m.empty()) {  // a pause: what the device sends meanwhile is read
+      host.Idle(dmc_cases::kFuzzPauseNs);
+      return;
+    }
     strict_ = strict_ && WholeDmcFrame(m) && !HidesAFrame(m);
     ++messages_;
     if (WholeDmcFrame(m)) {
@@ -226,6 +230,7 @@ class Matcher final : public ReplayMatcher {
 const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kDmc,
     .gap_ns = dmc_cases::kFuzzGapNs,
+    .pause_ns = dmc_cases::kFuzzPauseNs,
     .mutate = &Mutate,
     // The pin rules are DFMoco's (no DMC or StackShot firmware runs under simavr).
     .start = [](const wire::Bytes&, const PinJudgeOptions*) -> std::unique_ptr<FuzzPlay> {

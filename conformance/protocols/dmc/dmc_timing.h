@@ -218,6 +218,10 @@ inline constexpr TimeNs kSettleBusyRetryNs = 100 * kMs;
 inline constexpr TimeNs kFuzzGapNs = 1 * kMs;
 // How long the host listens for stray answers after the last one it awaited.
 inline constexpr TimeNs kFuzzQuietNs = 20 * kMs;
+// Plan choice: a pause the mutator puts between two messages (an empty
+// message, core/fuzz_protocol.h): two of the 40-60 ms apart position updates
+// a moving device sends (FACTS "DMC"), so a move runs on with nothing asked.
+inline constexpr TimeNs kFuzzPauseNs = 100 * kMs;
 
 }  // namespace dmc_cases
 }  // namespace moco::conformance

@@ -50,6 +50,12 @@ void Mutate(MutationSource& s, wire::Bytes& m) {
 class StackshotPlay final : public FuzzPlay {
  public:
   void Play(Target& target, const wire::Bytes& m) override {
+    if (m.empty()) {  // a pause: what the device sends meanwhile is read
+      const TimeNs until = target.Now() + kSsFuzzPauseNs;
+      while (target.Now() < until && target.Receive(until, out_)) {
+      }
+      return;
+    }
     target.Send(m);
     requests_.Feed(m, sent_);
     target.Receive(target.Now() + kSsFuzzGapNs, out_);
@@ -145,6 +151,7 @@ FuzzVerdict StackshotPlay::Finish(Target& target) {
 const FuzzHooks kHooks[] = {{
     .protocol = Protocol::kStackshot,
     .gap_ns = kSsFuzzGapNs,
+    .pause_ns = kSsFuzzPauseNs,
     .mutate = &Mutate,
     // The pin rules are DFMoco's (no DMC or StackShot firmware runs under simavr).
     .start = [](const wire::Bytes&, const PinJudgeOptions*) -> std::unique_ptr<FuzzPlay> {

@@ -37,6 +37,10 @@ inline constexpr sim::TimeNs kSsRandomWaitMaxNs = 800 * sim::kNsPerMs;
 // dropped before the next one.
 inline constexpr sim::TimeNs kSsFuzzGapNs = 3 * sim::kNsPerMs;
 static_assert(kSsFuzzGapNs > stackshot::kInterFrameGapNs);
+// Plan choice: a pause the mutator puts between two messages (an empty
+// message, core/fuzz_protocol.h): the host tools' status poll period (FACTS
+// "StackShot": every 100 ms), so a rail move runs on with nothing asked.
+inline constexpr sim::TimeNs kSsFuzzPauseNs = 100 * sim::kNsPerMs;
 // Plan choice: the PING after the session is answered within this.
 inline constexpr sim::TimeNs kSsFuzzPingAnswerNs = 500 * sim::kNsPerMs;
 // Plan choice: replies still on their way are read until the device is quiet this long.
