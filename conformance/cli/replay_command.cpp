@@ -30,11 +30,13 @@ int Rejudge(const std::string& path, FuzzExecutor& executor) {
   auto loaded = LoadSeed(path, /*as_written=*/true);
   if (const auto* err = std::get_if<std::string>(&loaded)) return Fail(*err);
   if (auto err = executor.Open()) return Fail(*err);
-  const FuzzVerdict v = executor.Run(std::get<Seed>(loaded).messages);
+  const Messages& messages = std::get<Seed>(loaded).messages;
+  const FuzzVerdict v = executor.Run(messages);
+  const auto pauses = std::ranges::count(messages, wire::Bytes());
   std::cout << "mococheck replay: " << path << " -> " << executor.target_name() << "\n"
-            << "the session records no device side: its " << v.messages
-            << " host write(s) run as `mococheck fuzz` runs a mutant, the device's invariants "
-               "judged ("
+            << "the session records no device side: its " << v.messages << " host write(s)"
+            << (pauses > 0 ? " and " + std::to_string(pauses) + " pause(s)" : std::string())
+            << " run as `mococheck fuzz` runs a mutant, the device's invariants judged ("
             << v.replies << " device line(s) or message(s))\n";
   if (v.ok) {
     std::cout << "result: PASS (no invariant broken)\n";

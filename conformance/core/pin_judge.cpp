@@ -133,8 +133,17 @@ void JudgePositions(const MotorJudge& judge, const std::vector<PinPositionEvent>
     // is still stepping out (FACTS DFMoco), at a start, a stop or a turn as
     // well as mid-move, and PIN-002 judges such a report; PIN-001 judges
     // the reports after which the motor makes no step.
+    //
+    // Each needs the pins after the report, which a run or a case cut short
+    // while a motor moves does not hold: whether the motor steps within the
+    // rest window (a report with no step after it up to the end, sooner than
+    // the window, is not judged), and the steps of a reporting period after
+    // it (fewer steps only narrow PIN-002's allowance, so a report that
+    // passes within the steps the trace holds passes; one that does not is
+    // not judged).
     const int64_t now = m.CountAt(e.t_ns);
-    const bool moving = m.RiseWithin(e.t_ns + 1, e.t_ns + kRestWindowNs);
+    const bool moving = m.RiseWithin(e.t_ns + 1, std::min(end, e.t_ns + kRestWindowNs));
+    if (!moving && e.t_ns + kRestWindowNs > end) continue;
     if (!moving) {
       // Not stepping on both sides: the position was taken at most a queued line before t.
       const auto [lo_rest, hi_rest] = m.RangeOver(e.t_ns - kRestWindowNs, e.t_ns);
@@ -149,10 +158,13 @@ void JudgePositions(const MotorJudge& judge, const std::vector<PinPositionEvent>
     } else {
       // Within the steps taken one reporting period either side of the report.
       const auto first = std::lower_bound(m.rises.begin(), m.rises.end(), e.t_ns - period_ns);
-      const auto last = std::upper_bound(m.rises.begin(), m.rises.end(), e.t_ns + period_ns);
+      const auto last =
+          std::upper_bound(m.rises.begin(), m.rises.end(), std::min(end, e.t_ns + period_ns));
       const int64_t steps = last - first;
       const int64_t off = e.position - (offset + now);
-      v.Check(p002, off >= -steps && off <= steps, [&] {
+      const bool within = off >= -steps && off <= steps;
+      if (!within && e.t_ns + period_ns > end) continue;
+      v.Check(p002, within, [&] {
         return Evidence{mn + " reported while moving within " + std::to_string(steps) +
                             " steps (those one reporting period either side) of " +
                             std::to_string(offset + now),

@@ -31,7 +31,7 @@ struct PinPositionEvent {
 
 // A motor with no rising STEP edge for this long after a report was at rest
 // when it reported (PIN-001); a trace that ends sooner after a report cannot
-// tell (a run cut short judges only up to its end less this).
+// tell, and leaves the report unjudged.
 inline constexpr sim::TimeNs kPinRestWindowNs = 50 * sim::kNsPerMs;
 
 struct PinJudgeOptions {
@@ -45,7 +45,9 @@ struct PinJudgeOptions {
 
 // Rule ids of a protocol's pin family: "<prefix>PIN-001" ... "<prefix>PIN-007".
 // Records every check of the case in `v`; `end_ns` is the case's end on the
-// target's clock.
+// target's clock. A report is judged only where the trace holds what its
+// rule needs after it: the rest window (PIN-001), a reporting period while
+// the motor moves (PIN-002).
 void JudgePins(std::string_view prefix, const PinTrace& trace,
                const std::vector<PinPositionEvent>& events, const PinJudgeOptions& options,
                sim::TimeNs end_ns, Verdicts& v);

@@ -170,6 +170,39 @@ TEST(PinJudge, AReportOfTheChunkStillBeingSteppedOutIsJudgedAsMoving) {
   EXPECT_EQ(StatusOf(v, "DFM-PIN-002"), Status::kPass);
 }
 
+// A trace that ends soon after a report (a run or a case cut short) cannot
+// tell whether the motor was at rest: the report is left unjudged, and judged
+// once the trace holds the rest window after it. A report while moving whose
+// reporting period runs past the end is judged only when it passes within the
+// steps the trace holds (more steps could only widen the allowance).
+TEST(PinJudge, AReportIsJudgedOnlyWhereTheTraceHoldsWhatItsRuleNeedsAfterIt) {
+  using K = PinPositionEvent::Kind;
+  // 100 steps by 21 ms, the report (one step off) at 30 ms.
+  const PinTrace t = Pulses(100, 1000 * kUs, 200 * kUs, 25 * kUs);
+  const sim::TimeNs at = 30 * sim::kNsPerMs;
+  Verdicts cut, whole;
+  JudgePins("DFM-", t, {{K::kReport, at, 1, 101}}, A4988(), at + kPinRestWindowNs - 1, cut);
+  EXPECT_EQ(StatusOf(cut, "DFM-PIN-001"), Status::kNotExercised);
+  JudgePins("DFM-", t, {{K::kReport, at, 1, 101}}, A4988(), at + kPinRestWindowNs, whole);
+  EXPECT_EQ(StatusOf(whole, "DFM-PIN-001"), Status::kFail);
+
+  // 2000 steps at 1 kHz from 1 ms; a report at 500 ms (500 pulses by then)
+  // with the trace judged up to 600 ms holds 600 of the steps a period (1 s)
+  // either side allows; up to 3 s, 1500.
+  const PinTrace moving = Steady(2000, 1000 * kUs, 1000);
+  const sim::TimeNs mid = 500 * sim::kNsPerMs, end = 600 * sim::kNsPerMs;
+  const sim::TimeNs after = 3 * sim::kNsPerSecond;
+  Verdicts near, far, far_after, farther_after;
+  JudgePins("DFM-", moving, {{K::kReport, mid, 1, 1060}}, A4988(), end, near);
+  EXPECT_EQ(StatusOf(near, "DFM-PIN-002"), Status::kPass) << "within the steps held";
+  JudgePins("DFM-", moving, {{K::kReport, mid, 1, 1200}}, A4988(), end, far);
+  EXPECT_EQ(StatusOf(far, "DFM-PIN-002"), Status::kNotExercised) << "steps may yet come";
+  JudgePins("DFM-", moving, {{K::kReport, mid, 1, 1200}}, A4988(), after, far_after);
+  EXPECT_EQ(StatusOf(far_after, "DFM-PIN-002"), Status::kPass) << "and they came";
+  JudgePins("DFM-", moving, {{K::kReport, mid, 1, 2100}}, A4988(), after, farther_after);
+  EXPECT_EQ(StatusOf(farther_after, "DFM-PIN-002"), Status::kFail);
+}
+
 TEST(PinProfiles, TheDriverFilesHoldTheBuiltInDatasheetFigures) {
   for (const DriverProfile& d : BuiltInDrivers()) {
     const auto read = LoadDriver(Root() + "/fixtures/drivers/" + d.name + ".json");

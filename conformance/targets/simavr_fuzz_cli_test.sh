@@ -14,6 +14,13 @@
 #   again while the good firmware passes; --driver without --board, --board on
 #   an emulated device and `replay --board` of a session with a device side are
 #   usage errors that name the fix.
+# pause_finding_replays (a 7th argument: the firmware with FAULT_LOST_STEP):
+#   from a session that asks for the position while the move is under way,
+#   the timing mutation (--pause-percent 30) lets the move end and the lost
+#   step show (DFM-PIN-001); the saved finding holds its pauses as `pause`
+#   events and `replay` waits them out to the same finding; with
+#   --pause-percent 0 the same runs find nothing; a share over 60 is a usage
+#   error.
 set -u
 test_name=$1
 m=$2
@@ -78,6 +85,31 @@ pin_law_replays)
     fail "--board on an emulated device: $(cat err.txt)"
   expect_rc 2 "$m" replay "$golden" --target "simavr:$good" --board "$board"
   grep -q -- 'use mococheck run --board' err.txt || fail "replay --board of a recording"
+  ;;
+pause_finding_replays)
+  lost=$7
+  board="$src/fixtures/boards/own-dfmoco.json"
+  printf '%s\n' '{"mocosim_session":1,"protocol":"dfmoco","device":"dfmoco-uno","clock":"virtual"}' \
+    '{"t_ns":0,"from":"host","text":"hi\r\n","hex":"68690d0a"}' \
+    '{"t_ns":1000000,"from":"host","text":"pr 1 20000\r\n","hex":"707220312032303030300d0a"}' \
+    '{"t_ns":2000000,"from":"host","text":"mm 1 1500\r\n","hex":"6d6d203120313530300d0a"}' \
+    '{"t_ns":3000000,"from":"host","text":"mp 1\r\n","hex":"6d7020310d0a"}' >move.jsonl
+  expect_rc 0 "$m" fuzz move.jsonl --target "simavr:$lost" --board "$board" --runs 300 \
+    --pause-percent 0
+  grep -q '^result: no invariant broken' out.txt || fail "a finding without pauses: $(cat out.txt)"
+  expect_rc 1 "$m" fuzz move.jsonl --target "simavr:$lost" --board "$board" --runs 300 \
+    --pause-percent 30 --max-failures 1 --crashes found
+  grep -q '^FAIL \[pin-law\] pin law: DFM-PIN-001 ' out.txt || fail "no lost step: $(cat out.txt)"
+  saved=$(sed -n 's/.*; saved: \(found\/mutant-[0-9-]*\.jsonl\)$/\1/p' out.txt | head -1)
+  [ -s "$saved" ] || fail "no saved finding ($saved)"
+  grep -q '"event":"pause","ns":250000000' "$saved" || fail "the finding holds no pause: $(cat "$saved")"
+  expect_rc 1 "$m" replay "$saved" --target "simavr:$lost" --board "$board"
+  grep -q '^the session records no device side: its [0-9]* host write(s) and [0-9]* pause(s)' out.txt ||
+    fail "the replay does not count the pauses: $(cat out.txt)"
+  grep -q '^FAIL \[pin-law\] pin law: DFM-PIN-001 ' out.txt || fail "the replay does not find it"
+  expect_rc 2 "$m" fuzz move.jsonl --target "simavr:$lost" --pause-percent 61 --runs 1
+  grep -q -- '--pause-percent: "61" is not a whole number in 0..60' err.txt ||
+    fail "--pause-percent 61: $(cat err.txt)"
   ;;
 *)
   fail "unknown test $test_name"

@@ -345,34 +345,22 @@ FuzzVerdict DfmocoPlay::Finish(Target& target) {
 std::optional<FuzzVerdict> DfmocoPlay::JudgePinLaws(Target& target) const {
   const PinTrace* trace = target.Pins();
   if (pins_ == nullptr || trace == nullptr) return std::nullopt;
-  // The run stops with its session, perhaps while a motor still moves, and
-  // a law cannot be judged on what the trace does not hold: whether a motor
-  // rested after a report (the rest window), or how many steps it took one
-  // reporting period either side of a report made while it moved (DFM-PIN-002).
-  // So every rule is judged up to the end less the rest window, and
-  // DFM-PIN-002 up to the end less a reporting period and that window.
-  const std::vector<PinPositionEvent> events = DfmocoProtocol::PinEvents(w_.traffic());
-  const std::string moving_rule = std::string(DfmocoProtocol::kPinRulePrefix) + "PIN-002";
-  Verdicts all;
-  JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, events, *pins_, target.Now() - kPinRestWindowNs,
-            all);
-  Verdicts moving;
-  JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, events, *pins_,
-            target.Now() - kPinRestWindowNs - pins_->board.report_period_ms * kMs, moving);
-  for (const Verdicts* v : {&all, &moving}) {
-    for (const auto& [id, o] : v->outcomes()) {
-      if ((id == moving_rule) != (v == &moving)) continue;
-      const Rule* r = FindRule(id);
-      if (o.status != Status::kFail || r == nullptr || r->level != Level::kMust) continue;
-      std::string what = "pin law: " + id + " " + std::string(r->title);
-      if (!o.evidence.empty()) {
-        const Evidence& e = o.evidence.front();
-        what += ": expected " + e.expected + ", observed " + e.observed;
-      }
-      FuzzVerdict verdict = Violation(what, messages_, CountLines(w_.out));
-      verdict.kind = FuzzVerdict::Kind::kPinLaw;
-      return verdict;
+  // The run stops with its session, perhaps while a motor still moves: the
+  // judge leaves a report whose window runs past the trace unjudged.
+  Verdicts v;
+  JudgePins(DfmocoProtocol::kPinRulePrefix, *trace, DfmocoProtocol::PinEvents(w_.traffic()), *pins_,
+            target.Now(), v);
+  for (const auto& [id, o] : v.outcomes()) {
+    const Rule* r = FindRule(id);
+    if (o.status != Status::kFail || r == nullptr || r->level != Level::kMust) continue;
+    std::string what = "pin law: " + id + " " + std::string(r->title);
+    if (!o.evidence.empty()) {
+      const Evidence& e = o.evidence.front();
+      what += ": expected " + e.expected + ", observed " + e.observed;
     }
+    FuzzVerdict verdict = Violation(what, messages_, CountLines(w_.out));
+    verdict.kind = FuzzVerdict::Kind::kPinLaw;
+    return verdict;
   }
   return std::nullopt;
 }
