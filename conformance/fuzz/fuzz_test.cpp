@@ -195,15 +195,19 @@ TEST(SessionMutator, PausesComeAtTheShareAskedFor) {
 
 // --- the executor -----------------------------------------------------------------------
 
+// The golden session of each protocol and the emulated device it was recorded from.
+struct RecordedCase {
+  const char* file;
+  Protocol protocol;
+  const char* model;
+};
+constexpr RecordedCase kRecorded[] = {
+    {"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
+    {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
+    {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
+
 TEST(FuzzExecutor, EveryRecordedSessionKeepsTheInvariants) {
-  const struct {
-    const char* file;
-    Protocol protocol;
-    const char* model;
-  } kCases[] = {{"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
-                {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
-                {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
-  for (const auto& k : kCases) {
+  for (const RecordedCase& k : kRecorded) {
     FuzzExecutor ex(k.protocol, InProcessTarget::ForModel(k.model, ""));
     ASSERT_FALSE(ex.Open().has_value());
     const FuzzVerdict v = ex.Run(LoadOrDie(k.file).messages);
@@ -216,14 +220,7 @@ TEST(FuzzExecutor, EveryRecordedSessionKeepsTheInvariants) {
 // sends nothing: the session takes the pauses' time longer, and still keeps
 // the invariants.
 TEST(FuzzExecutor, EveryProtocolWaitsOutAPause) {
-  const struct {
-    const char* file;
-    Protocol protocol;
-    const char* model;
-  } kCases[] = {{"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
-                {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
-                {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
-  for (const auto& k : kCases) {
+  for (const RecordedCase& k : kRecorded) {
     const TimeNs pause = FindFuzzHooks(k.protocol)->pause_ns;
     EXPECT_GE(pause, 100 * sim::kNsPerMs) << k.file;
     Messages messages = LoadOrDie(k.file).messages;
@@ -241,14 +238,7 @@ TEST(FuzzExecutor, EveryProtocolWaitsOutAPause) {
 }
 
 TEST(FuzzExecutor, ACampaignOverEveryProtocolFindsNoViolationInTheEmulator) {
-  const struct {
-    const char* file;
-    Protocol protocol;
-    const char* model;
-  } kCases[] = {{"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
-                {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
-                {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
-  for (const auto& k : kCases) {
+  for (const RecordedCase& k : kRecorded) {
     FuzzExecutor ex(k.protocol, InProcessTarget::ForModel(k.model, ""));
     ASSERT_FALSE(ex.Open().has_value());
     FuzzOptions o;
@@ -316,14 +306,7 @@ TEST(FuzzExecutor, ADeviceThatSwallowsAnAnswerIsCaughtAndTheMutantShrinks) {
 // --- replay -------------------------------------------------------------------------------
 
 TEST(Replay, GoldenDeviceSessionsMatchTheirDevicesExactly) {
-  const struct {
-    const char* file;
-    Protocol protocol;
-    const char* model;
-  } kCases[] = {{"dmc16-workflow.jsonl", Protocol::kDmc, "dmc16"},
-                {"dfmoco-uno-workflow.jsonl", Protocol::kDfmoco, "dfmoco"},
-                {"stackshot3x-workflow.jsonl", Protocol::kStackshot, "stackshot3x"}};
-  for (const auto& k : kCases) {
+  for (const RecordedCase& k : kRecorded) {
     auto target = InProcessTarget::ForModel(k.model, "");
     ASSERT_FALSE(target->Open().has_value());
     const ReplayResult r = Replay(SessionOrDie(k.file), k.protocol, *target, {});
