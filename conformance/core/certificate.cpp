@@ -465,6 +465,9 @@ std::string CertificateHtmlSection(const json& cert, const std::string& cert_nam
                                  Str(catalogue.value("rules", json("?"))) + " rules)");
   if (fw.is_object()) {
     s += row("firmware", fw.value("file", "?") + " sha256 " + fw.value("sha256", "?"));
+  } else {
+    // The manifest below still seals the empty part, as every certificate does.
+    s += row("firmware", "none: the device under test ran no firmware image");
   }
   s += row("sealed by", "Ed25519 key " + seal.value("key_id", "?"));
   const json manifest = seal.value("manifest", json::object());

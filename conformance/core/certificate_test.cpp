@@ -419,6 +419,24 @@ TEST_F(Certificates, AnIntactCertificateVerifiesAndSurvivesAJsonRoundTrip) {
   EXPECT_TRUE(CallLogOf(reparsed, &error)) << error;
 }
 
+// The page names the firmware image the suite ran, or says there was none
+// (an emulated device); the empty part is sealed all the same.
+TEST_F(Certificates, ThePageNamesTheFirmwareOrSaysThereWasNone) {
+  RunOptions options;
+  options.cases = "connect/*";
+  const Recorded rec = Record(Dfmoco(), options, RunDfmoco);
+  const std::string with = CertificateHtmlPage(rec.report, *cert_, "c.json", false);
+  EXPECT_NE(with.find("<code>fw.elf sha256 " + Sha256Hex("image") + "</code>"), std::string::npos);
+  EXPECT_EQ(with.find("ran no firmware image"), std::string::npos);
+  json emulated = *cert_;
+  emulated["firmware"] = nullptr;
+  const std::string without = CertificateHtmlPage(rec.report, emulated, "c.json", false);
+  EXPECT_NE(without.find("<th>firmware</th><td><code>none: the device under test ran no firmware "
+                         "image</code>"),
+            std::string::npos);
+  EXPECT_NE(without.find("<th>sha256 of firmware</th>"), std::string::npos);
+}
+
 TEST_F(Certificates, TextThatIsNotUtf8SealsAndVerifiesThroughTheFile) {
   // A device may introduce itself with any bytes; the file holds them as
   // U+FFFD, and the seal is over that same text.
