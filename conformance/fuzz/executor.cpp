@@ -365,6 +365,7 @@ void FuzzExecutor::ServeSnapshot(int socket, std::span<const wire::Bytes> prefix
       size_t at = 0;
       auto take = [&](void* to, size_t n) {
         if (at + n > rest.size()) _exit(3);
+        if (n == 0) return;  // a pause: an empty message, whose data() may be null
         std::memcpy(to, rest.data() + at, n);
         at += n;
       };
