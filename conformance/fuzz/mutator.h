@@ -49,7 +49,8 @@ class SessionMutator : public MutationSource {
 
   // libFuzzer's custom mutator over a host byte stream of `protocol`: cut into
   // messages, mutated with `seed`, joined again into `data` (at most
-  // `max_size` bytes); the new size.
+  // `max_size` bytes); the new size. A byte stream holds no time: a pause
+  // the mutation puts in is gone once joined.
   static size_t MutateStream(Protocol protocol, uint8_t* data, size_t size, size_t max_size,
                              unsigned int seed);
 
