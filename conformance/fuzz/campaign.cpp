@@ -170,7 +170,7 @@ std::variant<Seed, std::string> LoadSeed(const std::string& path, bool as_writte
 }
 
 std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
-                         const std::string& note, const Messages& messages, TimeNs gap_ns) {
+                         const std::string& note, const Messages& messages) {
   try {
     session::SessionHeader h;
     h.protocol = protocol;
@@ -179,6 +179,7 @@ std::string SaveMessages(const std::string& path, Protocol protocol, const std::
     h.note = note;
     session::SessionWriter w(path, h);
     const FuzzHooks* hooks = FindFuzzHooks(protocol);
+    const TimeNs gap_ns = hooks == nullptr ? 0 : hooks->gap_ns;
     const TimeNs pause_ns = hooks == nullptr ? 0 : hooks->pause_ns;
     TimeNs t = 0;
     for (const wire::Bytes& m : messages) {
@@ -264,8 +265,7 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
         for (const std::string& frame : f.backtrace) note += " " + frame + ";";
         note.pop_back();
       }
-      const std::string err =
-          SaveMessages(path, protocol, options.device, note, f.messages, executor.gap_ns());
+      const std::string err = SaveMessages(path, protocol, options.device, note, f.messages);
       f.saved_path = err.empty() ? path : "not saved: " + err;
     }
     report.failures.push_back(std::move(f));

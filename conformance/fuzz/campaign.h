@@ -82,11 +82,11 @@ FuzzReport RunFuzz(FuzzExecutor& executor, Protocol protocol, const std::vector<
                    const std::function<void(const FuzzReport&)>& progress = {});
 
 // Writes `messages` as a session file (host traffic only, one message every
-// `gap_ns`; a pause, an empty message, as a `pause` event of the protocol's
-// FuzzHooks::pause_ns that the next message comes after), atomically.
-// Returns an error message or "".
+// FuzzHooks::gap_ns of the protocol; a pause, an empty message, as a `pause`
+// event of its FuzzHooks::pause_ns that the next message comes after),
+// atomically. Returns an error message or "".
 std::string SaveMessages(const std::string& path, Protocol protocol, const std::string& device,
-                         const std::string& note, const Messages& messages, TimeNs gap_ns);
+                         const std::string& note, const Messages& messages);
 
 }  // namespace moco::conformance
 

@@ -164,8 +164,6 @@ std::optional<std::string> FuzzExecutor::Open() {
 
 bool FuzzExecutor::CanRun() const { return hooks_ != nullptr && hooks_->start != nullptr; }
 
-TimeNs FuzzExecutor::gap_ns() const { return hooks_ == nullptr ? 0 : hooks_->gap_ns; }
-
 std::span<const uint8_t> FuzzExecutor::coverage() const {
   if (shared_ == nullptr || options_.coverage_bytes == 0) return {};
   return {shared_, options_.coverage_bytes};

@@ -75,9 +75,6 @@ class FuzzExecutor {
   // Whether the protocol's sessions can be run at all (its FuzzHooks::run).
   bool CanRun() const;
 
-  // Virtual time a run leaves between two host messages (the protocol's
-  // FuzzHooks::gap_ns).
-  TimeNs gap_ns() const;
   // The last run's edge counts (empty without coverage).
   std::span<const uint8_t> coverage() const;
   // With coverage, for a target that runs a firmware image: what every run

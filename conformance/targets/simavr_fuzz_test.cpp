@@ -246,9 +246,7 @@ TEST(SimavrFuzz, ASavedFindingRerunsCycleForCycle) {
   ASSERT_EQ(found.kind, FuzzVerdict::Kind::kStackSmash) << found.violation;
 
   const std::string path = ::testing::TempDir() + "finding.jsonl";
-  ASSERT_EQ(
-      SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "a finding", session, forked.gap_ns()),
-      "");
+  ASSERT_EQ(SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "a finding", session), "");
   auto loaded = LoadSeed(path, /*as_written=*/true);
   ASSERT_TRUE(std::holds_alternative<Seed>(loaded)) << std::get<std::string>(loaded);
   EXPECT_EQ(std::get<Seed>(loaded).messages, session);
@@ -425,8 +423,7 @@ TEST(SimavrFuzz, APauseLetsAMoveRunItsCourse) {
   EXPECT_EQ(lost.Run(paused, 5).violation, rest.violation) << "from a snapshot after two pauses";
 
   const std::string path = ::testing::TempDir() + "/paused.jsonl";
-  ASSERT_EQ(SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "paused", paused, lost.gap_ns()),
-            "");
+  ASSERT_EQ(SaveMessages(path, Protocol::kDfmoco, "dfmoco-uno", "paused", paused), "");
   auto again = LoadSeed(path, /*as_written=*/true);
   ASSERT_TRUE(std::holds_alternative<Seed>(again)) << std::get<std::string>(again);
   EXPECT_EQ(std::get<Seed>(again).messages, paused);

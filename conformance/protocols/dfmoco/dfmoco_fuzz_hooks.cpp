@@ -197,7 +197,10 @@ class Written {
   }
   void Send(Target& target, wire::ByteView bytes) { Link(target).WriteWithoutReading(bytes); }
   void Idle(Target& target, TimeNs duration_ns) { Link(target).Idle(duration_ns); }
-  std::vector<Chunk> traffic() const { return link_ ? link_->traffic() : std::vector<Chunk>(); }
+  const std::vector<Chunk>& traffic() const {
+    static const std::vector<Chunk> kNone;
+    return link_ ? link_->traffic() : kNone;
+  }
 
  private:
   HostLink& Link(Target& target) {
