@@ -17,6 +17,7 @@
 #include "conformance/core/certificate.h"
 #include "conformance/core/report.h"
 #include "conformance/core/seal.h"
+#include "conformance/targets/native_target.h"
 #include "conformance/targets/recorded_target.h"
 #include "wire/protocol.h"
 
@@ -66,10 +67,18 @@ struct CertifyArgs {
 // The firmware a simavr: target runs: its file name, size and digest.
 std::optional<std::string> FirmwareOf(const PreparedRun& p, json& firmware) {
   firmware = nullptr;
-  if (p.resolved.spec.kind != TargetSpec::Kind::kSimavr) return std::nullopt;
-  auto spec = ParseSimavrAddress(p.resolved.spec.address);
-  if (const auto* err = std::get_if<std::string>(&spec)) return *err;
-  const std::string& path = std::get<SimavrSpec>(spec).elf_path;
+  std::string path;
+  if (p.resolved.spec.kind == TargetSpec::Kind::kSimavr) {
+    auto spec = ParseSimavrAddress(p.resolved.spec.address);
+    if (const auto* err = std::get_if<std::string>(&spec)) return *err;
+    path = std::get<SimavrSpec>(spec).elf_path;
+  } else if (p.resolved.spec.kind == TargetSpec::Kind::kNative) {
+    auto spec = ParseNativeAddress(p.resolved.spec.address);
+    if (const auto* err = std::get_if<std::string>(&spec)) return *err;
+    path = std::get<NativeSpec>(spec).path;
+  } else {
+    return std::nullopt;
+  }
   std::string image;
   if (auto err = ReadInput("--target", path, kMaxFirmwareBytes, image)) return *err;
   firmware = {{"file", Basename(path)},

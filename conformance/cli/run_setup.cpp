@@ -13,6 +13,7 @@
 #include "base/vcd.h"
 #include "cli_numbers.h"
 #include "conformance/core/report.h"
+#include "conformance/targets/native_target.h"
 #include "wire/protocol.h"
 
 namespace moco::conformance::cli {
@@ -258,6 +259,12 @@ std::vector<std::pair<std::string, std::string>> RunInputs(
     auto spec = ParseSimavrAddress(p.resolved.spec.address);
     if (const auto* s = std::get_if<SimavrSpec>(&spec)) {
       inputs.push_back({"--target's firmware", s->elf_path});
+    }
+  }
+  if (p.resolved.spec.kind == TargetSpec::Kind::kNative) {
+    auto spec = ParseNativeAddress(p.resolved.spec.address);
+    if (const auto* s = std::get_if<NativeSpec>(&spec)) {
+      inputs.push_back({"--target's firmware", s->path});
     }
   }
   inputs.insert(inputs.end(), extra.begin(), extra.end());

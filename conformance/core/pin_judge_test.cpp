@@ -229,6 +229,17 @@ TEST(PinProfiles, TheBoardFilesReadAndTheOwnFirmwareDrivesTheUnoPins) {
   EXPECT_EQ(own.motors[3].dir, (PinRef{'B', 3}));   // Arduino pin 11
 }
 
+TEST(PinProfiles, PinsAreNamedByPortAndBitOrByNumber) {
+  EXPECT_EQ(ParsePinRef("pd4"), (PinRef{'D', 4}));
+  EXPECT_EQ(ParsePinRef("GPIO26"), (PinRef{'B', 0, 26}));
+  EXPECT_EQ(ParsePinRef("d13"), (PinRef{'B', 0, 13}));
+  EXPECT_EQ(ParsePinRef("D13")->Name(), "D13");
+  EXPECT_FALSE(ParsePinRef("GPIO"));
+  EXPECT_FALSE(ParsePinRef("D1x"));
+  EXPECT_FALSE(ParsePinRef("D1000"));
+  EXPECT_FALSE(ParsePinRef("PD8"));
+}
+
 TEST(PinProfiles, BadBoardsAreRefusedNamingTheProblem) {
   auto error = [](std::string_view text) {
     const auto b = ParseBoard(text, "b.json");
@@ -236,7 +247,9 @@ TEST(PinProfiles, BadBoardsAreRefusedNamingTheProblem) {
   };
   EXPECT_NE(error("").find("empty"), std::string::npos);
   EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
-  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"D4","dir":"PD5"}]})").find("PD4"),
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"Q4","dir":"PD5"}]})").find("PD4"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"board":"x","motors":[{"step":"GPIO256","dir":"PD5"}]})").find("GPIO26"),
             std::string::npos);
   EXPECT_NE(error(R"({"board":"x","motors":[{"step":"PD4","dir":"PD4"}]})").find("named twice"),
             std::string::npos);

@@ -47,8 +47,9 @@ std::optional<PinRef> ReadPin(base::JsonFields& f, std::string_view key, base::P
   if (f.failed() || text.empty()) return std::nullopt;
   auto pin = ParsePinRef(text);
   if (!pin) {
-    f.Fail(key, "is \"" + text + "\", not a port pin",
-           "write the AVR port and bit, e.g. \"PD4\" (Arduino Uno pin 4)");
+    f.Fail(key, "is \"" + text + "\", not a pin",
+           "write the AVR port and bit, e.g. \"PD4\" (Arduino Uno pin 4), or a pin number for "
+           "a native target's board, e.g. \"GPIO26\" or \"D26\"");
   }
   return pin;
 }
@@ -56,6 +57,20 @@ std::optional<PinRef> ReadPin(base::JsonFields& f, std::string_view key, base::P
 }  // namespace
 
 std::optional<PinRef> ParsePinRef(std::string_view text) {
+  for (const std::string_view prefix : {"GPIO", "D"}) {
+    if (text.size() <= prefix.size() || text.size() > prefix.size() + 3) continue;
+    bool same = true;
+    for (size_t i = 0; i < prefix.size(); ++i)
+      same = same && std::toupper(static_cast<unsigned char>(text[i])) == prefix[i];
+    if (!same) continue;
+    int number = 0;
+    for (const char c : text.substr(prefix.size())) {
+      if (c < '0' || c > '9') return std::nullopt;
+      number = number * 10 + (c - '0');
+    }
+    if (number > 255) return std::nullopt;
+    return PinRef{'B', 0, number};
+  }
   if (text.size() != 3) return std::nullopt;
   if (std::toupper(static_cast<unsigned char>(text[0])) != 'P') return std::nullopt;
   const char port = static_cast<char>(std::toupper(static_cast<unsigned char>(text[1])));

@@ -18,14 +18,22 @@
 
 namespace moco::conformance {
 
-// One bit of an AVR I/O port: "PD4" is port 'D', bit 4.
+// One bit of an AVR I/O port: "PD4" is port 'D', bit 4; or, for a board whose
+// pins are numbered (a native target's ESP32 or Teensy), pin `number`: "D26"
+// or "GPIO26".
 struct PinRef {
   char port = 'B';  // 'A'..'L'
   uint8_t bit = 0;  // 0..7
-  std::string Name() const { return std::string("P") + port + static_cast<char>('0' + bit); }
+  int number = -1;  // >= 0: a numbered pin (port and bit unused)
+  bool numbered() const { return number >= 0; }
+  std::string Name() const {
+    if (numbered()) return "D" + std::to_string(number);
+    return std::string("P") + port + static_cast<char>('0' + bit);
+  }
   bool operator==(const PinRef&) const = default;
 };
-// Parses "PD4" (also "pd4"); nullopt for anything else.
+// Parses "PD4" (also "pd4"), "D26" or "GPIO26" (a pin number 0..255); nullopt
+// for anything else.
 std::optional<PinRef> ParsePinRef(std::string_view text);
 
 struct BoardMotor {

@@ -283,6 +283,12 @@ std::optional<std::string> SimavrTarget::Build() {
     timed_.assign(trace_.signals.size(), 0);
     for (size_t i = 0; i < trace_.signals.size(); ++i) {
       const PinRef pin = trace_.signals[i].pin;
+      if (pin.numbered()) {
+        Teardown();
+        return "board \"" + board_.name + "\": " + trace_.signals[i].name + " is pin " +
+               pin.Name() + ", a numbered pin; a simavr: target watches AVR port pins: name it "
+               "by its port and bit (e.g. \"PD4\")";
+      }
       avr_irq_t* irq = avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(pin.port), pin.bit);
       if (irq == nullptr) {
         const std::string mcu = mcu_;

@@ -26,6 +26,8 @@
 #include "sim/rig.h"
 #include "wire/protocol.h"
 
+#include "conformance/targets/native_target.h"
+
 #ifdef MOCO_HAVE_SIMAVR
 #include "conformance/targets/simavr_target.h"
 #endif
@@ -357,8 +359,8 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
   const std::string rest =
       colon == std::string_view::npos ? std::string() : std::string(text.substr(colon + 1));
   const std::string usage =
-      "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH, tcp:HOST:PORT or "
-      "simavr:PATH.elf[@MCU[:HZ]]";
+      "; give in-process:MODEL (e.g. in-process:dmc16), pty:PATH, tcp:HOST:PORT, "
+      "simavr:PATH.elf[@MCU[:HZ]] or native:PATH[@PORT]";
   if (rest.empty()) return "--target \"" + std::string(text) + "\" names no address" + usage;
   if (scheme == "in-process") return TargetSpec{TargetSpec::Kind::kInProcess, rest, "in-process"};
   if (scheme == "simavr") {
@@ -367,6 +369,13 @@ std::variant<TargetSpec, std::string> ParseTargetSpec(std::string_view text) {
       return "--target \"" + std::string(text) + "\": " + *err;
     }
     return TargetSpec{TargetSpec::Kind::kSimavr, rest, "simavr"};
+  }
+  if (scheme == "native") {
+    const auto parsed = ParseNativeAddress(rest);
+    if (const auto* err = std::get_if<std::string>(&parsed)) {
+      return "--target \"" + std::string(text) + "\": " + *err;
+    }
+    return TargetSpec{TargetSpec::Kind::kNative, rest, "native"};
   }
   if (scheme == "pty" || scheme == "serial") {
     return TargetSpec{TargetSpec::Kind::kSerial, rest, std::string(scheme)};
@@ -436,6 +445,13 @@ std::variant<std::unique_ptr<Target>, std::string> MakeTarget(const TargetSpec& 
     case TargetSpec::Kind::kTcp:
       return std::unique_ptr<Target>(
           std::make_unique<FdTarget>(FdTarget::Kind::kTcp, spec.address, baud));
+    case TargetSpec::Kind::kNative: {
+      auto parsed = ParseNativeAddress(spec.address);
+      if (auto* err = std::get_if<std::string>(&parsed)) return std::move(*err);
+      // The firmware sets its own baud rate; --baud does not apply.
+      return std::unique_ptr<Target>(
+          std::make_unique<NativeTarget>(std::move(std::get<NativeSpec>(parsed))));
+    }
     case TargetSpec::Kind::kSimavr: {
       auto parsed = ParseSimavrAddress(spec.address);
       if (auto* err = std::get_if<std::string>(&parsed)) return std::move(*err);

@@ -182,8 +182,8 @@ class Target {
   // Restart() on (a simavr: target only). Returns an error naming the fix, or
   // nullopt.
   virtual std::optional<std::string> WatchPins(const Board& /*board*/) {
-    return "pins can be watched only on a simavr: target (--board needs "
-           "--target simavr:PATH.elf)";
+    return "pins can be watched only on a firmware target (--board needs "
+           "--target simavr:PATH.elf or --target native:PATH)";
   }
   // The watched pins since the last Open() / Restart(); nullptr when none are.
   virtual const PinTrace* Pins() const { return nullptr; }
@@ -319,12 +319,12 @@ class FdTarget final : public Target {
 };
 
 // A parsed --target: "in-process:MODEL", "pty:PATH" (also "serial:PATH"),
-// "tcp:HOST:PORT" or "simavr:PATH.elf[@MCU[:HZ]]".
+// "tcp:HOST:PORT", "simavr:PATH.elf[@MCU[:HZ]]" or "native:PATH[@PORT]".
 struct TargetSpec {
-  enum class Kind { kInProcess, kSerial, kTcp, kSimavr };
+  enum class Kind { kInProcess, kSerial, kTcp, kSimavr, kNative };
   Kind kind = Kind::kInProcess;
-  std::string address;  // model, path, host:port, or PATH.elf[@MCU[:HZ]]
-  std::string scheme;   // as written: "in-process", "pty", "serial", "tcp" or "simavr"
+  std::string address;  // model, path, host:port, PATH.elf[@MCU[:HZ]] or PATH[@PORT]
+  std::string scheme;   // as written: "in-process", "pty", "serial", "tcp", "simavr" or "native"
 };
 
 // AVR firmware to run under simavr: the address of a "simavr:" target.

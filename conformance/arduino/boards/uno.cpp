@@ -1,0 +1,19 @@
+// Board file: an Arduino Uno on the host core (boards/uno.h). Serial is the
+// ATmega328P's USART with the AVR core's 64-byte buffers; the port map is the
+// Uno's pin mapping (PD0-7: pins 0-7, PB0-5: pins 8-13, PC0-5: pins 14-19).
+#include "moco_core.h"
+
+namespace {
+constexpr moco::arduino::PortPin kPorts[] = {
+    {0, 'D', 0},  {1, 'D', 1},  {2, 'D', 2},  {3, 'D', 3},  {4, 'D', 4},
+    {5, 'D', 5},  {6, 'D', 6},  {7, 'D', 7},  {8, 'B', 0},  {9, 'B', 1},
+    {10, 'B', 2}, {11, 'B', 3}, {12, 'B', 4}, {13, 'B', 5}, {14, 'C', 0},
+    {15, 'C', 1}, {16, 'C', 2}, {17, 'C', 3}, {18, 'C', 4}, {19, 'C', 5},
+};
+// A digitalWrite() takes about 4 us on an Uno's core, millis() about 1.5 us;
+// a port write is two cycles.
+constexpr moco::arduino::BoardSpec kUno = {
+    "uno", 20, 64, 64, false, 0, 1500, 4000, 125, kPorts, sizeof(kPorts) / sizeof(kPorts[0]), 1024};
+}  // namespace
+
+const moco::arduino::BoardSpec& moco::arduino::TheBoard() { return kUno; }
