@@ -8,7 +8,16 @@
 # built in; the installed profiles are for --profile.
 include(GNUInstallDirs)
 
-install(TARGETS mocosim mococheck dmc-host RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(TARGETS mocosim mococheck dmc-host mococheck-build-native
+        RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The host Arduino core's sources, which mococheck-build-native compiles with a
+# sketch (it looks for them in ../share/mocosim/arduino beside itself).
+foreach(part include core boards)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/conformance/arduino/${part}/
+          DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/arduino/${part})
+endforeach()
+install(FILES ${PROJECT_SOURCE_DIR}/conformance/arduino/link.h
+        DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/arduino)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/profiles/
         DESTINATION ${CMAKE_INSTALL_DATADIR}/mocosim/profiles FILES_MATCHING PATTERN "*.json")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/fixtures/rigs/
@@ -29,7 +38,7 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR
 # Installed compressed (gzip -9n: no name or time stamp, so the same bytes
 # every build), as Debian's policy has man pages.
 set(moco_man_pages)
-foreach(program mocosim mococheck dmc-host)
+foreach(program mocosim mococheck dmc-host mococheck-build-native)
   set(page ${CMAKE_BINARY_DIR}/man/${program}.1)
   add_custom_command(
     OUTPUT ${page}.gz

@@ -237,7 +237,7 @@ std::variant<PinJudgeOptions, std::string> LoadPinJudge(const std::string& board
 void AddPinOptions(CLI::App* sub, std::string& board_path, std::string& driver) {
   sub->add_option("--board", board_path,
                   "Board profile (JSON, fixtures/boards/) naming the pins to watch on a simavr: "
-                  "target; enables the pin rules (*-PIN-*)")
+                  "or native: target; enables the pin rules (*-PIN-*)")
       ->check(moco::cli::NonEmptyPath());
   sub->add_option("--driver", driver,
                   "Step driver whose STEP/DIR timing the pin rules judge: a4988 (default), "
@@ -245,7 +245,7 @@ void AddPinOptions(CLI::App* sub, std::string& board_path, std::string& driver) 
 }
 
 // The files a run reads: the profile, board and driver files, the firmware
-// of a simavr: target, and `extra` (the command's own).
+// of a simavr: or native: target, and `extra` (the command's own).
 std::vector<std::pair<std::string, std::string>> RunInputs(
     const RunArgs& a, const PreparedRun& p,
     const std::vector<std::pair<std::string, std::string>>& extra) {
@@ -465,8 +465,10 @@ void AddRunOptions(CLI::App* sub, RunArgs& a, bool subsets) {
   using moco::cli::AddNumber;
   sub->add_option("--target", a.target_text,
                   "in-process:MODEL (e.g. in-process:dmc16, virtual time), pty:PATH or serial:PATH "
-                  "(raw 8N1 at --baud), tcp:HOST:PORT, or simavr:PATH.elf[@MCU[:HZ]] (AVR "
-                  "firmware under simavr on its own clock; default @atmega328p:16000000)")
+                  "(raw 8N1 at --baud), tcp:HOST:PORT, simavr:PATH.elf[@MCU[:HZ]] (AVR "
+                  "firmware under simavr on its own clock; default @atmega328p:16000000), or "
+                  "native:PATH[@PORT] (a sketch built with mococheck-build-native, in simulated "
+                  "time; PORT: serial (default), serial1, serial2 or bluetooth)")
       ->required();
   sub->add_option("--protocol", a.protocol,
                   "Protocol spoken by the target: dmc (DMC v2), dfmoco or stackshot. Default: the "

@@ -112,7 +112,7 @@ std::string NotApplicableOn(const Target& target, const Need& needs,
   if (needs != SharedNeeds::kPins) return NotApplicableBecause<Traits>(needs, device);
   if (!device) return "the device did not introduce itself";
   if (target.Pins() == nullptr) {
-    return "the target watches no pins (give --board with a simavr: target)";
+    return "the target watches no pins (give --board with a simavr: or native: target)";
   }
   return "";
 }

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "conformance/arduino/core/runtime_internal.h"
-#include "conformance/arduino/link.h"
+#include "../link.h"
 #include "moco_core.h"
+#include "runtime_internal.h"
 
 namespace moco::arduino {
 namespace {
@@ -404,8 +404,8 @@ TimeNs TimerElapsed(int id) {
 void PinMode(int /*pin*/, int /*mode*/) { Call(); }
 
 void PinWrite(int pin, bool level) {
-  Call();
   Runtime& rt = Rt();
+  if (!rt.connected) rt.Connect();
   if (pin < 0 || static_cast<size_t>(pin) >= rt.levels.size()) return;
   if (rt.levels[static_cast<size_t>(pin)] == level) return;
   rt.levels[static_cast<size_t>(pin)] = level;
@@ -528,6 +528,13 @@ void EepromWrite(size_t address, uint8_t value) {
   if (!rt.connected) rt.Connect();
   if (address < rt.eeprom.size()) rt.eeprom[address] = value;
 }
+
+std::vector<AddedCore>& AddedCores() {
+  static auto* cores = new std::vector<AddedCore>();
+  return *cores;
+}
+
+void AddCore(void (*setup)(), void (*loop)()) { AddedCores().push_back({setup, loop}); }
 
 void StartFirmware() {
   Runtime& rt = Rt();

@@ -37,7 +37,10 @@ void delayMicroseconds(unsigned int us) {
 void yield() { ar::Call(); }
 
 void pinMode(uint8_t pin, uint8_t mode) { ar::PinMode(pin, mode); }
-void digitalWrite(uint8_t pin, uint8_t level) { ar::PinWrite(pin, level != LOW); }
+void digitalWrite(uint8_t pin, uint8_t level) {
+  ar::Call();
+  ar::PinWrite(pin, level != LOW);
+}
 int digitalRead(uint8_t pin) { return ar::PinRead(pin) ? HIGH : LOW; }
 
 int analogRead(uint8_t /*pin*/) {
@@ -48,6 +51,7 @@ int analogRead(uint8_t /*pin*/) {
 
 void analogWrite(uint8_t pin, int value) {
   ar::Note("analogWrite(): PWM is not modelled; a pin is high at 255 and low below");
+  ar::Call();
   ar::PinWrite(pin, value >= 255);
 }
 

@@ -120,6 +120,12 @@ void loop();
 #include "esp32-hal.h"
 #endif
 #ifdef MOCO_API_TEENSY
+// Teensyduino's fast pin access: a port write's cost, not a call's.
+inline void digitalWriteFast(uint8_t pin, uint8_t level) {
+  moco::arduino::Spend(moco::arduino::TheBoard().port_write_ns);
+  moco::arduino::PinWrite(pin, level != LOW);
+}
+inline int digitalReadFast(uint8_t pin) { return moco::arduino::PinRead(pin) ? HIGH : LOW; }
 #include "IntervalTimer.h"
 #include "elapsedMillis.h"
 #endif

@@ -71,13 +71,21 @@ bool TimerRunning(int id);
 // Time since the timer was started, 0 when it is stopped.
 TimeNs TimerElapsed(int id);
 
-// Pins. Write() records an edge for a watched pin at the current time.
+// Pins. Write() records an edge for a watched pin at the current time, and
+// costs nothing itself (digitalWrite() adds a call's cost first).
 void PinMode(int pin, int mode);
 void PinWrite(int pin, bool level);
 bool PinRead(int pin);
 // A direct write of an 8-bit port: every changed bit the board's port map
 // names is an edge at the same time (one port write, one instant).
 void PortWrite(char port, uint8_t before, uint8_t after);
+
+// A second core of a dual-core board, run by a user's glue file beside the
+// sketch on the same clock (docs/firmware-ci.md): `setup` once before the
+// sketch's setup(), `loop` (may be null: a core that only serves interrupts)
+// after each return of the sketch's loop(). Call it from a static
+// initializer of the glue file.
+void AddCore(void (*setup)(), void (*loop)());
 
 // Says once (per `what`) that the sketch used something the core does not
 // model; the run report lists it.
