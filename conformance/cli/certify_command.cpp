@@ -64,7 +64,7 @@ struct CertifyArgs {
   std::string key_path, out_path;
 };
 
-// The firmware a simavr: target runs: its file name, size and digest.
+// The firmware a simavr: or native: target runs: its file name, size and digest.
 std::optional<std::string> FirmwareOf(const PreparedRun& p, json& firmware) {
   firmware = nullptr;
   std::string path;
@@ -531,7 +531,7 @@ Runner AddCertifyCommand(CLI::App& app, CLI::App*& sub) {
   sub = app.add_subcommand(
       "certify",
       "Run the whole suite against a device and write a sealed certificate of it: the device's "
-      "identity, the firmware's SHA-256 (simavr:), every verdict with its evidence and the whole "
+      "identity, the firmware's SHA-256 (simavr:, native:), every verdict with its evidence and the whole "
       "recorded exchange (docs/certificates.md)");
   AddRunOptions(sub, c->run, false);
   sub->add_option("--key", c->key_path, "Ed25519 private key to seal with ('mococheck keygen')")

@@ -126,5 +126,43 @@ TEST(NativeCore, UnoTimerOneAndAReceiveBufferThatOverflowsWhileTheSketchWaits) {
   }
 }
 
+// What stops a faulty sketch: each a FirmwareStopped() naming what happened
+// and when, Receive() false from then on.
+std::string StopOf(char command, int stall_wall_seconds = 20) {
+  NativeSpec spec{Executable("faulty")};
+  spec.stall_wall_seconds = stall_wall_seconds;
+  NativeTarget t(spec);
+  EXPECT_EQ(t.Open(), std::nullopt);
+  RunFor(t, sim::kNsPerMs);
+  EXPECT_EQ(t.FirmwareStopped(), std::nullopt);
+  Send(t, std::string(1, command));
+  wire::Bytes got;
+  EXPECT_FALSE(t.Receive(t.Now() + sim::kNsPerSecond, got));
+  EXPECT_FALSE(t.Send(wire::Bytes{'x'}));
+  const auto fault = t.FirmwareFaulted();
+  EXPECT_TRUE(fault.has_value());
+  return t.FirmwareStopped().value_or("");
+}
+
+TEST(NativeCore, ALoopThatNeverCallsTheCoreIsStoppedAfterItsWallTimeLimit) {
+  const std::string why = StopOf('s', 1);
+  EXPECT_NE(why.find("answered no grant of time for 1 s"), std::string::npos) << why;
+  EXPECT_NE(why.find("calls nothing of the core"), std::string::npos) << why;
+}
+
+TEST(NativeCore, ACrashEndsTheFirmwareWithWhatKilledIt) {
+  const std::string why = StopOf('n');
+  // A plain build dies of SIGSEGV; a sanitizer's build reports it and exits.
+  const bool said = why.find("signal 11") != std::string::npos ||
+                    why.find("exited with status") != std::string::npos;
+  EXPECT_TRUE(said) << why;
+  EXPECT_NE(why.find(" at 0.00"), std::string::npos) << why;
+}
+
+TEST(NativeCore, AnExitEndsTheFirmwareWithItsStatus) {
+  const std::string why = StopOf('q');
+  EXPECT_NE(why.find("exited with status 0"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace moco::conformance

@@ -223,14 +223,15 @@ bool NativeTarget::ReadPacket(std::vector<uint8_t>& packet) {
   packet.resize(lk::kMaxPacketBytes + 64);
   for (;;) {
     pollfd p{fd_, POLLIN, 0};
-    const int ready = poll(&p, 1, kStallWallSeconds * 1000);
+    const int ready = poll(&p, 1, spec_.stall_wall_seconds * 1000);
     if (ready < 0 && errno == EINTR) {
       if (StopRequested() != 0) return false;
       continue;
     }
     if (ready == 0) {
-      Stop("the firmware answered no grant of time for " + std::to_string(kStallWallSeconds) +
-           " s of wall time at " + std::to_string(static_cast<double>(now_ns_) / 1e9) +
+      Stop("the firmware answered no grant of time for " +
+           std::to_string(spec_.stall_wall_seconds) + " s of wall time at " +
+           std::to_string(static_cast<double>(now_ns_) / 1e9) +
            " s: a loop that calls nothing of the core (no clock read, pin, serial or wait) "
            "never lets simulated time move");
       return false;

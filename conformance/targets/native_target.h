@@ -27,6 +27,9 @@ namespace moco::conformance {
 struct NativeSpec {
   std::string path;
   arduino::link::Port port = arduino::link::Port::kSerial;
+  // How long a slice of simulated time may take in wall time before the
+  // firmware is taken to be stuck (NativeTarget::kStallWallSeconds).
+  int stall_wall_seconds = 20;
 };
 std::variant<NativeSpec, std::string> ParseNativeAddress(std::string_view address);
 
@@ -42,8 +45,9 @@ std::variant<NativeSpec, std::string> ParseNativeAddress(std::string_view addres
 // directly.
 //
 // What stops the firmware: the process ending (a crash, a signal, an exit),
-// the core refusing an API, or no grant answered within kStallWallSeconds of
-// wall time (a loop that calls nothing of the core never lets time move).
+// the core refusing an API, or no grant answered within the spec's
+// stall_wall_seconds of wall time (a loop that calls nothing of the core never
+// lets time move).
 class NativeTarget final : public Target {
  public:
   explicit NativeTarget(NativeSpec spec);
@@ -77,9 +81,8 @@ class NativeTarget final : public Target {
 
   static constexpr size_t kMaxPinEdges = size_t{8} << 20;
   // A grant is cut into slices of this much simulated time, each answered
-  // within kStallWallSeconds.
+  // within NativeSpec::stall_wall_seconds.
   static constexpr TimeNs kSliceNs = 100 * sim::kNsPerMs;
-  static constexpr int kStallWallSeconds = 20;
 
  private:
   std::optional<std::string> Start();

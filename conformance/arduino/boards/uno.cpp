@@ -3,6 +3,14 @@
 // Uno's pin mapping (PD0-7: pins 0-7, PB0-5: pins 8-13, PC0-5: pins 14-19).
 #include "moco_core.h"
 
+// A build may set its own figures: -DMOCO_CLOCK_READ_NS=N -DMOCO_CALL_NS=N.
+#ifndef MOCO_CLOCK_READ_NS
+#define MOCO_CLOCK_READ_NS 1500
+#endif
+#ifndef MOCO_CALL_NS
+#define MOCO_CALL_NS 4000
+#endif
+
 namespace {
 constexpr moco::arduino::PortPin kPorts[] = {
     {0, 'D', 0},  {1, 'D', 1},  {2, 'D', 2},  {3, 'D', 3},  {4, 'D', 4},
@@ -13,7 +21,19 @@ constexpr moco::arduino::PortPin kPorts[] = {
 // A digitalWrite() takes about 4 us on an Uno's core, millis() about 1.5 us;
 // a port write is two cycles.
 constexpr moco::arduino::BoardSpec kUno = {
-    "uno", 20, 64, 64, false, 0, 1500, 4000, 125, kPorts, sizeof(kPorts) / sizeof(kPorts[0]), 1024};
+    .name = "uno",
+    .pins = 20,
+    .uart_rx_buffer_bytes = 64,
+    .uart_tx_buffer_bytes = 64,
+    .serial_is_usb = false,
+    .usb_buffer_bytes = 0,
+    .clock_read_ns = MOCO_CLOCK_READ_NS,
+    .call_ns = MOCO_CALL_NS,
+    .port_write_ns = 125,
+    .port_map = kPorts,
+    .port_map_size = sizeof(kPorts) / sizeof(kPorts[0]),
+    .eeprom_bytes = 1024,
+};
 }  // namespace
 
 const moco::arduino::BoardSpec& moco::arduino::TheBoard() { return kUno; }

@@ -2,7 +2,8 @@
 // serial ports, each call a point where simulated time moves (moco_core.h).
 // The board header given before it (conformance/arduino/boards/NAME.h) says
 // which board API set a sketch also sees: an ESP32's hw_timer, portMUX and
-// IRAM_ATTR; a Teensy's IntervalTimer and elapsedMillis; an AVR's ports.
+// IRAM_ATTR; a Teensy's IntervalTimer and elapsedMillis; an AVR's ports; an
+// mbed board's ArduinoCore-API names (pin_size_t, PinStatus, RingBufferN).
 #ifndef MOCO_CONFORMANCE_ARDUINO_INCLUDE_ARDUINO_H_
 #define MOCO_CONFORMANCE_ARDUINO_INCLUDE_ARDUINO_H_
 
@@ -115,6 +116,14 @@ void randomSeed(unsigned long seed);
 
 void setup();
 void loop();
+
+// ArduinoCore-API, which the mbed cores build on: its names for a pin number
+// and a level (an int here, as HIGH and LOW are), and RingBufferN.
+#ifdef ARDUINO_ARCH_MBED
+typedef uint8_t pin_size_t;
+typedef int PinStatus;
+#include "RingBuffer.h"
+#endif
 
 #ifdef MOCO_API_ESP32
 #include "esp32-hal.h"

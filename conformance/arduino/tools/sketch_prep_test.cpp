@@ -476,7 +476,7 @@ TEST(PrepareSketchTest, PropertyOutputIsConcatenationPlusOneChunk) {
       for (int l = 0; l < lines; ++l) {
         std::string line = kLines[rng() % std::size(kLines)];
         for (size_t at; (at = line.find('%')) != std::string::npos;) {
-          line.replace(at, 1, std::to_string(rng() % 4));
+          line[at] = static_cast<char>('0' + rng() % 4);
         }
         if (line == "\\") line = "int w; \\";  // a splice into the next line
         files[f].text += line + "\n";
