@@ -6,6 +6,8 @@
 #   DFM-PIN rule judged and passing; the certificate replays to its verdicts and
 #   names the executable; the same sketch built by the CMake function
 #   (moco_add_native_firmware SKETCH_DIR) gives the same verdicts.
+# teensy_port_passes: the same sketch built for a Teensy 4.0 (IntervalTimer, the
+#   protocol on USB Serial) passes the suite with every DFM-PIN rule judged.
 # build_refuses_bad_input: a missing folder, an empty one, an unknown board, an
 #   output that is a folder are refused with exit 2 naming the fix; a sketch
 #   that does not compile exits 1 with the compiler's message at the .ino's own
@@ -52,6 +54,14 @@ esp32_certifies)
     verdicts cmake.json >c.txt
     cmp -s v.txt c.txt || fail "the CMake-built sketch judged otherwise: $(diff v.txt c.txt)"
   fi
+  ;;
+teensy_port_passes)
+  expect_rc 0 "$build" "$src/fixtures/firmware/dfmoco_esp32" --board teensy40 -o rig.native
+  expect_rc 0 "$m" run --target native:rig.native --protocol dfmoco \
+    --board "$src/fixtures/boards/dfmoco-esp32.json" --driver a4988 -q --json run.json
+  verdicts run.json >v.txt || fail "no JSON report"
+  [ "$(grep -c 'DFM-PIN-00[1-7] pass$' v.txt)" = 7 ] || fail "not every pin rule passed: $(cat v.txt)"
+  grep -q 'teensy40' run.json || fail "the report does not name the board"
   ;;
 build_refuses_bad_input)
   expect_rc 2 "$build" no-such-folder --board esp32

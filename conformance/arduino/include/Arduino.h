@@ -129,6 +129,10 @@ typedef int PinStatus;
 #include "esp32-hal.h"
 #endif
 #ifdef MOCO_API_TEENSY
+// Teensyduino's placement attributes (tightly coupled memory, flash, DMA RAM).
+#define FASTRUN
+#define FLASHMEM
+#define DMAMEM
 // Teensyduino's fast pin access: a port write's cost, not a call's.
 inline void digitalWriteFast(uint8_t pin, uint8_t level) {
   moco::arduino::Spend(moco::arduino::TheBoard().port_write_ns);
