@@ -84,7 +84,10 @@ void PortWrite(char port, uint8_t before, uint8_t after);
 // sketch on the same clock (docs/firmware-ci.md): `setup` once before the
 // sketch's setup(), `loop` (may be null: a core that only serves interrupts)
 // after each return of the sketch's loop(). Call it from a static
-// initializer of the glue file.
+// initializer of the glue file. The added setup runs to its end first, on
+// the one clock: a wait in it delays the sketch's setup too, where on the
+// board the cores run side by side (a glue can give the second core's
+// delay() a clock of its own, as fixtures/firmware/glue/dmc_lite_giga does).
 void AddCore(void (*setup)(), void (*loop)());
 
 // Says once (per `what`) that the sketch used something the core does not

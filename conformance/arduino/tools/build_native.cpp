@@ -46,7 +46,7 @@ are compiled as C++, as the core's headers are C++) and those under src/.
 
 options:
   --board NAME     the board whose API set and figures the sketch gets:
-                   uno, esp32, teensy40 or generic (default: generic)
+                   uno, esp32, teensy40, giga or generic (default: generic)
   -o PATH          the executable to write (default: SKETCHNAME.native in the
                    current folder); written whole or not at all
   --glue PATH      firmware-specific glue (repeatable): a .cpp/.c file to

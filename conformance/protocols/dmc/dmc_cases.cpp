@@ -157,7 +157,10 @@ void BootHi(DmcCaseContext& c) {
                    [](const DmcRecord& r) { return IsUnsolicited(r, MsgType::kHi); });
     for (const DmcRecord& r : c.host.records()) seen = seen || IsUnsolicited(r, MsgType::kHi);
   }
-  Expect(c, "DMC-HI-011", seen, "an unsolicited HI within 1 s of power-on", "none");
+  // The spec sets no time ("whenever it starts up"): a HI that comes while the
+  // case waits counts, however long the device's start-up took.
+  Expect(c, "DMC-HI-011", seen,
+         "an unsolicited HI at start-up (looked for until 1 s into the case)", "none");
 }
 
 void HiAgain(DmcCaseContext& c) {

@@ -44,8 +44,9 @@ inline constexpr TimeNs kRestQuietNs = dmc::kPositionUpdatePeriodNs * 3 / 2;  //
 inline constexpr TimeNs kStartLatencyNs = 2 * dmc::kReferenceMotionTickNs + 10 * kMs;  // 50 ms
 
 // --- Connect and I/O -----------------------------------------------------------
-// DMC-HI-011 evidence "an unsolicited HI within 1 s of power-on"; plan choice
-// (the spec says only "whenever it starts up").
+// DMC-HI-011: how long the boot HI is waited for once the case looks; plan
+// choice (the spec says only "whenever it starts up", so a HI that comes while
+// the case waits counts, whatever the device's start-up took).
 inline constexpr TimeNs kBootHiWithinNs = 1000 * kMs;
 // DMC-GIO-005 evidence: an unsolicited GIO_IN "within 1 s of the change";
 // plan choice (the spec says "any time the inputs change").
