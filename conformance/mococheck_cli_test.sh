@@ -279,7 +279,7 @@ mococheck_cli_pin_options_are_checked_before_the_run)
   expect_rc 2 "$m" run --target in-process:dfmoco --vcd x.vcd
   grep -q -- "--vcd needs --board" err.txt || fail "--vcd without --board"
   expect_rc 2 "$m" run --target in-process:dfmoco --board "$board"
-  grep -q "only on a simavr: target" err.txt || fail "--board on an in-process target"
+  grep -q "only on a firmware target (--board needs --target simavr:PATH.elf or --target native:PATH)" err.txt || fail "--board on an in-process target"
   expect_rc 2 "$m" run --target in-process:dfmoco --board "$board" --driver l298
   grep -q "not a known driver; give one of a4988, drv8825, tmc2209" err.txt || fail "driver"
   printf '{"board": "x", "motors": [{"step": "PD4", "dir": "PD4"}]}' >twice.json
