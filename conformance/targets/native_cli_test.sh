@@ -7,7 +7,8 @@
 #   names the executable; the same sketch built by the CMake function
 #   (moco_add_native_firmware SKETCH_DIR) gives the same verdicts.
 # teensy_port_passes: the same sketch built for a Teensy 4.0 (IntervalTimer, the
-#   protocol on USB Serial) passes the suite with every DFM-PIN rule judged.
+#   protocol on USB Serial) passes the suite with every DFM-PIN rule judged; its
+#   --vcd file reads back in sigrok-cli with the board's eight signals.
 # build_refuses_bad_input: a missing folder, an empty one, an unknown board, an
 #   output that is a folder are refused with exit 2 naming the fix; a sketch
 #   that does not compile exits 1 with the compiler's message at the .ino's own
@@ -60,6 +61,13 @@ teensy_port_passes)
   expect_rc 0 "$m" run --target native:rig.native --protocol dfmoco \
     --board "$src/fixtures/boards/dfmoco-esp32.json" --driver a4988 -q --json run.json
   verdicts run.json >v.txt || fail "no JSON report"
+  # The pins of one case as a VCD (1 ns timescale), read by sigrok at 1 MHz.
+  expect_rc 0 "$m" run --target native:rig.native --protocol dfmoco --cases 'motor/move' \
+    --board "$src/fixtures/boards/dfmoco-esp32.json" -q --vcd run.vcd
+  sigrok-cli -I vcd:downsample=1000 -i run.vcd --show >sigrok.txt 2>&1 ||
+    fail "sigrok-cli cannot read the VCD"
+  [ "$(grep -c -- '- m[1-4]_\(step\|dir\): logic' sigrok.txt)" = 8 ] ||
+    fail "the VCD lacks the board's signals: $(cat sigrok.txt)"
   [ "$(grep -c 'DFM-PIN-00[1-7] pass$' v.txt)" = 7 ] || fail "not every pin rule passed: $(cat v.txt)"
   grep -q 'teensy40' run.json || fail "the report does not name the board"
   ;;

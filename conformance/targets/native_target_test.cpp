@@ -12,19 +12,13 @@
 #include <string>
 #include <vector>
 
-#include "conformance/core/own_dfmoco_pins_testing.h"
-#include "conformance/core/report.h"
-#include "conformance/core/rule_proof_testing.h"
-#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dfmoco/dfmoco_pin_proofs_testing.h"
 #ifdef MOCO_HAVE_SIMAVR
 #include "conformance/targets/simavr_target.h"
 #endif
 
 namespace moco::conformance {
 namespace {
-
-using proof::ExpectCaught;
-using proof::ExpectMustsFailed;
 
 std::string Text(const wire::Bytes& b) { return std::string(b.begin(), b.end()); }
 
@@ -115,19 +109,9 @@ TEST(NativeTarget, AddressesNameTheProtocolPort) {
   EXPECT_TRUE(std::holds_alternative<std::string>(ParseNativeAddress("@serial")));
 }
 
-// Every DFMoco case on `target`, the own firmware's pins judged.
-RunReport RunWithPins(Target& target) {
-  const PinJudgeOptions pins = OwnDfmocoPins();
-  EXPECT_EQ(target.WatchPins(pins.board), std::nullopt);
-  EXPECT_EQ(target.Open(), std::nullopt) << target.Name();
-  RunOptions options;
-  options.pins = pins;
-  return RunDfmoco(target, options);
-}
-
 RunReport RunNative(const std::string& path) {
   NativeTarget t(NativeSpec{path});
-  return RunWithPins(t);
+  return RunOwnDfmocoWithPins(t);
 }
 
 TEST(NativeDfmoco, TheSuiteGivesTheVerdictsTheSameSourceGivesUnderSimavr) {
@@ -141,7 +125,7 @@ TEST(NativeDfmoco, TheSuiteGivesTheVerdictsTheSameSourceGivesUnderSimavr) {
   }
 #ifdef MOCO_DFMOCO_ELF
   SimavrTarget avr(SimavrSpec{MOCO_DFMOCO_ELF, "", 0});
-  const RunReport simavr = RunWithPins(avr);
+  const RunReport simavr = RunOwnDfmocoWithPins(avr);
   std::map<std::string, Status> simavr_status;
   for (const auto& [id, s] : simavr.rules) simavr_status[id] = s.status;
   EXPECT_EQ(native_status, simavr_status) << ConsoleReport(native, false) << "\n---\n"
@@ -149,17 +133,8 @@ TEST(NativeDfmoco, TheSuiteGivesTheVerdictsTheSameSourceGivesUnderSimavr) {
 #endif
 }
 
-// The fault fails `rule` and no other; a SHOULD rule leaves the exit code 0.
 void ExpectOnly(const char* path, const std::string& rule, bool must) {
-  const RunReport r = RunNative(path);
-  ExpectCaught(r, rule);
-  std::set<std::string> failed;
-  for (const auto& [id, s] : r.rules) {
-    if (s.status == Status::kFail) failed.insert(id);
-  }
-  EXPECT_EQ(failed, std::set<std::string>{rule}) << ConsoleReport(r, false);
-  ExpectMustsFailed(r, must ? std::set<std::string>{rule} : std::set<std::string>{});
-  EXPECT_EQ(ExitCode(r), must ? 1 : 0);
+  ExpectOnlyRuleFailed(RunNative(path), rule, must);
 }
 
 TEST(NativePinProofs, AStepCountedButNeverPulsedIsCaughtByPin001) {

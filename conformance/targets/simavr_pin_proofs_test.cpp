@@ -13,42 +13,21 @@
 #include <string>
 #include <variant>
 
-#include "conformance/core/own_dfmoco_pins_testing.h"
-#include "conformance/core/pin_judge.h"
-#include "conformance/core/report.h"
-#include "conformance/core/rule_proof_testing.h"
-#include "conformance/protocols/dfmoco/dfmoco_protocol.h"
+#include "conformance/protocols/dfmoco/dfmoco_pin_proofs_testing.h"
 #include "conformance/targets/simavr_pins.h"
 #include "conformance/targets/simavr_target.h"
 
 namespace moco::conformance {
 namespace {
 
-using proof::ExpectCaught;
-using proof::ExpectMustsFailed;
-
 // Every DFMoco case of the firmware `elf` under simavr, its pins judged.
 RunReport RunWithPins(const char* elf) {
-  const PinJudgeOptions pins = OwnDfmocoPins();
   SimavrTarget target(SimavrSpec{elf, "", 0});
-  EXPECT_EQ(target.WatchPins(pins.board), std::nullopt);
-  EXPECT_EQ(target.Open(), std::nullopt) << elf;
-  RunOptions options;
-  options.pins = pins;
-  return RunDfmoco(target, options);
+  return RunOwnDfmocoWithPins(target);
 }
 
-// The fault fails `rule` and no other rule (of any level); a SHOULD rule
-// leaves the run's exit code 0.
 void ExpectOnly(const RunReport& r, const std::string& rule, bool must) {
-  ExpectCaught(r, rule);
-  std::set<std::string> failed;
-  for (const auto& [id, s] : r.rules) {
-    if (s.status == Status::kFail) failed.insert(id);
-  }
-  EXPECT_EQ(failed, std::set<std::string>{rule}) << ConsoleReport(r, false);
-  ExpectMustsFailed(r, must ? std::set<std::string>{rule} : std::set<std::string>{});
-  EXPECT_EQ(ExitCode(r), must ? 1 : 0);
+  ExpectOnlyRuleFailed(r, rule, must);
 }
 
 // The firmware without a fault passes every pin rule, through the command

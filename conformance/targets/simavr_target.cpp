@@ -286,7 +286,8 @@ std::optional<std::string> SimavrTarget::Build() {
       if (pin.numbered()) {
         Teardown();
         return "board \"" + board_.name + "\": " + trace_.signals[i].name + " is pin " +
-               pin.Name() + ", a numbered pin; a simavr: target watches AVR port pins: name it "
+               pin.Name() +
+               ", a numbered pin; a simavr: target watches AVR port pins: name it "
                "by its port and bit (e.g. \"PD4\")";
       }
       avr_irq_t* irq = avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(pin.port), pin.bit);

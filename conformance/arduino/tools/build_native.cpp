@@ -3,6 +3,7 @@
 // ci.md): the .ino files prepared as the Arduino builder does (sketch_prep.h),
 // the folder's .cpp/.c files and those of its src/ folder, the user's glue, the
 // core's sources and the board's file, compiled and linked by one compiler run.
+#include <fcntl.h>
 #include <spawn.h>
 #include <stdlib.h>
 #include <sys/stat.h>
@@ -185,10 +186,24 @@ std::optional<std::string> WriteWhole(const fs::path& path, const std::string& t
     return path.string() + " exists and is not a regular file; give another -o path";
   }
   const fs::path tmp = path.string() + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    if (!out.flush()) return "cannot write " + tmp.string() + ": " + std::strerror(errno);
+  // A new file only: never through a name someone planted beside the output.
+  const int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) return "cannot write " + tmp.string() + ": " + std::strerror(errno);
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string why = std::strerror(errno);
+      close(fd);
+      unlink(tmp.c_str());
+      return "cannot write " + tmp.string() + ": " + why;
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (fsync(fd) != 0 || close(fd) != 0) {
+    unlink(tmp.c_str());
+    return "cannot write " + tmp.string() + ": " + std::strerror(errno);
   }
   if (rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = std::strerror(errno);
