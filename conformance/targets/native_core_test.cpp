@@ -126,6 +126,23 @@ TEST(NativeCore, UnoTimerOneAndAReceiveBufferThatOverflowsWhileTheSketchWaits) {
   }
 }
 
+TEST(NativeCore, ASecondCoreSetsUpFirstLoopsAfterEachLoopAndItsTimerShareTheClock) {
+  NativeTarget t(NativeSpec{Executable("dual_core")});
+  ASSERT_EQ(t.Open(), std::nullopt);
+  RunFor(t, sim::kNsPerMs);
+  const TimeNs asked = t.Now();
+  Send(t, "\n");  // USB serial (the giga board): read at once
+  const std::string answer = RunFor(t, sim::kNsPerMs);
+  // The second core's timer every 5 us from its setup at time 0: as many ticks
+  // as 5 us periods have passed when the line was read (a call or two later).
+  const size_t at = answer.find("ticks ");
+  ASSERT_NE(at, std::string::npos) << answer;
+  EXPECT_EQ(answer.substr(0, at), "order sm loops paired ");
+  const long ticks = std::stol(answer.substr(at + 6));
+  EXPECT_GE(ticks, asked / 5000);
+  EXPECT_LE(ticks, asked / 5000 + 1);
+}
+
 // What stops a faulty sketch: each a FirmwareStopped() naming what happened
 // and when, Receive() false from then on.
 std::string StopOf(char command, int stall_wall_seconds = 20) {

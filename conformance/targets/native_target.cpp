@@ -15,6 +15,8 @@
 #include <cerrno>
 #include <cstring>
 
+extern char** environ;
+
 namespace moco::conformance {
 namespace lk = arduino::link;
 
@@ -85,7 +87,15 @@ std::optional<std::string> NativeTarget::Start() {
   if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds) != 0) {
     return std::string("cannot make the firmware's link: ") + std::strerror(errno);
   }
+  // Everything the child needs is made before the fork: between fork and exec
+  // it only calls what is safe there (no allocation).
   const std::string path = spec_.path;
+  const std::string link_env = std::string(lk::kLinkEnv) + "=1";
+  std::vector<char*> envp;
+  for (char** e = environ; *e != nullptr; ++e) envp.push_back(*e);
+  envp.push_back(const_cast<char*>(link_env.c_str()));
+  envp.push_back(nullptr);
+  char* const argv[] = {const_cast<char*>(path.c_str()), nullptr};
   const pid_t pid = fork();
   if (pid < 0) {
     close(fds[0]);
@@ -94,15 +104,17 @@ std::optional<std::string> NativeTarget::Start() {
   }
   if (pid == 0) {
     prctl(PR_SET_PDEATHSIG, SIGKILL);
-    dup2(fds[1], lk::kLinkFd);  // the duplicate is inherited: no close-on-exec
-    const int null = open("/dev/null", O_RDWR);
+    if (fds[1] == lk::kLinkFd) {
+      fcntl(lk::kLinkFd, F_SETFD, 0);  // already in place: keep it across exec
+    } else {
+      dup2(fds[1], lk::kLinkFd);  // the duplicate is inherited: no close-on-exec
+    }
+    const int null = open("/dev/null", O_RDWR | O_CLOEXEC);
     if (null >= 0) {
       dup2(null, 0);
       dup2(null, 1);
     }
-    setenv(lk::kLinkEnv, "1", 1);
-    char* const argv[] = {const_cast<char*>(path.c_str()), nullptr};
-    execv(path.c_str(), argv);
+    execve(path.c_str(), argv, envp.data());
     _exit(127);
   }
   close(fds[1]);
