@@ -23,8 +23,10 @@
 //               here), i64 frame_ns (one byte on the host's line; 0: not paced),
 //               u32 bytes dropped by a full receive buffer since the last kYield;
 //               ends every kRun's answer
-//     kStopped  text: the sketch can run no further (it returned from main, or
-//               called an API the core refuses); the process exits after it
+//     kStopped  u8 fault (Fault), then text: the sketch can run no further (an
+//               API the core refuses, or a fault signal: a bad memory access,
+//               an illegal instruction, a division by zero, an abort); the
+//               process exits after it
 #ifndef MOCO_CONFORMANCE_ARDUINO_LINK_H_
 #define MOCO_CONFORMANCE_ARDUINO_LINK_H_
 
@@ -53,6 +55,9 @@ enum class Type : uint8_t {
   kYield = 20,
   kStopped = 21,
 };
+
+// What stopped the sketch (kStopped).
+enum class Fault : uint8_t { kRefused = 0, kCrash = 1, kDivisionByZero = 2 };
 
 // Which of the sketch's serial ports carries the protocol.
 enum class Port : uint8_t { kSerial = 0, kSerial1 = 1, kSerial2 = 2, kBluetooth = 3 };

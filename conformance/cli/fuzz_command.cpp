@@ -43,8 +43,8 @@ std::optional<std::string> LoadFuzzPins(const FuzzArgs& a, bool firmware,
   }
   if (a.board_path.empty()) return std::nullopt;
   if (!firmware) {
-    return "--board watches the pins of firmware under simavr; give --target "
-           "simavr:FIRMWARE.elf";
+    return "--board watches the pins of firmware; give --target simavr:FIRMWARE.elf or "
+           "native:FIRMWARE";
   }
   auto pins = LoadPinJudge(a.board_path, a.driver);
   if (const auto* err = std::get_if<std::string>(&pins)) return *err;
@@ -78,15 +78,20 @@ int Fuzz(const FuzzArgs& a) {
   request.no_device_message = "the sessions name no emulated device; give --target";
   request.virtual_clock_only_message =
       "fuzz runs devices in virtual time only (each mutant needs a fresh device): give "
-      "--target in-process:MODEL or simavr:FIRMWARE.elf, and use replay for a real device";
+      "--target in-process:MODEL, simavr:FIRMWARE.elf or native:FIRMWARE, and use replay for "
+      "a real device";
   auto resolved = ResolveTarget(request);
   if (const auto* err = std::get_if<std::string>(&resolved)) return Fail(*err);
   ResolvedTarget& target = std::get<ResolvedTarget>(resolved);
-  const bool firmware = target.spec.kind == TargetSpec::Kind::kSimavr;
+  // simavr firmware runs forked from snapshots with its code's coverage; a
+  // native firmware is a process of its own, started afresh for each run
+  // (its code is not observed: the search is blind).
+  const bool simavr = target.spec.kind == TargetSpec::Kind::kSimavr;
+  const bool firmware = simavr || target.spec.kind == TargetSpec::Kind::kNative;
   FuzzExecutor::Options run_options;
-  run_options.fork = firmware;
-  run_options.coverage_bytes = firmware ? kCoverageBytes : 0;
-  run_options.snapshots = firmware ? kSnapshots : 0;
+  run_options.fork = simavr;
+  run_options.coverage_bytes = simavr ? kCoverageBytes : 0;
+  run_options.snapshots = simavr ? kSnapshots : 0;
   if (auto err = LoadFuzzPins(a, firmware, run_options)) return Fail(*err);
   FuzzExecutor executor(proto, std::move(target.target), run_options);
   if (auto err = executor.Open()) return Fail(*err);
@@ -203,14 +208,15 @@ Runner AddFuzzCommand(CLI::App& app, CLI::App*& sub) {
   auto a = std::make_shared<FuzzArgs>();
   CLI::App* fuzz = app.add_subcommand(
       "fuzz",
-      "Mutate recorded host traffic and check device invariants (in-process devices, or AVR "
-      "firmware under simavr with coverage)");
+      "Mutate recorded host traffic and check device invariants (in-process devices, AVR "
+      "firmware under simavr with coverage, or native firmware)");
   sub = fuzz;
   fuzz->add_option("sessions", a->sessions, "Session files to mutate (same protocol)")->required();
   fuzz->add_option("--target", a->target,
-                   "in-process:MODEL (default: the first session's device) or "
+                   "in-process:MODEL (default: the first session's device), "
                    "simavr:FIRMWARE.elf[@MCU[:HZ]] (booted once, each mutant forked from there, "
-                   "coverage-guided)");
+                   "coverage-guided) or native:FIRMWARE[@PORT] (a sketch built with "
+                   "mococheck-build-native, started afresh for each mutant; no coverage)");
   fuzz->add_option("--profile", a->profile, "Device profile for the in-process device")
       ->check(CLI::ExistingFile);
   AddNumber(fuzz, "--seed", a->seed, uint64_t{0}, UINT64_MAX, "Seed of the mutator");

@@ -47,7 +47,7 @@ std::variant<ResolvedTarget, std::string> ResolveTarget(const TargetRequest& req
   const TargetSpec& ts = out.spec;
   const bool in_process = ts.kind == TargetSpec::Kind::kInProcess;
   if (!request.virtual_clock_only_message.empty() && !in_process &&
-      ts.kind != TargetSpec::Kind::kSimavr) {
+      ts.kind != TargetSpec::Kind::kSimavr && ts.kind != TargetSpec::Kind::kNative) {
     return request.virtual_clock_only_message;
   }
   const devices::DeviceModel* model = in_process ? devices::FindDeviceModel(ts.address) : nullptr;

@@ -114,7 +114,8 @@ std::optional<std::string> FuzzExecutor::Open() {
   if (!target_->VirtualClock() || !target_->CanRestart()) {
     return target_->Name() +
            " runs in real time or cannot restart; fuzz needs a device in virtual time "
-           "(in-process:MODEL or simavr:FIRMWARE.elf); use replay for a real device";
+           "(in-process:MODEL, simavr:FIRMWARE.elf or native:FIRMWARE); use replay for a real "
+           "device";
   }
   const size_t map = options_.coverage_bytes;
   if (map != 0 && (map & (map - 1)) != 0) {

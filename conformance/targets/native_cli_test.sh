@@ -1,6 +1,6 @@
 #!/bin/sh
 # The native target through the command line (docs/firmware-ci.md "Any board"):
-#   native_cli_test.sh TEST MOCOCHECK BUILD_NATIVE WORKDIR SOURCE_DIR [CMAKE_BUILT_ESP32]
+#   native_cli_test.sh TEST MOCOCHECK BUILD_NATIVE WORKDIR SOURCE_DIR [FIRMWARE [GOOD]]
 # esp32_certifies: the ESP32 DFMoco sketch (hw_timer, portMUX, BluetoothSerial),
 #   built by mococheck-build-native, certifies over its Bluetooth port with every
 #   DFM-PIN rule judged and passing; the certificate replays to its verdicts and
@@ -9,6 +9,10 @@
 # teensy_port_passes: the same sketch built for a Teensy 4.0 (IntervalTimer, the
 #   protocol on USB Serial) passes the suite with every DFM-PIN rule judged; its
 #   --vcd file reads back in sigrok-cli with the board's eight signals.
+# fuzz_finds_and_replays (FIRMWARE: the DFMoco firmware with BUG_ZERO_RATE, GOOD:
+#   without it): `fuzz --target native:` mutates the golden session, each run a
+#   fresh process, and finds the division by zero as its own kind; the saved
+#   finding replays to it, and the good firmware passes it.
 # build_refuses_bad_input: a missing folder, an empty one, an unknown board, an
 #   output that is a folder are refused with exit 2 naming the fix; a sketch
 #   that does not compile exits 1 with the compiler's message at the .ino's own
@@ -70,6 +74,21 @@ teensy_port_passes)
     fail "the VCD lacks the board's signals: $(cat sigrok.txt)"
   [ "$(grep -c 'DFM-PIN-00[1-7] pass$' v.txt)" = 7 ] || fail "not every pin rule passed: $(cat v.txt)"
   grep -q 'teensy40' run.json || fail "the report does not name the board"
+  ;;
+fuzz_finds_and_replays)
+  bug=$cmake_built
+  good=$7
+  expect_rc 1 "$m" fuzz "$src/fixtures/sessions/dfmoco-uno-workflow.jsonl" \
+    --target "native:$bug" --seed 4 --runs 200 --max-failures 1 --crashes found
+  grep -q '^FAIL \[division-by-zero\] the firmware stopped: the sketch stopped at a division by zero (SIGFPE)' \
+    out.txt || fail "no division-by-zero finding"
+  saved=$(sed -n 's/.*; saved: \(found\/mutant-[0-9-]*\.jsonl\)$/\1/p' out.txt | head -1)
+  [ -s "$saved" ] || fail "no saved finding ($saved)"
+  grep -q "^  rerun: mococheck replay $saved --target native:$bug" out.txt || fail "no rerun line"
+  expect_rc 1 "$m" replay "$saved" --target "native:$bug"
+  grep -q '^FAIL \[division-by-zero\]' out.txt || fail "the replay does not find it again"
+  expect_rc 0 "$m" replay "$saved" --target "native:$good"
+  grep -q '^result: PASS' out.txt || fail "the good firmware does not pass the finding's session"
   ;;
 build_refuses_bad_input)
   expect_rc 2 "$build" no-such-folder --board esp32

@@ -82,6 +82,7 @@ std::optional<std::string> NativeTarget::Start() {
   frame_ns_ = 0;
   pending_.clear();
   stopped_.clear();
+  stop_kind_ = FirmwareFaultKind::kCrash;
   dropped_ = 0;
   int fds[2];
   if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds) != 0) {
@@ -281,10 +282,13 @@ bool NativeTarget::AwaitYield(wire::Bytes* out) {
         if (std::find(notes_.begin(), notes_.end(), note) == notes_.end()) notes_.push_back(note);
         break;
       }
-      case lk::Type::kStopped:
+      case lk::Type::kStopped: {
+        const auto fault = static_cast<lk::Fault>(r.Get(1));
+        if (fault == lk::Fault::kDivisionByZero) stop_kind_ = FirmwareFaultKind::kDivisionByZero;
         Stop(std::string(r.Rest()) + " at " + std::to_string(static_cast<double>(now_ns_) / 1e9) +
              " s");
         return false;
+      }
       case lk::Type::kYield:
         now_ns_ = r.GetI64();
         line_free_ns_ = r.GetI64();
@@ -363,7 +367,7 @@ std::optional<std::string> NativeTarget::FirmwareStopped() const {
 std::optional<FirmwareFault> NativeTarget::FirmwareFaulted() const {
   if (stopped_.empty()) return std::nullopt;
   FirmwareFault f;
-  f.kind = FirmwareFaultKind::kCrash;
+  f.kind = stop_kind_;
   f.what = stopped_;
   return f;
 }

@@ -103,6 +103,7 @@ class NativeTarget final : public Target {
   TimeNs frame_ns_ = 0;
   wire::Bytes pending_;  // sent, not yet handed to the firmware
   std::string stopped_;
+  FirmwareFaultKind stop_kind_ = FirmwareFaultKind::kCrash;
   std::string board_name_;
   std::map<std::pair<char, uint8_t>, int> port_map_;  // (port, bit) -> pin
   std::vector<std::string> notes_;

@@ -1,6 +1,7 @@
 // The host Arduino core's simulated time (include/moco_core.h): the clock, the
 // events that fall due in it (timer interrupts, serial bytes on the line) and
 // the runner's grants of time over the link (link.h).
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <sys/socket.h>
@@ -110,6 +111,40 @@ class Runtime {
     }
     SendPacket(hello);
     ReceiveAttach();
+    CatchFaults();
+  }
+
+  // A fault signal becomes a kStopped naming it, at the time it happened:
+  // the runner reports it as a finding (the kind, the time) rather than an
+  // unexplained end of the process. Only async-signal-safe calls in the handler.
+  static void OnFault(int signal_number) {
+    char packet[96];
+    packet[0] = static_cast<char>(link::Type::kStopped);
+    packet[1] = static_cast<char>(signal_number == SIGFPE ? link::Fault::kDivisionByZero
+                                                          : link::Fault::kCrash);
+    const char* what = signal_number == SIGSEGV  ? "a bad memory access (SIGSEGV)"
+                       : signal_number == SIGBUS ? "a bad memory access (SIGBUS)"
+                       : signal_number == SIGILL ? "an illegal instruction (SIGILL)"
+                       : signal_number == SIGFPE ? "a division by zero (SIGFPE)"
+                                                 : "an abort (SIGABRT)";
+    size_t n = 2;
+    for (const char* c = "the sketch stopped at "; *c != '\0'; ++c) packet[n++] = *c;
+    for (const char* c = what; *c != '\0' && n < sizeof(packet); ++c) packet[n++] = *c;
+    send(link::kLinkFd, packet, n, MSG_NOSIGNAL);
+    _exit(4);
+  }
+
+  static void CatchFaults() {
+    static char stack[64 * 1024];
+    stack_t alt{};
+    alt.ss_sp = stack;
+    alt.ss_size = sizeof(stack);
+    sigaltstack(&alt, nullptr);  // a stack overflow still reaches the handler
+    struct sigaction sa {};
+    sa.sa_handler = &OnFault;
+    sa.sa_flags = SA_ONSTACK;
+    sigemptyset(&sa.sa_mask);
+    for (const int s : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) sigaction(s, &sa, nullptr);
   }
 
   void SendPacket(const std::vector<uint8_t>& packet) {
@@ -143,7 +178,8 @@ class Runtime {
   }
 
   [[noreturn]] void Fatal(const std::string& why) {
-    std::vector<uint8_t> stopped{static_cast<uint8_t>(link::Type::kStopped)};
+    std::vector<uint8_t> stopped{static_cast<uint8_t>(link::Type::kStopped),
+                                 static_cast<uint8_t>(link::Fault::kRefused)};
     stopped.insert(stopped.end(), why.begin(), why.end());
     Flush();
     SendPacket(stopped);
