@@ -81,7 +81,7 @@ pin_law_replays)
   expect_rc 2 "$m" fuzz "$golden" --target "simavr:$good" --driver a4988 --runs 1
   grep -q -- '--driver needs --board' err.txt || fail "--driver alone: $(cat err.txt)"
   expect_rc 2 "$m" fuzz "$golden" --target in-process:dfmoco --board "$board" --runs 1
-  grep -q -- '--board watches the pins of firmware under simavr' err.txt ||
+  grep -q -- '--board watches the pins of firmware; give --target simavr:FIRMWARE.elf or native:FIRMWARE' err.txt ||
     fail "--board on an emulated device: $(cat err.txt)"
   expect_rc 2 "$m" replay "$golden" --target "simavr:$good" --board "$board"
   grep -q -- 'use mococheck run --board' err.txt || fail "replay --board of a recording"
