@@ -531,7 +531,8 @@ Runner AddCertifyCommand(CLI::App& app, CLI::App*& sub) {
   sub = app.add_subcommand(
       "certify",
       "Run the whole suite against a device and write a sealed certificate of it: the device's "
-      "identity, the firmware's SHA-256 (simavr:, native:), every verdict with its evidence and the whole "
+      "identity, the firmware's SHA-256 (simavr:, native:), every verdict with its evidence and "
+      "the whole "
       "recorded exchange (docs/certificates.md)");
   AddRunOptions(sub, c->run, false);
   sub->add_option("--key", c->key_path, "Ed25519 private key to seal with ('mococheck keygen')")

@@ -20,6 +20,11 @@ extern char** environ;
 namespace moco::conformance {
 namespace lk = arduino::link;
 
+namespace {
+// The names of link::Port in an address, by value.
+constexpr const char* kPortNames[] = {"serial", "serial1", "serial2", "bluetooth"};
+}  // namespace
+
 std::variant<NativeSpec, std::string> ParseNativeAddress(std::string_view address) {
   const std::string usage =
       "; give native:PATH, optionally @serial, @serial1, @serial2 or @bluetooth (the sketch's "
@@ -30,18 +35,13 @@ std::variant<NativeSpec, std::string> ParseNativeAddress(std::string_view addres
   if (spec.path.empty()) return "no firmware executable path" + usage;
   if (at == std::string_view::npos) return spec;
   const std::string_view port = address.substr(at + 1);
-  if (port == "serial") {
-    spec.port = lk::Port::kSerial;
-  } else if (port == "serial1") {
-    spec.port = lk::Port::kSerial1;
-  } else if (port == "serial2") {
-    spec.port = lk::Port::kSerial2;
-  } else if (port == "bluetooth") {
-    spec.port = lk::Port::kBluetooth;
-  } else {
-    return "unknown port \"" + std::string(port) + "\"" + usage;
+  for (size_t i = 0; i < std::size(kPortNames); ++i) {
+    if (port == kPortNames[i]) {
+      spec.port = static_cast<lk::Port>(i);
+      return spec;
+    }
   }
-  return spec;
+  return "unknown port \"" + std::string(port) + "\"" + usage;
 }
 
 NativeTarget::NativeTarget(NativeSpec spec) : spec_(std::move(spec)) {}
@@ -51,8 +51,7 @@ NativeTarget::~NativeTarget() { Teardown(); }
 std::string NativeTarget::Name() const {
   std::string name = "native:" + spec_.path;
   if (spec_.port != lk::Port::kSerial) {
-    static const char* const kPorts[] = {"serial", "serial1", "serial2", "bluetooth"};
-    name += std::string("@") + kPorts[static_cast<int>(spec_.port)];
+    name += std::string("@") + kPortNames[static_cast<int>(spec_.port)];
   }
   if (!board_name_.empty()) name += " (board " + board_name_ + ")";
   if (!stopped_.empty()) name += " (firmware stopped: " + stopped_ + ")";
@@ -122,16 +121,15 @@ std::optional<std::string> NativeTarget::Start() {
   pid_ = pid;
   fd_ = fds[0];
 
-  std::vector<uint8_t> packet;
-  if (!ReadPacket(packet) || packet.empty() ||
-      packet[0] != static_cast<uint8_t>(lk::Type::kHello)) {
+  size_t size = 0;
+  if (!ReadPacket(size) || size == 0 || rx_packet_[0] != static_cast<uint8_t>(lk::Type::kHello)) {
     const std::string why = stopped_.empty() ? Ended() : stopped_;
     Teardown();
     return "the firmware " + spec_.path +
            " did not introduce itself as firmware built for the native target (" + why +
            "); build it with mococheck-build-native (docs/firmware-ci.md)";
   }
-  lk::Reader r(packet.data() + 1, packet.size() - 1);
+  lk::Reader r(rx_packet_.data() + 1, size - 1);
   const uint64_t version = r.Get(4);
   if (version != lk::kLinkVersion) {
     Teardown();
@@ -218,12 +216,12 @@ bool NativeTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   for (;;) {
     if (!stopped_.empty() || fd_ < 0 || StopRequested() != 0) return false;
     const TimeNs until = std::min(deadline_ns, now_ns_ + kSliceNs);
-    std::vector<uint8_t> run{static_cast<uint8_t>(lk::Type::kRun)};
-    lk::Put(run, static_cast<uint64_t>(until), 8);
-    run.push_back(1);  // stop at output
-    run.insert(run.end(), pending_.begin(), pending_.end());
+    tx_packet_.assign(1, static_cast<uint8_t>(lk::Type::kRun));
+    lk::Put(tx_packet_, static_cast<uint64_t>(until), 8);
+    tx_packet_.push_back(1);  // stop at output
+    tx_packet_.insert(tx_packet_.end(), pending_.begin(), pending_.end());
     pending_.clear();
-    if (send(fd_, run.data(), run.size(), MSG_NOSIGNAL) < 0) {
+    if (send(fd_, tx_packet_.data(), tx_packet_.size(), MSG_NOSIGNAL) < 0) {
       Stop(Ended());
       return false;
     }
@@ -232,8 +230,8 @@ bool NativeTarget::Receive(TimeNs deadline_ns, wire::Bytes& out) {
   }
 }
 
-bool NativeTarget::ReadPacket(std::vector<uint8_t>& packet) {
-  packet.resize(lk::kMaxPacketBytes + 64);
+bool NativeTarget::ReadPacket(size_t& size) {
+  if (rx_packet_.size() < lk::kMaxPacketBytes + 64) rx_packet_.resize(lk::kMaxPacketBytes + 64);
   for (;;) {
     pollfd p{fd_, POLLIN, 0};
     const int ready = poll(&p, 1, spec_.stall_wall_seconds * 1000);
@@ -249,24 +247,25 @@ bool NativeTarget::ReadPacket(std::vector<uint8_t>& packet) {
            "never lets simulated time move");
       return false;
     }
-    const ssize_t n = recv(fd_, packet.data(), packet.size(), 0);
+    const ssize_t n = recv(fd_, rx_packet_.data(), rx_packet_.size(), 0);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return false;
-    packet.resize(static_cast<size_t>(n));
+    size = static_cast<size_t>(n);
     return true;
   }
 }
 
 bool NativeTarget::AwaitYield(wire::Bytes* out) {
-  std::vector<uint8_t> packet;
   for (;;) {
-    if (!ReadPacket(packet)) {
+    size_t size = 0;
+    if (!ReadPacket(size)) {
       if (stopped_.empty() && StopRequested() == 0) Stop(Ended());
       return false;
     }
-    if (packet.empty()) continue;
-    lk::Reader r(packet.data() + 1, packet.size() - 1);
-    switch (static_cast<lk::Type>(packet[0])) {
+    if (size == 0) continue;
+    const uint8_t type = rx_packet_[0];
+    lk::Reader r(rx_packet_.data() + 1, size - 1);
+    switch (static_cast<lk::Type>(type)) {
       case lk::Type::kOutput:
         while (r.left() >= lk::kOutputRecord) {
           r.GetI64();
@@ -296,7 +295,7 @@ bool NativeTarget::AwaitYield(wire::Bytes* out) {
         dropped_ += r.Get(4);
         return true;
       default:
-        Stop("the firmware sent a packet of unknown type " + std::to_string(packet[0]));
+        Stop("the firmware sent a packet of unknown type " + std::to_string(type));
         return false;
     }
   }

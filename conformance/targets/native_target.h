@@ -89,7 +89,8 @@ class NativeTarget final : public Target {
   void Teardown();
   // Reads packets until a yield; false when the firmware stopped.
   bool AwaitYield(wire::Bytes* out);
-  bool ReadPacket(std::vector<uint8_t>& packet);
+  // The firmware's next packet into rx_packet_, its length in `size`.
+  bool ReadPacket(size_t& size);
   void Stop(std::string what);
   // Why the process ended (waits for it).
   std::string Ended();
@@ -102,6 +103,9 @@ class NativeTarget final : public Target {
   TimeNs line_free_ns_ = 0;
   TimeNs frame_ns_ = 0;
   wire::Bytes pending_;  // sent, not yet handed to the firmware
+  // Packet buffers, reused: a grant and its answer go back and forth for
+  // every byte the firmware sends.
+  std::vector<uint8_t> rx_packet_, tx_packet_;
   std::string stopped_;
   FirmwareFaultKind stop_kind_ = FirmwareFaultKind::kCrash;
   std::string board_name_;

@@ -68,6 +68,9 @@ class Runtime {
   std::vector<uint8_t> levels;
   std::vector<bool> watched;
   std::vector<uint8_t> out_packet, edge_packet;
+  // The largest packet the runner sends (a run with the host's bytes).
+  static constexpr size_t kMaxRunPacketBytes = 256 * 1024;
+  std::vector<uint8_t> rx_packet;
   std::set<std::string> notes;
   std::vector<std::string> pending_notes;
   uint32_t dropped = 0;
@@ -153,22 +156,19 @@ class Runtime {
     }
   }
 
-  // Blocks for the runner's next packet; the runner gone ends the process.
-  std::vector<uint8_t> ReceivePacket() {
-    std::vector<uint8_t> packet(256 * 1024);
+  // Blocks for the runner's next packet, into `rx_packet` (reused: one
+  // arrives per grant); the runner gone ends the process.
+  link::Reader ReceivePacket() {
+    rx_packet.resize(kMaxRunPacketBytes);
     for (;;) {
-      const ssize_t n = recv(link::kLinkFd, packet.data(), packet.size(), 0);
-      if (n > 0) {
-        packet.resize(static_cast<size_t>(n));
-        return packet;
-      }
+      const ssize_t n = recv(link::kLinkFd, rx_packet.data(), rx_packet.size(), 0);
+      if (n > 0) return link::Reader(rx_packet.data(), static_cast<size_t>(n));
       if (n == 0 || errno != EINTR) _exit(0);
     }
   }
 
   void ReceiveAttach() {
-    const std::vector<uint8_t> packet = ReceivePacket();
-    link::Reader r(packet.data(), packet.size());
+    link::Reader r = ReceivePacket();
     if (r.Get(1) != static_cast<uint8_t>(link::Type::kAttach)) Fatal("the runner sent no attach");
     protocol_port = static_cast<int>(r.Get(1)) & 3;
     while (r.left() >= 2) {
@@ -226,8 +226,7 @@ class Runtime {
     link::Put(yield, dropped, 4);
     dropped = 0;
     SendPacket(yield);
-    const std::vector<uint8_t> packet = ReceivePacket();
-    link::Reader r(packet.data(), packet.size());
+    link::Reader r = ReceivePacket();
     if (r.Get(1) != static_cast<uint8_t>(link::Type::kRun)) Fatal("the runner sent no run");
     grant_ns = r.GetI64();
     stop_at_output = r.Get(1) != 0;
